@@ -1,0 +1,27 @@
+// Weighted spherical designs for weights known only through samples: an environment channel,
+// or a visibility function given by ray samples (Theorem 2.2, the seed's comment 3 and Table 2).
+#pragma once
+
+#include "sdlighting/spherical_design.h"
+
+#include <glm/vec3.hpp>
+
+#include <vector>
+
+namespace sd {
+
+/// A design of `degree` (0..kMaxDesignDegree) for the discrete measure Σ_i weights_i δ(dirs_i),
+/// its weights summing to that measure's mass, certified to kDesignTolerance.
+///
+/// Carathéodory–Tchakaloff compression (Sommariva–Vianello): in a basis orthonormal for the
+/// measure (column-pivoting QR of the weighted SH Vandermonde, rank-truncated), NNLS picks at most
+/// rank-many of the sample directions with positive weights and the same moments. Gradient
+/// projection (eq. 14) then removes nodes while the design still certifies.
+///
+/// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
+/// weights must be finite and >= 0 with a positive sum. Throws std::invalid_argument otherwise,
+/// std::runtime_error if no certified design is found.
+SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
+                                int degree);
+
+}  // namespace sd

@@ -1,0 +1,43 @@
+// Gradient projection for weighted designs (eq. 14), shared by the zonal and the tabulated
+// builders. Private to the library.
+#pragma once
+
+#include "sdlighting/spherical_design.h"
+
+#include <glm/vec3.hpp>
+
+#include <Eigen/Dense>
+
+#include <functional>
+#include <vector>
+
+namespace sd {
+
+/// The moment equations of one weight, in a basis chosen by the caller to be (near) orthonormal
+/// for that weight, so that the system stays well conditioned even for narrow lobes
+/// (msd-notes: the raw SH Vandermonde reaches condition 1e15).
+struct MomentSystem {
+  int size = 0;
+  /// Writes the `size` basis values at a unit direction and, when `gradients` is not null, their
+  /// ambient gradients (3 doubles per function; only the tangential part is used).
+  std::function<void(const glm::dvec3& dir, double* values, double* gradients)> evaluate;
+  Eigen::VectorXd target;  // ∫ basis · w dμ
+};
+
+/// Minimises E = ‖Σ_ν λ_ν F(x_ν) − target‖² over x_ν ∈ S², λ_ν >= 0 (eq. 14) by projected
+/// Levenberg–Marquardt steps: each step moves nodes in their tangent planes, then projects back
+/// onto the sphere and λ onto λ >= 0. Nodes whose weight reaches 0 are removed. Returns √E.
+double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
+                  std::vector<double>& weights, double tolerance, int max_iterations);
+
+/// Gradient projection used to remove nodes: drops the `step` lightest nodes of a certified
+/// design, refits, keeps the result if `certify` accepts it (it sets the residual), and halves the
+/// step after a failure; the first step aims at `target_size`. Returns the smallest design found.
+SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design, int target_size,
+                             const std::function<bool(SphericalDesign&)>& certify, double tolerance,
+                             int max_iterations);
+
+/// Two unit vectors completing `dir` to an orthonormal frame.
+void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2);
+
+}  // namespace sd

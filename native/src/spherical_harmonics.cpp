@@ -1,0 +1,123 @@
+#include "sdlighting/spherical_harmonics.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+
+namespace sd {
+namespace {
+
+// Q_lm(z) (see the header) and its derivative for one fixed m, all l in [m, order].
+// Recurrences of the fully normalised associated Legendre functions divided by sin^m θ:
+//   Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}   (Q_00 = 1, Q_11 = √3)
+//   Q_{m+1,m} = sqrt(2m+3) z Q_mm
+//   Q_lm = a_lm z Q_{l-1,m} - b_lm Q_{l-2,m}
+struct AssociatedLegendreColumn {
+  double q_mm = 1.0;  // carried from one m to the next
+
+  void advance_diagonal(int m) {
+    if (m == 1) {
+      q_mm = std::sqrt(3.0);
+    } else if (m >= 2) {
+      q_mm *= std::sqrt((2.0 * m + 1.0) / (2.0 * m));
+    }
+  }
+};
+
+inline double coefficient_a(int l, int m) {
+  return std::sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * double(l + m)));
+}
+
+inline double coefficient_b(int l, int m) {
+  return std::sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
+                   ((l - m) * double(l + m) * (2.0 * l - 3.0)));
+}
+
+template <bool kWithGradient>
+void evaluate(int order, const glm::dvec3& d, double* values, double* gradients) {
+  AssociatedLegendreColumn column;
+  // (x + i y)^m and (x + i y)^(m-1), as real and imaginary parts.
+  double re = 1.0, im = 0.0, re_prev = 0.0, im_prev = 0.0;
+  for (int m = 0; m <= order; ++m) {
+    column.advance_diagonal(m);
+    if (m > 0) {
+      re_prev = re;
+      im_prev = im;
+      const double r = re * d.x - im * d.y;
+      im = re * d.y + im * d.x;
+      re = r;
+    }
+    double q_prev2 = 0.0, q_prev = 0.0, dq_prev2 = 0.0, dq_prev = 0.0;
+    for (int l = m; l <= order; ++l) {
+      double q, dq;
+      if (l == m) {
+        q = column.q_mm;
+        dq = 0.0;
+      } else if (l == m + 1) {
+        const double c = std::sqrt(2.0 * m + 3.0);
+        q = c * d.z * q_prev;
+        dq = c * q_prev;
+      } else {
+        const double a = coefficient_a(l, m), b = coefficient_b(l, m);
+        q = a * d.z * q_prev - b * q_prev2;
+        dq = a * (q_prev + d.z * dq_prev) - b * dq_prev2;
+      }
+      q_prev2 = q_prev;
+      q_prev = q;
+      dq_prev2 = dq_prev;
+      dq_prev = dq;
+
+      const int center = l * l + l;
+      values[center + m] = q * re;
+      if (m > 0) values[center - m] = q * im;
+      if constexpr (kWithGradient) {
+        // Ambient gradient of the polynomial extension, then projected onto the tangent plane.
+        auto store = [&](int index, glm::dvec3 g) {
+          g -= glm::dot(g, d) * d;
+          gradients[3 * index + 0] = g.x;
+          gradients[3 * index + 1] = g.y;
+          gradients[3 * index + 2] = g.z;
+        };
+        store(center + m, {q * m * re_prev, -q * m * im_prev, dq * re});
+        if (m > 0) store(center - m, {q * m * im_prev, q * m * re_prev, dq * im});
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void sh_basis(int order, const glm::dvec3& dir, double* out) {
+  evaluate<false>(order, dir, out, nullptr);
+}
+
+std::vector<double> sh_basis(int order, const glm::dvec3& dir) {
+  std::vector<double> out(sh_count(order));
+  sh_basis(order, dir, out.data());
+  return out;
+}
+
+void sh_basis_with_gradient(int order, const glm::dvec3& dir, double* values, double* gradients) {
+  evaluate<true>(order, dir, values, gradients);
+}
+
+void legendre_all(int lmax, double t, double* out) {
+  out[0] = 1.0;
+  if (lmax >= 1) out[1] = t;
+  for (int l = 2; l <= lmax; ++l) {
+    out[l] = ((2.0 * l - 1.0) * t * out[l - 1] - (l - 1.0) * out[l - 2]) / l;
+  }
+}
+
+double legendre(int l, double t) {
+  double p_prev = 1.0, p = t;
+  if (l == 0) return 1.0;
+  for (int k = 2; k <= l; ++k) {
+    const double next = ((2.0 * k - 1.0) * t * p - (k - 1.0) * p_prev) / k;
+    p_prev = p;
+    p = next;
+  }
+  return p;
+}
+
+}  // namespace sd

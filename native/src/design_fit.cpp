@@ -79,6 +79,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
       for (int i = 0; i < n; ++i) {
         trial_weights[i] = std::max(weights[i] + step(3 * i), 0.0);  // projection onto λ >= 0
         trial_nodes[i] = glm::normalize(nodes[i] + step(3 * i + 1) * lin.e1[i] + step(3 * i + 2) * lin.e2[i]);
+        if (system.project_to_support) trial_nodes[i] = system.project_to_support(trial_nodes[i]);
       }
       const double trial_cost = residual_of(system, trial_nodes, trial_weights).norm();
       if (std::isfinite(trial_cost) && trial_cost < cost) {

@@ -22,11 +22,14 @@ struct MomentSystem {
   /// ambient gradients (3 doubles per function; only the tangential part is used).
   std::function<void(const glm::dvec3& dir, double* values, double* gradients)> evaluate;
   Eigen::VectorXd target;  // ∫ basis · w dμ
+  /// Optional projection of a unit direction onto the weight's support, applied after every step
+  /// so that nodes stay where the weight lives (a lobe's nodes above its horizon).
+  std::function<glm::dvec3(const glm::dvec3& dir)> project_to_support;
 };
 
 /// Minimises E = ‖Σ_ν λ_ν F(x_ν) − target‖² over x_ν ∈ S², λ_ν >= 0 (eq. 14) by projected
 /// Levenberg–Marquardt steps: each step moves nodes in their tangent planes, then projects back
-/// onto the sphere and λ onto λ >= 0. Nodes whose weight reaches 0 are removed. Returns √E.
+/// onto the sphere (and the system's support, if it has one) and λ onto λ >= 0. Nodes whose weight reaches 0 are removed. Returns √E.
 double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
                   std::vector<double>& weights, double tolerance, int max_iterations);
 

@@ -45,6 +45,14 @@ MomentSystem orthonormal_zonal_system(const ZonalWeight& weight, int degree) {
   system.size = sh_count(degree);
   system.target = Eigen::VectorXd::Zero(system.size);
   system.target(0) = std::sqrt(weight.mass());
+  const double s_min = weight.support_min(), s_max = weight.support_max();
+  system.project_to_support = [s_min, s_max](const glm::dvec3& d) {
+    const double s = one_minus_z(d);
+    if (s >= s_min && s <= s_max) return d;
+    const double r = std::hypot(d.x, d.y);
+    const double phi = r > 0.0 ? std::atan2(d.y, d.x) : 0.0;
+    return direction_from(std::clamp(s, s_min, s_max), phi);
+  };
   system.evaluate = [radial, degree](const glm::dvec3& d, double* values, double* gradients) {
     const double s = one_minus_z(d);
     thread_local std::vector<double> q, dq;

@@ -29,7 +29,10 @@ void expect_lobe_design(const SphericalDesign& design, const ZonalLobe& lobe, in
       error = std::max(error, std::abs(moments[sh_index(l, m)] - expected));
     }
   EXPECT_LT(error, kDesignTolerance) << "sigma=" << lobe.exponent << " degree=" << degree;
-  for (const auto& x : design.nodes) EXPECT_NEAR(glm::length(x), 1.0, 1e-14);
+  for (const auto& x : design.nodes) {
+    EXPECT_NEAR(glm::length(x), 1.0, 1e-14);
+    EXPECT_GE(x.z, -1e-15) << "node below the lobe's horizon";
+  }
 }
 
 TEST(ZonalDesign, EveryMethodCertifiesForLambertAndPhong) {

@@ -1,0 +1,157 @@
+"""Bad input raises ValueError (messages checked loosely)."""
+import math
+
+import numpy as np
+import pytest
+
+NAN = float("nan")
+INF = float("inf")
+GOOD_DIRS = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+GOOD_WEIGHTS = np.array([1.0, 0.5, 0.25])
+
+
+@pytest.mark.parametrize("lmax,dirs,match", [
+    (-1, [0.0, 0.0, 1.0], "lmax"),
+    (65, [0.0, 0.0, 1.0], "lmax"),
+    (2, [0.0, 1.0], "shape"),
+    (2, np.zeros((4, 2)), "shape"),
+    (2, np.ones((2, 3, 3)), "shape"),
+    (2, np.ones((3, 4)), "shape"),
+    (2, 1.0, "shape"),
+    (2, [0.0, 0.0, 0.0], "zero"),
+    (2, [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], "zero"),
+    (2, [NAN, 0.0, 1.0], "NaN"),
+    (2, [[0.0, INF, 1.0]], "NaN|inf"),
+])
+def test_sh_basis(sd, lmax, dirs, match):
+    with pytest.raises(ValueError, match=match):
+        sd.sh_basis(lmax, dirs)
+
+
+def rotation_z(angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+@pytest.mark.parametrize("coeffs,rotation,match", [
+    (np.ones(5), np.eye(3), "square"),
+    (np.ones(8), np.eye(3), "square"),
+    (np.ones((10, 3)), np.eye(3), "square"),
+    (np.ones(0), np.eye(3), "square"),
+    (np.ones(66 * 66), np.eye(3), "lmax"),
+    (np.ones((4, 2, 2)), np.eye(3), "shape"),
+    (np.ones(()), np.eye(3), "shape"),
+    (np.array([1.0, NAN, 0.0, 0.0]), np.eye(3), "NaN"),
+    (np.ones(4), np.eye(2), "shape"),
+    (np.ones(4), np.eye(4), "shape"),
+    (np.ones(4), np.eye(3).ravel(), "shape"),
+    (np.ones(4), 2.0 * np.eye(3), "orthogonal"),
+    (np.ones(4), np.ones((3, 3)), "orthogonal"),
+    (np.ones(4), rotation_z(0.3) + 1e-6, "orthogonal"),
+    (np.ones(4), np.diag([1.0, 1.0, -1.0]), "rotation"),
+    (np.ones(4), -np.eye(3), "rotation"),
+    (np.ones(4), np.where(np.eye(3) > 0, NAN, 0.0), "NaN|non-finite"),
+])
+def test_rotate_sh(sd, coeffs, rotation, match):
+    with pytest.raises(ValueError, match=match):
+        sd.rotate_sh(coeffs, rotation)
+
+
+@pytest.mark.parametrize("lobe,exponent,lmax,match", [
+    ("blinn", 8.0, 4, "lobe"),
+    ("Lambert", 0.0, 4, "lobe"),
+    ("phong", -1.0, 4, "exponent"),
+    ("phong", NAN, 4, "exponent"),
+    ("phong", 2e4, 4, "exponent"),
+    ("phong", 8.0, -1, "lmax"),
+])
+def test_zonal_coefficients(sd, lobe, exponent, lmax, match):
+    with pytest.raises(ValueError, match=match):
+        sd.zonal_coefficients(lobe, exponent, lmax)
+
+
+@pytest.mark.parametrize("lmax,t,match", [
+    (-1, [0.5], "lmax"),
+    (3, [0.5, NAN], "NaN"),
+    (3, [[0.5]], "1-D"),
+])
+def test_legendre(sd, lmax, t, match):
+    with pytest.raises(ValueError, match=match):
+        sd.legendre(lmax, t)
+
+
+@pytest.mark.parametrize("args,match", [
+    (("phong", 8.0, -1), "degree"),
+    (("phong", 8.0, 31), "degree"),
+    (("lambert", 0.0, 100), "degree"),
+    (("ggx", 8.0, 4), "lobe"),
+    (("phong", -2.0, 4), "exponent"),
+    (("phong", NAN, 4), "exponent"),
+    (("phong", 8.0, 4, "newton"), "method"),
+    (("phong", 8.0, 4, ""), "method"),
+])
+@pytest.mark.parametrize("function", ["zonal_design", "zonal_design_report"])
+def test_zonal_design(sd, function, args, match):
+    with pytest.raises(ValueError, match=match):
+        getattr(sd, function)(*args)
+
+
+@pytest.mark.parametrize("t,w,degree,method,match", [
+    ([0.0, 1.0], [1.0, 1.0], -1, "auto", "degree"),
+    ([0.0, 1.0], [1.0, 1.0], 31, "auto", "degree"),
+    ([0.0, 1.0], [1.0, 1.0], 4, "fast", "method"),
+    ([0.0, 1.0], [1.0, 1.0, 1.0], 4, "auto", "length"),
+    ([0.5], [1.0], 4, "auto", "at least"),
+    ([[0.0, 1.0]], [[1.0, 1.0]], 4, "auto", "1-D"),
+    ([0.0, NAN], [1.0, 1.0], 4, "auto", "NaN"),
+    ([0.0, 1.0], [1.0, INF], 4, "auto", "NaN|inf"),
+    ([0.0, 1.0], [1.0, -0.5], 4, "auto", "negative"),
+    ([0.5, 0.0], [1.0, 1.0], 4, "auto", "increasing"),
+    ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0], 4, "auto", "increasing"),
+    ([-1.5, 1.0], [1.0, 1.0], 4, "auto", r"\[-1, 1\]"),
+    ([0.0, 1.0], [0.0, 0.0], 4, "auto", "zero"),
+])
+def test_zonal_design_tabulated(sd, t, w, degree, method, match):
+    with pytest.raises(ValueError, match=match):
+        sd.zonal_design_tabulated(t, w, degree, method)
+
+
+@pytest.mark.parametrize("dirs,weights,degree,match", [
+    (GOOD_DIRS, GOOD_WEIGHTS, -1, "degree"),
+    (GOOD_DIRS, GOOD_WEIGHTS, 31, "degree"),
+    (GOOD_DIRS[:, :2], GOOD_WEIGHTS, 4, "shape"),
+    (GOOD_DIRS[0], GOOD_WEIGHTS[:1], 4, "shape"),
+    (GOOD_DIRS.reshape(1, 3, 3), GOOD_WEIGHTS, 4, "shape"),
+    (np.zeros((0, 3)), np.zeros(0), 4, "empty"),
+    (GOOD_DIRS, GOOD_WEIGHTS[:2], 4, "weights"),
+    (GOOD_DIRS, GOOD_WEIGHTS.reshape(3, 1), 4, "weights"),
+    (np.where(np.eye(3) > 0, NAN, 0.0), GOOD_WEIGHTS, 4, "NaN"),
+    (np.array([[0.0, 0.0, 1.0], [INF, 0.0, 0.0], [0.0, 1.0, 0.0]]), GOOD_WEIGHTS, 4, "NaN|inf"),
+    (GOOD_DIRS, [1.0, NAN, 1.0], 4, "NaN"),
+    (GOOD_DIRS, [1.0, -0.1, 1.0], 4, "negative"),
+    (GOOD_DIRS, [1.0, -INF, 1.0], 4, "NaN|inf|negative"),
+    (GOOD_DIRS, [0.0, 0.0, 0.0], 4, "zero"),
+    (np.vstack([GOOD_DIRS[:2], [0.0, 0.0, 0.0]]), GOOD_WEIGHTS, 4, "zero"),
+])
+@pytest.mark.parametrize("function", ["weighted_design", "weighted_design_report"])
+def test_weighted_design(sd, function, dirs, weights, degree, match):
+    with pytest.raises(ValueError, match=match):
+        getattr(sd, function)(dirs, weights, degree)
+
+
+@pytest.mark.parametrize("orders", [(-1, 2, 2), (2, -1, 2), (2, 2, -1), (65, 0, 0)])
+def test_gaunt_coefficients(sd, orders):
+    with pytest.raises(ValueError, match="order"):
+        sd.gaunt_coefficients(*orders)
+
+
+def test_valid_edge_cases_do_not_raise(sd):
+    # The limits themselves are accepted.
+    assert sd.sh_basis(64, [0.0, 0.0, 1.0]).shape == (65 * 65,)
+    assert sd.rotate_sh(np.ones(1), np.eye(3)).tolist() == [1.0]
+    nodes, weights = sd.zonal_design("lambert", float("nan"), 0)  # exponent ignored for Lambert
+    assert len(nodes) >= 1 and weights.sum() == pytest.approx(1.0)
+    assert sd.zonal_coefficients("phong", 1e4, 2).shape == (3,)
+    assert sd.zonal_coefficients("phong", 0.0, 0).tolist() == [1.0]
+    # A rotation with rounding noise well below the 1e-9 tolerance is accepted.
+    assert sd.rotate_sh(np.ones(4), rotation_z(0.7) + 1e-13).shape == (4,)

@@ -1,13 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian packages sd-lighting builds, tests and runs with, when any is missing.
-# Usage: scripts/install_dependencies.sh [--with-blender]
+# Blender brings the HDRIs the tests light with; xvfb and Mesa's llvmpipe give it a GPU context
+# without a display.
 set -euo pipefail
 
 packages=(cmake g++ make pkg-config libembree-dev pybind11-dev libglm-dev libopenimageio-dev
-          libeigen3-dev python3-dev python3-numpy python3-pytest libgtest-dev libbenchmark-dev)
-if [[ "${1:-}" == "--with-blender" ]]; then
-  packages+=(blender xvfb xauth libgl1-mesa-dri)
-fi
+          libeigen3-dev python3-dev python3-numpy python3-pytest libgtest-dev libbenchmark-dev
+          blender xvfb xauth libgl1-mesa-dri)
 
 missing=()
 for package in "${packages[@]}"; do

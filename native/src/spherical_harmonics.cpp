@@ -12,34 +12,50 @@ namespace {
 //   Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}   (Q_00 = 1, Q_11 = √3)
 //   Q_{m+1,m} = sqrt(2m+3) z Q_mm
 //   Q_lm = a_lm z Q_{l-1,m} - b_lm Q_{l-2,m}
-struct AssociatedLegendreColumn {
-  double q_mm = 1.0;  // carried from one m to the next
+// Orders up to this use precomputed recurrence coefficients (the square roots dominate otherwise).
+constexpr int kTabulatedOrder = 64;
 
-  void advance_diagonal(int m) {
-    if (m == 1) {
-      q_mm = std::sqrt(3.0);
-    } else if (m >= 2) {
-      q_mm *= std::sqrt((2.0 * m + 1.0) / (2.0 * m));
-    }
-  }
-};
-
-inline double coefficient_a(int l, int m) {
+inline double coefficient_a_exact(int l, int m) {
   return std::sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * double(l + m)));
 }
 
-inline double coefficient_b(int l, int m) {
+inline double coefficient_b_exact(int l, int m) {
   return std::sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
                    ((l - m) * double(l + m) * (2.0 * l - 3.0)));
 }
 
+// a_lm, b_lm for m + 2 <= l <= kTabulatedOrder, and the diagonal Q_mm, indexed [l][m].
+struct RecurrenceTables {
+  std::vector<double> a, b, diagonal;
+  RecurrenceTables() : a(size(), 0.0), b(size(), 0.0), diagonal(kTabulatedOrder + 1, 1.0) {
+    for (int l = 2; l <= kTabulatedOrder; ++l)
+      for (int m = 0; m + 2 <= l; ++m) {
+        a[at(l, m)] = coefficient_a_exact(l, m);
+        b[at(l, m)] = coefficient_b_exact(l, m);
+      }
+    for (int m = 1; m <= kTabulatedOrder; ++m) diagonal[m] = diagonal_step(m, diagonal[m - 1]);
+  }
+  static size_t size() { return size_t(kTabulatedOrder + 1) * (kTabulatedOrder + 1); }
+  static size_t at(int l, int m) { return size_t(l) * (kTabulatedOrder + 1) + m; }
+  // Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}, Q_00 = 1, Q_11 = √3.
+  static double diagonal_step(int m, double previous) {
+    return m == 1 ? std::sqrt(3.0) : previous * std::sqrt((2.0 * m + 1.0) / (2.0 * m));
+  }
+};
+
+const RecurrenceTables& tables() {
+  static const RecurrenceTables instance;
+  return instance;
+}
+
 template <bool kWithGradient>
 void evaluate(int order, const glm::dvec3& d, double* values, double* gradients) {
-  AssociatedLegendreColumn column;
+  const RecurrenceTables& table = tables();
+  double q_mm = 1.0;
   // (x + i y)^m and (x + i y)^(m-1), as real and imaginary parts.
   double re = 1.0, im = 0.0, re_prev = 0.0, im_prev = 0.0;
   for (int m = 0; m <= order; ++m) {
-    column.advance_diagonal(m);
+    q_mm = m <= kTabulatedOrder ? table.diagonal[m] : RecurrenceTables::diagonal_step(m, q_mm);
     if (m > 0) {
       re_prev = re;
       im_prev = im;
@@ -51,14 +67,16 @@ void evaluate(int order, const glm::dvec3& d, double* values, double* gradients)
     for (int l = m; l <= order; ++l) {
       double q, dq;
       if (l == m) {
-        q = column.q_mm;
+        q = q_mm;
         dq = 0.0;
       } else if (l == m + 1) {
         const double c = std::sqrt(2.0 * m + 3.0);
         q = c * d.z * q_prev;
         dq = c * q_prev;
       } else {
-        const double a = coefficient_a(l, m), b = coefficient_b(l, m);
+        const bool tabulated = l <= kTabulatedOrder;
+        const double a = tabulated ? table.a[RecurrenceTables::at(l, m)] : coefficient_a_exact(l, m);
+        const double b = tabulated ? table.b[RecurrenceTables::at(l, m)] : coefficient_b_exact(l, m);
         q = a * d.z * q_prev - b * q_prev2;
         dq = a * (q_prev + d.z * dq_prev) - b * dq_prev2;
       }

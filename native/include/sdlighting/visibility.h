@@ -1,0 +1,153 @@
+// Per-vertex visibility and transfer precompute with Embree 3 (msd-notes: eq. (1), PRT (2) and
+// (8)-(9), Theorem 2.2).
+//
+// For every vertex p with unit normal n, R rays x_1 .. x_R cover the WHOLE sphere (rays into the
+// surface are blocked by the surface itself) and start at p + ε n, tnear = 0, tfar = ∞. V_r = 1 when
+// ray r escapes the scene, else 0. The scene is one Embree scene of the object's triangles plus
+// optional occluder triangles (two-sided, float32, RTC_SCENE_FLAG_ROBUST, high build quality),
+// traced as rtcOccluded1M streams of each vertex's rays. The directions are a spherical Fibonacci set of R points (an equal-weight rule, weights 1/R) turned
+// by a uniformly random rotation drawn per vertex from splitmix64 seeded with
+// splitmix64_mix(seed) ⊕ vertex index, so results depend on (seed, vertex) only: deterministic
+// and independent of the thread count. With dμ = dx/4π and the SH y_lm of spherical_harmonics.h:
+//
+//   ambient occlusion  AO  = (1/R) Σ_r V_r                      (= Ṽ_00, the fraction of escaping rays)
+//   visibility         Ṽ_lm = (1/R) Σ_r V_r y_lm(x_r),                          l  <= s'
+//   product matrix     M_{lm,l'm'} = (1/R) Σ_r V_r y_lm(x_r) y_l'm'(x_r),        l <= s, l' <= s'
+//   diffuse transfer   T_lm = (1/R) Σ_r V_r 4 max(0, n·x_r) y_lm(x_r),           l <= s   (PRT (2))
+//   design             sd::weighted_design({x_r : V_r = 1}, 1/R each, s + s')     (Theorem 2.2)
+//
+// The design is a positive rule for the discrete measure of V: Σ_ν λ_ν f(x_ν) = (1/R) Σ_r V_r f(x_r)
+// for every polynomial f of degree <= s + s', its weights summing to AO. A vertex none of whose rays
+// escapes gets an EMPTY design (0 nodes): its B of (13) is 0.
+//
+// ε is scale-aware: 1e-4 × the diagonal of the bounding box of the object's vertices, but at least
+// 1e-5 × their largest absolute coordinate (Embree works in float32: the floor keeps ε above the
+// rounding of coordinates far from the origin). See ray_epsilon().
+#pragma once
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <vector>
+
+namespace sd {
+
+/// Thrown by a bake stopped through its progress callback or cancel flag. Nothing is returned.
+class BakeCancelled : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Highest order s' of the visibility expansion Ṽ (and the column order of M, the design's s').
+constexpr int kMaxVisibilityOrder = 8;
+/// Highest order s of the transfer vector T and the row order of M (the design's s).
+constexpr int kMaxTransferOrder = 16;
+/// Most rays per vertex a bake accepts (a guard against absurd allocations).
+constexpr int kMaxRaysPerVertex = 1 << 24;
+/// ε = kRayEpsilonScale × bounding-box diagonal of the object (see ray_epsilon()).
+constexpr double kRayEpsilonScale = 1e-4;
+/// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.
+constexpr double kRayEpsilonFloat = 1e-5;
+
+/// A triangle as three vertex indices (each must be in [0, vertex count)).
+using Triangle = std::array<std::int64_t, 3>;
+
+/// Triangles that block rays without being baked (a ground plane, other objects).
+struct OccluderMesh {
+  std::vector<glm::dvec3> vertices;
+  std::vector<Triangle> triangles;
+};
+
+/// What to bake. An order of -1 (the default) means "not requested"; AO is always computed.
+struct TransferOptions {
+  int rays = 1024;          ///< R >= 1 rays per vertex
+  std::uint64_t seed = 0;   ///< seeds the per-vertex rotations of the Fibonacci set
+  int visibility_order = -1;  ///< s' of Ṽ, in [0, kMaxVisibilityOrder]
+  int product_order = -1;     ///< s of M (rows), in [0, kMaxTransferOrder]; needs product_visibility_order
+  int product_visibility_order = -1;  ///< s' of M (columns), in [0, kMaxVisibilityOrder]
+  int transfer_order = -1;    ///< s of T, in [0, kMaxTransferOrder]
+  int design_order = -1;             ///< s of the design (degree s + s'), in [0, kMaxTransferOrder]
+  int design_visibility_order = -1;  ///< s' of the design, in [0, kMaxVisibilityOrder]
+  int threads = 0;            ///< worker threads; 0 = every hardware thread
+  bool record_rays = false;   ///< test hook: keep every V_r in TransferBake::ray_visibility
+  /// Called from the calling thread only, about every 50 ms and once more after the last vertex,
+  /// with (vertices done, vertex count); returning false cancels the bake (BakeCancelled). An
+  /// exception it throws cancels the bake and propagates once the workers have stopped.
+  std::function<bool(std::size_t done, std::size_t total)> progress;
+  /// Polled by the workers and the calling thread; true cancels the bake (BakeCancelled).
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+/// Results of bake_transfer; arrays are per vertex, row-major, empty when not requested.
+struct TransferBake {
+  std::size_t vertex_count = 0;
+  int rays = 0;
+  std::uint64_t seed = 0;
+  double epsilon = 0.0;  ///< the ray-origin offset used
+  double seconds = 0.0;  ///< wall time of the whole bake (scene build included)
+
+  std::vector<double> ambient_occlusion;  ///< [N]
+
+  int visibility_order = -1;
+  std::vector<double> visibility;  ///< [N][(s'+1)²]
+
+  int product_order = -1, product_visibility_order = -1;
+  std::vector<double> product_matrices;  ///< [N][(s+1)²][(s'+1)²]
+
+  int transfer_order = -1;
+  std::vector<double> transfer;  ///< [N][(s+1)²]
+
+  int design_degree = -1;  ///< s + s', or -1
+  /// Vertex i's design is nodes/weights [design_offsets[i], design_offsets[i+1]); empty when no
+  /// ray of the vertex escapes.
+  std::vector<std::int64_t> design_offsets;  ///< [N+1]
+  std::vector<glm::dvec3> design_nodes;
+  std::vector<double> design_weights;
+  std::vector<double> design_residuals;  ///< [N] certified moment residual / mass (0 when empty)
+
+  std::vector<std::uint8_t> ray_visibility;  ///< [N][R] V_r, only with record_rays
+};
+
+/// Bakes the requested outputs for every vertex of a triangle mesh.
+///
+/// vertices/normals: N >= 1 finite points and non-zero finite normals (normalised here).
+/// triangles: indices into vertices (may be empty: the vertices are then probes; degenerate
+/// triangles are fine). occluders: extra blocking triangles, indices into occluders.vertices.
+/// Throws std::invalid_argument on bad input (NaN/inf, zero normal, index out of range, orders out
+/// of range, rays < 1, no vertices), BakeCancelled when cancelled, std::runtime_error naming the
+/// vertex when its design cannot be certified or Embree fails. Runs options.threads workers over
+/// chunks of vertices; the calling thread only reports progress. Results are returned only on
+/// success.
+TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
+                           const std::vector<Triangle>& triangles, const TransferOptions& options,
+                           const OccluderMesh& occluders = {});
+
+/// Ṽ of order `order` for every vertex ([N][(order+1)²]): bake_transfer with only the visibility
+/// requested.
+std::vector<double> bake_visibility(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
+                                    const std::vector<Triangle>& triangles, int order, int rays,
+                                    std::uint64_t seed = 0, const OccluderMesh& occluders = {},
+                                    std::function<bool(std::size_t, std::size_t)> progress = {});
+
+/// The ray-origin offset bake_transfer uses for these object vertices (see the file comment);
+/// when all coincide at the origin, 1e-4 × the occluders' diagonal, or 1e-6 if that is 0 too.
+double ray_epsilon(const std::vector<glm::dvec3>& vertices, const OccluderMesh& occluders = {});
+
+/// The spherical Fibonacci set of `count` points: z_i = 1 − (2i+1)/count, azimuth 2π frac(i φ⁻¹)
+/// (φ the golden ratio), an equal-weight rule for dμ.
+std::vector<glm::dvec3> spherical_fibonacci(int count);
+
+/// The uniformly random rotation of `vertex`'s ray set (Shoemake's quaternion from splitmix64).
+glm::dmat3 vertex_ray_rotation(std::uint64_t seed, std::size_t vertex);
+
+/// The R ray directions of `vertex`: vertex_ray_rotation(seed, vertex) × spherical_fibonacci(rays),
+/// in the order of TransferBake::ray_visibility.
+std::vector<glm::dvec3> vertex_ray_directions(int rays, std::uint64_t seed, std::size_t vertex);
+
+}  // namespace sd

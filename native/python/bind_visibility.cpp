@@ -1,0 +1,289 @@
+// Bindings of the visibility / transfer precompute (sdlighting/visibility.h): bake_transfer,
+// bake_visibility, the ray-direction hook and the BakeCancelled exception.
+//
+// Arrays are checked here (shapes, dtypes, finiteness) so that bad input raises ValueError naming the
+// argument; the library's std::invalid_argument surfaces as ValueError too. The bake runs without
+// the GIL; the progress callback is called with the GIL re-acquired, from the calling thread only.
+#include "array_checks.h"
+#include "bindings.h"
+#include "sdlighting/spherical_harmonics.h"
+#include "sdlighting/visibility.h"
+#include "sdlighting/weighted_design.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace sdpy {
+namespace {
+
+using IndexPair = std::optional<std::pair<int, int>>;
+
+// Points from an (N, 3) float array, finite (N may be 0).
+std::vector<glm::dvec3> read_points(const char* name, const DoubleArray& a) {
+  if (a.ndim() != 2 || a.shape(1) != 3) value_error(std::string(name) + " must have shape (N, 3), got " + shape_string(a));
+  const size_t n = static_cast<size_t>(a.shape(0));
+  check_finite(name, a.data(), 3 * n);
+  std::vector<glm::dvec3> points(n);
+  const double* data = a.data();
+  for (size_t i = 0; i < n; ++i) points[i] = glm::dvec3(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+  return points;
+}
+
+// Triangles from an (T, 3) integer array (any integer dtype; an empty array of any dtype).
+std::vector<sd::Triangle> read_triangles(const char* name, const py::object& object) {
+  const py::array a = py::array::ensure(object);
+  if (!a) value_error(std::string(name) + " must be an integer array of shape (T, 3)");
+  if (a.ndim() != 2 || a.shape(1) != 3) value_error(std::string(name) + " must have shape (T, 3), got " + shape_string(a));
+  const size_t t = static_cast<size_t>(a.shape(0));
+  if (t == 0) return {};
+  const char kind = a.dtype().kind();
+  if (kind != 'i' && kind != 'u') {
+    value_error(std::string(name) + " must hold integers, got dtype " + std::string(py::str(a.dtype())));
+  }
+  using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  const IndexArray indices = IndexArray::ensure(a);
+  if (!indices) value_error(std::string(name) + " cannot be converted to int64");
+  // uint64 values above INT64_MAX wrap to negative numbers, which the library's range check rejects.
+  std::vector<sd::Triangle> triangles(t);
+  const std::int64_t* data = indices.data();
+  for (size_t i = 0; i < t; ++i) triangles[i] = {data[3 * i], data[3 * i + 1], data[3 * i + 2]};
+  return triangles;
+}
+
+sd::OccluderMesh read_occluders(const std::optional<DoubleArray>& vertices, const py::object& triangles) {
+  if (vertices.has_value() != !triangles.is_none()) {
+    value_error("occluder_vertices and occluder_triangles must be given together");
+  }
+  sd::OccluderMesh mesh;
+  if (!vertices) return mesh;
+  mesh.vertices = read_points("occluder_vertices", *vertices);
+  mesh.triangles = read_triangles("occluder_triangles", triangles);
+  return mesh;
+}
+
+// Moves a vector into a numpy array that owns it (no copy).
+template <typename T>
+py::array adopt(std::vector<T>&& values, std::vector<py::ssize_t> shape, const py::dtype& dtype = py::dtype::of<T>()) {
+  auto* heap = new std::vector<T>(std::move(values));
+  py::capsule owner(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array(dtype, std::move(shape), {}, heap->data(), owner);
+}
+
+// The progress callback seen by the library: calls `progress` (when not None) with the GIL held (None
+// or any true value continues, a false value cancels) and checks for signals (Ctrl-C cancels the bake with KeyboardInterrupt). A Python exception propagates
+// as py::error_already_set, which cancels the bake and is re-raised.
+std::function<bool(size_t, size_t)> progress_function(const py::object* progress) {
+  return [progress](size_t done, size_t total) -> bool {
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (progress->is_none()) return true;
+    const py::object answer = (*progress)(done, total);
+    if (answer.is_none()) return true;
+    const int truth = PyObject_IsTrue(answer.ptr());
+    if (truth < 0) throw py::error_already_set();
+    return truth != 0;
+  };
+}
+
+sd::TransferBake run_bake(const DoubleArray& vertices, const DoubleArray& normals, const py::object& triangles,
+                          sd::TransferOptions options, const std::optional<DoubleArray>& occluder_vertices,
+                          const py::object& occluder_triangles, const py::object& progress) {
+  const std::vector<glm::dvec3> v = read_points("vertices", vertices);
+  if (v.empty()) value_error("vertices is empty: the mesh needs at least one vertex");
+  const std::vector<glm::dvec3> n = read_points("normals", normals);
+  if (n.size() != v.size()) {
+    value_error("normals must have shape (" + std::to_string(v.size()) + ", 3) to match vertices, got " +
+                shape_string(normals));
+  }
+  const std::vector<sd::Triangle> t = read_triangles("triangles", triangles);
+  const sd::OccluderMesh occluders = read_occluders(occluder_vertices, occluder_triangles);
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) value_error("progress must be callable or None");
+  options.progress = progress_function(&progress);
+  py::gil_scoped_release release;
+  return sd::bake_transfer(v, n, t, options, occluders);
+}
+
+py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
+  const auto n = static_cast<py::ssize_t>(bake.vertex_count);
+  py::dict out;
+  out["ambient_occlusion"] = adopt(std::move(bake.ambient_occlusion), {n});
+  if (bake.visibility_order >= 0) {
+    out["visibility"] = adopt(std::move(bake.visibility), {n, py::ssize_t(sd::sh_count(bake.visibility_order))});
+  }
+  if (bake.product_order >= 0) {
+    out["product_matrices"] =
+        adopt(std::move(bake.product_matrices), {n, py::ssize_t(sd::sh_count(bake.product_order)),
+                                                 py::ssize_t(sd::sh_count(bake.product_visibility_order))});
+  }
+  if (bake.transfer_order >= 0) {
+    out["transfer"] = adopt(std::move(bake.transfer), {n, py::ssize_t(sd::sh_count(bake.transfer_order))});
+  }
+  if (bake.design_degree >= 0) {
+    const auto total = static_cast<py::ssize_t>(bake.design_nodes.size());
+    py::array_t<double> nodes({total, py::ssize_t(3)});
+    double* data = nodes.mutable_data();
+    for (py::ssize_t i = 0; i < total; ++i) {
+      data[3 * i + 0] = bake.design_nodes[i].x;
+      data[3 * i + 1] = bake.design_nodes[i].y;
+      data[3 * i + 2] = bake.design_nodes[i].z;
+    }
+    out["design_offsets"] = adopt(std::move(bake.design_offsets), {n + 1});
+    out["design_nodes"] = std::move(nodes);
+    out["design_weights"] = adopt(std::move(bake.design_weights), {total});
+    out["design_residuals"] = adopt(std::move(bake.design_residuals), {n});
+    out["design_degree"] = bake.design_degree;
+  }
+  if (return_rays) {
+    out["ray_visibility"] =
+        adopt(std::move(bake.ray_visibility), {n, py::ssize_t(bake.rays)}, py::dtype("bool"));
+  }
+  out["rays"] = bake.rays;
+  out["seed"] = bake.seed;
+  out["epsilon"] = bake.epsilon;
+  out["seconds"] = bake.seconds;
+  return out;
+}
+
+py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normals, const py::object& triangles,
+                          int rays, std::uint64_t seed, int visibility_order, const IndexPair& product_orders,
+                          int transfer_order, const IndexPair& design_orders,
+                          const std::optional<DoubleArray>& occluder_vertices, const py::object& occluder_triangles,
+                          const py::object& progress, int threads, bool return_rays) {
+  sd::TransferOptions options;
+  options.rays = rays;
+  options.seed = seed;
+  options.visibility_order = visibility_order;
+  if (product_orders) {
+    options.product_order = product_orders->first;
+    options.product_visibility_order = product_orders->second;
+    check_range("product_orders s", options.product_order, 0, sd::kMaxTransferOrder);
+    check_range("product_orders s'", options.product_visibility_order, 0, sd::kMaxVisibilityOrder);
+  }
+  options.transfer_order = transfer_order;
+  if (design_orders) {
+    options.design_order = design_orders->first;
+    options.design_visibility_order = design_orders->second;
+    check_range("design_orders s", options.design_order, 0, sd::kMaxTransferOrder);
+    check_range("design_orders s'", options.design_visibility_order, 0, sd::kMaxVisibilityOrder);
+  }
+  if (threads < 0) value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(threads));
+  options.threads = threads;
+  options.record_rays = return_rays;
+  return bake_dict(run_bake(vertices, normals, triangles, options, occluder_vertices, occluder_triangles, progress),
+                   return_rays);
+}
+
+py::array py_bake_visibility(const DoubleArray& vertices, const DoubleArray& normals, const py::object& triangles,
+                             int order, int rays, std::uint64_t seed,
+                             const std::optional<DoubleArray>& occluder_vertices,
+                             const py::object& occluder_triangles, const py::object& progress, int threads) {
+  check_range("order", order, 0, sd::kMaxVisibilityOrder);
+  if (threads < 0) value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(threads));
+  sd::TransferOptions options;
+  options.rays = rays;
+  options.seed = seed;
+  options.visibility_order = order;
+  options.threads = threads;
+  sd::TransferBake bake =
+      run_bake(vertices, normals, triangles, options, occluder_vertices, occluder_triangles, progress);
+  const auto n = static_cast<py::ssize_t>(bake.vertex_count);
+  return adopt(std::move(bake.visibility), {n, py::ssize_t(sd::sh_count(order))});
+}
+
+py::array_t<double> py_vertex_ray_directions(int rays, std::uint64_t seed, py::ssize_t vertex) {
+  check_range("rays", rays, 1, sd::kMaxRaysPerVertex);
+  if (vertex < 0) value_error("vertex must be >= 0, got " + std::to_string(vertex));
+  const std::vector<glm::dvec3> dirs = sd::vertex_ray_directions(rays, seed, static_cast<size_t>(vertex));
+  py::array_t<double> out({py::ssize_t(rays), py::ssize_t(3)});
+  double* data = out.mutable_data();
+  for (int i = 0; i < rays; ++i) {
+    data[3 * i + 0] = dirs[i].x;
+    data[3 * i + 1] = dirs[i].y;
+    data[3 * i + 2] = dirs[i].z;
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_visibility(py::module_& m) {
+  py::register_exception<sd::BakeCancelled>(m, "BakeCancelled", PyExc_RuntimeError);
+  m.attr("BakeCancelled").attr("__doc__") =
+      "Raised by bake_transfer / bake_visibility when the progress callback returns False (or the bake "
+      "is otherwise cancelled). A subclass of RuntimeError; nothing is returned.";
+  m.attr("MAX_VISIBILITY_ORDER") = sd::kMaxVisibilityOrder;
+  m.attr("MAX_TRANSFER_ORDER") = sd::kMaxTransferOrder;
+  m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
+
+  m.def("bake_transfer", &py_bake_transfer, py::arg("vertices"), py::arg("normals"), py::arg("triangles"),
+        py::arg("rays"), py::arg("seed") = 0, py::arg("visibility_order") = -1,
+        py::arg("product_orders") = py::none(), py::arg("transfer_order") = -1,
+        py::arg("design_orders") = py::none(), py::arg("occluder_vertices") = py::none(),
+        py::arg("occluder_triangles") = py::none(), py::arg("progress") = py::none(), py::arg("threads") = 0,
+        py::arg("return_rays") = false,
+        R"doc(Per-vertex visibility and transfer precompute with Embree (ray casting over the whole sphere).
+
+For vertex p with unit normal n, `rays` rays x_r start at p + epsilon n (tnear 0, tfar inf) in the
+directions of a spherical Fibonacci set turned by a random rotation drawn per vertex from the seed
+(vertex_ray_directions gives them): deterministic, independent of the thread count. V_r = 1 if ray r
+escapes the scene (the mesh's triangles plus the occluders; triangles are two-sided). With equal
+weights 1/R and the module's real SH y_lm:
+  ambient_occlusion  (1/R) sum_r V_r   (always returned)
+  visibility         V~_lm = (1/R) sum_r V_r y_lm(x_r), l <= s' = visibility_order
+  product_matrices   M[lm, l'm'] = (1/R) sum_r V_r y_lm(x_r) y_l'm'(x_r), l <= s, l' <= s'
+                     for product_orders = (s, s')
+  transfer           T_lm = (1/R) sum_r V_r 4 max(0, n.x_r) y_lm(x_r), l <= transfer_order (PRT eq. 2)
+  design             per vertex, weighted_design(escaping directions, 1/R each, s + s') for
+                     design_orders = (s, s') (Theorem 2.2): sum_v lambda_v f(x_v) equals
+                     (1/R) sum_r V_r f(x_r) for every polynomial f of degree <= s + s'; the weights
+                     sum to the vertex's ambient occlusion. A vertex whose rays are all blocked gets an
+                     EMPTY design (0 nodes; its B is 0).
+
+vertices: (N, 3) floats, N >= 1, finite.  normals: (N, 3), finite and non-zero (normalised here).
+triangles: (T, 3) integer indices into vertices (T may be 0: the vertices are then just probes).
+rays: rays per vertex, in [1, MAX_RAYS_PER_VERTEX].  seed: non-negative int.
+visibility_order: s' in [0, MAX_VISIBILITY_ORDER], or -1 (not requested).
+product_orders, design_orders: None or (s, s') with s in [0, MAX_TRANSFER_ORDER], s' in
+    [0, MAX_VISIBILITY_ORDER].  transfer_order: s in [0, MAX_TRANSFER_ORDER], or -1.
+occluder_vertices (M, 3), occluder_triangles (K, 3): extra blocking geometry, both or neither.
+progress: None or a callable progress(done, total) (vertex counts), called about every 50 ms and
+    once at the end from the calling thread with the GIL held; returning False cancels the bake
+    (BakeCancelled); an exception it raises cancels the bake and propagates. Ctrl-C cancels too.
+threads: worker threads, 0 (default) = every hardware thread.
+return_rays: test hook, adds "ray_visibility" (bool (N, rays), V_r in vertex_ray_directions order).
+
+Returns a dict: "ambient_occlusion" (N,); "visibility" (N, (s'+1)**2); "product_matrices"
+(N, (s+1)**2, (s'+1)**2); "transfer" (N, (s+1)**2); "design_offsets" int64 (N+1,) (vertex i's nodes
+are design_nodes[design_offsets[i]:design_offsets[i+1]]), "design_nodes" (total, 3),
+"design_weights" (total,), "design_residuals" (N,) (certified moment residual / mass, 0 for an empty
+design), "design_degree" (int); each only when requested; plus "rays", "seed", "epsilon" (the
+origin offset used: 1e-4 x the bounding-box diagonal of the vertices, at least 1e-5 x their largest
+absolute coordinate) and "seconds" (wall time). Raises ValueError on bad input, BakeCancelled when
+cancelled, RuntimeError naming the vertex if a design cannot be certified. Releases the GIL.)doc");
+
+  m.def("bake_visibility", &py_bake_visibility, py::arg("vertices"), py::arg("normals"), py::arg("triangles"),
+        py::arg("order"), py::arg("rays"), py::arg("seed") = 0, py::arg("occluder_vertices") = py::none(),
+        py::arg("occluder_triangles") = py::none(), py::arg("progress") = py::none(), py::arg("threads") = 0,
+        R"doc(Visibility V~ of order `order` (s' in [0, MAX_VISIBILITY_ORDER]) for every vertex: the same
+bake as bake_transfer(..., visibility_order=order)["visibility"], shape (N, (order+1)**2). Its
+column 0 is the ambient occlusion. Arguments as for bake_transfer. Releases the GIL.)doc");
+
+  m.def("vertex_ray_directions", &py_vertex_ray_directions, py::arg("rays"), py::arg("seed"), py::arg("vertex"),
+        R"doc(The ray directions bake_transfer uses for vertex index `vertex` with this seed: a spherical
+Fibonacci set of `rays` points (z_i = 1 - (2i+1)/rays, azimuth 2 pi frac(i / golden ratio)) turned by
+the vertex's random rotation (Shoemake's uniform quaternion from splitmix64 seeded with
+mix(seed) xor vertex). Returns (rays, 3) unit vectors, in the order of "ray_visibility".)doc");
+}
+
+}  // namespace sdpy

@@ -16,6 +16,8 @@ void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2) {
 
 namespace {
 
+constexpr int kStallWindow = 10;
+
 struct Linearisation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2)
@@ -58,12 +60,18 @@ void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
 }  // namespace
 
 double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
-                  std::vector<double>& weights, double tolerance, int max_iterations) {
+                  std::vector<double>& weights, const FitOptions& options) {
+  const double tolerance = options.tolerance;
   Linearisation lin;
   linearise(system, nodes, weights, lin);
   double cost = lin.residual.norm();
   double damping = 1e-3;
-  for (int iteration = 0; iteration < max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
+  double cost_before = cost;  // kStallWindow iterations ago
+  for (int iteration = 0; iteration < options.max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
+    if (options.stop_when_stalled && iteration > 0 && iteration % kStallWindow == 0) {
+      if (cost > 0.5 * cost_before && cost > 1e3 * tolerance) break;
+      cost_before = cost;
+    }
     const int n = static_cast<int>(nodes.size());
     // Marquardt's scaling keeps the step meaningful whatever the units of λ and of angles.
     Eigen::MatrixXd normal = lin.jacobian.transpose() * lin.jacobian;
@@ -105,10 +113,9 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
 }
 
 SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design, int target_size,
-                             const std::function<bool(SphericalDesign&)>& certify, double tolerance,
-                             int max_iterations) {
+                             const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options) {
   int step = std::max(1, design.size() - target_size);
-  while (step >= 1 && design.size() - step >= 1) {
+  while (step >= 1 && design.size() - step >= std::max(target_size, 1)) {
     std::vector<int> order(design.size());
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) { return design.weights[a] > design.weights[b]; });
@@ -119,7 +126,7 @@ SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design,
       candidate.nodes.push_back(design.nodes[order[j]]);
       candidate.weights.push_back(design.weights[order[j]]);
     }
-    fit_design(system, candidate.nodes, candidate.weights, tolerance, max_iterations);
+    fit_design(system, candidate.nodes, candidate.weights, options);
     if (certify(candidate)) {
       design = std::move(candidate);
       step = std::min(step, std::max(1, design.size() - target_size));

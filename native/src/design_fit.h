@@ -27,18 +27,28 @@ struct MomentSystem {
   std::function<glm::dvec3(const glm::dvec3& dir)> project_to_support;
 };
 
+/// When to stop a fit.
+struct FitOptions {
+  double tolerance = 0.0;   ///< stop once √E <= tolerance
+  int max_iterations = 300;
+  /// Give up once E stops halving over 10 iterations: cheap for the many small per-vertex
+  /// designs of a bake, while one-off lobe designs are worth the slow phases some fits go through.
+  bool stop_when_stalled = false;
+};
+
 /// Minimises E = ‖Σ_ν λ_ν F(x_ν) − target‖² over x_ν ∈ S², λ_ν >= 0 (eq. 14) by projected
 /// Levenberg–Marquardt steps: each step moves nodes in their tangent planes, then projects back
 /// onto the sphere (and the system's support, if it has one) and λ onto λ >= 0. Nodes whose weight reaches 0 are removed. Returns √E.
 double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
-                  std::vector<double>& weights, double tolerance, int max_iterations);
+                  std::vector<double>& weights, const FitOptions& options);
 
 /// Gradient projection used to remove nodes: drops the `step` lightest nodes of a certified
 /// design, refits, keeps the result if `certify` accepts it (it sets the residual), and halves the
-/// step after a failure; the first step aims at `target_size`. Returns the smallest design found.
+/// step after a failure; the first step aims at `target_size`, below which it never goes (the
+/// generic count: fewer nodes have fewer unknowns than moment equations). Returns the smallest
+/// design found.
 SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design, int target_size,
-                             const std::function<bool(SphericalDesign&)>& certify, double tolerance,
-                             int max_iterations);
+                             const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options);
 
 /// Two unit vectors completing `dir` to an orthonormal frame.
 void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2);

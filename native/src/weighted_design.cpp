@@ -134,7 +134,7 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
 
   const int generic = std::max(1, (rank + 2) / 3);
   return prune_design(basis.system(target), std::move(best), generic, certified,
-                      1e-15 * std::sqrt(measure.mass), 100);
+                      FitOptions{1e-15 * std::sqrt(measure.mass), 100, true});
 }
 
 }  // namespace sd

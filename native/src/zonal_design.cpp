@@ -150,9 +150,8 @@ class ZonalDesignBuilder {
     // over three unknowns per node.
     const int generic = std::max(sh_count(degree_) / 3, design_lower_bound(degree_));
     const MomentSystem system = orthonormal_zonal_system(weight_, degree_);
-    const double tolerance = 1e-15 * std::sqrt(weight_.mass());
     auto certify = [this](SphericalDesign& design) { return try_certify(design); };
-    SphericalDesign best = prune_design(system, gauss, generic, certify, tolerance, kMaxIterations);
+    SphericalDesign best = prune_design(system, gauss, generic, certify, fit_options());
     best.method = "gradient";
     std::optional<SphericalDesign> spread;
     for (int n = std::min(generic, best.size() - 1); n >= design_lower_bound(degree_); --n) {
@@ -174,6 +173,8 @@ class ZonalDesignBuilder {
   static constexpr int kExtraSizes = 3;
   static constexpr int kMaxIterations = 300;
 
+  FitOptions fit_options() const { return FitOptions{1e-15 * std::sqrt(weight_.mass()), kMaxIterations, false}; }
+
   std::optional<SphericalDesign> attempt(const MomentSystem& system, int n) const {
     std::mt19937_64 rng(1000003ull * degree_ + n);
     std::uniform_real_distribution<double> jitter(-0.5, 0.5);
@@ -188,7 +189,7 @@ class ZonalDesignBuilder {
         design.nodes.push_back(direction_from(quantile(u), phase + golden_angle * i));
         design.weights.push_back(weight_.mass() / n);
       }
-      fit_design(system, design.nodes, design.weights, 1e-15 * std::sqrt(weight_.mass()), kMaxIterations);
+      fit_design(system, design.nodes, design.weights, fit_options());
       if (design.size() > 0 && design.size() <= n && try_certify(design)) return design;
     }
     return std::nullopt;

@@ -1,5 +1,6 @@
 #include "sdlighting/shading.h"
 
+#include "lobe_frame.h"
 #include "parallel_for.h"
 #include "sdlighting/gaunt.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -85,16 +86,6 @@ void add_light(const double* light, int count, const double* y, double scale, do
   rgb[0] += scale * r;
   rgb[1] += scale * g;
   rgb[2] += scale * b;
-}
-
-// Any rotation taking e3 to a (Duff et al., "Building an orthonormal basis, revisited", 2017);
-// the twist does not matter for a zonal lobe (Theorem 2.1).
-void frame_around(const glm::dvec3& a, glm::dvec3& t1, glm::dvec3& t2) {
-  const double sign = std::copysign(1.0, a.z);
-  const double c = -1.0 / (sign + a.z);
-  const double d = a.x * a.y * c;
-  t1 = {1.0 + sign * a.x * a.x * c, sign * d, -sign * a.x};
-  t2 = {d, sign + a.y * a.y * c, -a.y};
 }
 
 }  // namespace

@@ -1,0 +1,45 @@
+// The ground truth every method is measured against: eq. (1) by Monte Carlo, with the
+// full-resolution environment (not band-limited), ray-traced visibility and the exact lobe.
+#pragma once
+
+#include "sdlighting/environment.h"
+#include "sdlighting/shading.h"
+#include "sdlighting/visibility.h"
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace sd {
+
+/// How much work the reference does.
+struct ReferenceOptions {
+  int samples = 4096;       ///< sample pairs per vertex (each pair traces up to two rays)
+  std::uint64_t seed = 0;   ///< the estimate depends on (seed, vertex) only, not on threads
+  int threads = 0;          ///< 0: every hardware thread
+};
+
+/// B per vertex and the Monte Carlo standard error of each value (both vertex_count × 3).
+struct ReferenceResult {
+  std::vector<double> radiance;
+  std::vector<double> standard_error;
+  int samples = 0;
+  double epsilon = 0.0;  ///< the ray-origin offset, the same as the bake's (ray_epsilon)
+};
+
+/// B_p(v, g) = ∫ L(g x) V_p(x) w(a_p·x) dμ(x), eq. (1), for every vertex: each sample pair draws one
+/// direction from the environment (EnvironmentSampler, texels ∝ luminance) and one from the lobe
+/// (exactly: t = u^(1/(σ+1))), combined by the balance heuristic (multiple importance sampling),
+/// so that both a sun and a narrow highlight converge. V is traced with Embree against the
+/// object's triangles and the occluders from p + ε n, as the bake does. L is the map's texels
+/// (piecewise constant), unfiltered. `views` (unit, vertex → eye) are read for Phong only.
+/// Throws std::invalid_argument on bad input (as bake_transfer does, and samples < 1).
+ReferenceResult shade_reference(const Environment& environment, const glm::dmat3& rotation,
+                                const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
+                                const std::vector<glm::dvec3>& views, const std::vector<Triangle>& triangles,
+                                const Material& material, const ReferenceOptions& options,
+                                const OccluderMesh& occluders = {});
+
+}  // namespace sd

@@ -11,7 +11,9 @@ namespace {
 
 constexpr const char* kModuleDoc = R"doc(
 Native core of sd-lighting: real spherical harmonics, SH rotation, zonal BRDF lobes, real Gaunt
-coefficients and weighted spherical designs (the method of spherical designs, MSD).
+coefficients, weighted spherical designs, environment maps, the Embree visibility bake and every
+shading formula of the method of spherical designs (MSD) and of PRT, with the Monte Carlo
+reference they are measured against.
 
 Spherical-harmonic convention (the same in C++, Python and GLSL):
   Real SH y_lm orthonormal for the normalised measure dmu = dx / (4 pi) on the unit sphere, so
@@ -39,6 +41,13 @@ Functions:
   gaunt_coefficients(a, b, c)           real Gaunt coefficients (sparse)
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
+  load_environment(path), load_cube_environment(faces), environment_from_pixels(rgb)
+                                        -> Environment: .sh(lmax), .band_limited(...), errors, designs
+  rotated_environment_sh(coeffs, g)     coefficients of x -> L(g x)
+  bake_transfer(vertices, normals, triangles, rays, ...)   per-vertex AO, Ṽ, M, T, V designs
+  bake_visibility(vertices, normals, triangles, order, rays, ...)   Ṽ only
+  shade(method, light, normals, ...)    eqs. (2), (8)-(9), (10), (12), (13), unshadowed, AO
+  reference(environment, vertices, normals, triangles, ...)   eq. (1) by Monte Carlo
 
 Arrays are accepted in any form numpy converts to float64 (C-contiguous copies are made when
 needed) and returned as float64 numpy arrays. Bad shapes, NaN or infinity, negative weights and

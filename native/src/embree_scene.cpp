@@ -109,18 +109,9 @@ void EmbreeScene::commit() {
 bool EmbreeScene::occluded(const glm::dvec3& origin, const glm::dvec3& dir) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRay ray{};
-  ray.org_x = static_cast<float>(origin.x);
-  ray.org_y = static_cast<float>(origin.y);
-  ray.org_z = static_cast<float>(origin.z);
-  ray.dir_x = static_cast<float>(dir.x);
-  ray.dir_y = static_cast<float>(dir.y);
-  ray.dir_z = static_cast<float>(dir.z);
-  ray.tnear = 0.0f;
-  ray.tfar = std::numeric_limits<float>::infinity();
-  ray.mask = 0xFFFFFFFFu;
+  RTCRay ray = occlusion_ray(origin, dir);
   rtcOccluded1(scene_, &context, &ray);
-  return ray.tfar < 0.0f;  // Embree marks a hit by setting tfar to -inf
+  return is_occluded(ray);
 }
 
 std::string EmbreeScene::error_name(RTCError code) {

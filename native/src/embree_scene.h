@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,24 @@ void check_triangles(const char* name, const std::vector<Triangle>& triangles, s
 
 /// The normals made unit length; throws std::invalid_argument for non-finite or zero ones.
 std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals);
+
+/// An occlusion ray from `origin` along `dir`, t in [0, ∞) (Embree works in float32).
+inline RTCRay occlusion_ray(const glm::dvec3& origin, const glm::dvec3& dir) {
+  RTCRay ray{};
+  ray.org_x = static_cast<float>(origin.x);
+  ray.org_y = static_cast<float>(origin.y);
+  ray.org_z = static_cast<float>(origin.z);
+  ray.dir_x = static_cast<float>(dir.x);
+  ray.dir_y = static_cast<float>(dir.y);
+  ray.dir_z = static_cast<float>(dir.z);
+  ray.tnear = 0.0f;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  return ray;
+}
+
+/// Whether Embree marked the ray occluded (it sets tfar to −∞ on a hit).
+inline bool is_occluded(const RTCRay& ray) { return ray.tfar < 0.0f; }
 
 /// A committed Embree scene of the object's triangles and the occluders' (robust, high quality).
 class EmbreeScene {

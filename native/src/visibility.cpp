@@ -111,7 +111,6 @@ void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& p, const gl
   // (visibility_benchmarks).
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  const float ox = static_cast<float>(origin.x), oy = static_cast<float>(origin.y), oz = static_cast<float>(origin.z);
   s.escaped.clear();
   for (int start = 0; start < rays; start += kStreamBlock) {
     const int count = std::min(kStreamBlock, rays - start);
@@ -120,23 +119,11 @@ void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& p, const gl
     for (int i = 0; i < count; ++i) {
       const glm::dvec3 x = rotation * base[start + i];
       s.directions[i] = x;
-      RTCRay& ray = s.stream[i];
-      ray.org_x = ox;
-      ray.org_y = oy;
-      ray.org_z = oz;
-      ray.tnear = 0.0f;
-      ray.dir_x = static_cast<float>(x.x);
-      ray.dir_y = static_cast<float>(x.y);
-      ray.dir_z = static_cast<float>(x.z);
-      ray.time = 0.0f;
-      ray.tfar = std::numeric_limits<float>::infinity();
-      ray.mask = 0xFFFFFFFFu;
-      ray.id = 0;
-      ray.flags = 0;
+      s.stream[i] = occlusion_ray(origin, x);
     }
     rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(count), sizeof(RTCRay));
     for (int i = 0; i < count; ++i) {
-      const bool escapes = s.stream[i].tfar >= 0.0f;  // an occluded ray comes back with tfar = -inf
+      const bool escapes = !is_occluded(s.stream[i]);
       if (escapes) s.escaped.push_back(s.directions[i]);
       if (record) record[start + i] = escapes ? 1 : 0;
     }

@@ -7,6 +7,7 @@
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/zonal_lobe.h"
+#include "sphere_test_support.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -36,20 +37,18 @@ const std::string kBlenderWorlds = "/usr/share/blender/datafiles/studiolights/wo
 const char* const kBlenderHdris[] = {"city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"};
 
 using Radiance = std::function<glm::dvec3(const glm::dvec3&)>;
+using test::equirect_pixel_direction;
+using test::random_direction;
+using test::random_rotation;
+using test::SphereRule;
 
 // ---- references written independently of the library ----
-
-// Pixel centre of row j (from the top), column i: θ = π (j+0.5)/H, φ = π − 2π (i+0.5)/W.
-glm::dvec3 pixel_direction(int i, int j, int width, int height) {
-  const double theta = kPi * (j + 0.5) / height, phi = kPi - 2.0 * kPi * (i + 0.5) / width;
-  return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
-}
 
 std::vector<float> equirect_pixels(int width, int height, const Radiance& f) {
   std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
   for (int j = 0; j < height; ++j) {
     for (int i = 0; i < width; ++i) {
-      const glm::dvec3 v = f(pixel_direction(i, j, width, height));
+      const glm::dvec3 v = f(equirect_pixel_direction(i, j, width, height));
       for (int c = 0; c < 3; ++c) rgb[3 * (static_cast<size_t>(j) * width + i) + c] = static_cast<float>(v[c]);
     }
   }
@@ -109,24 +108,12 @@ BandLimited random_band_limited(int order, unsigned seed) {
   return f;
 }
 
-glm::dvec3 random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  return glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
-}
-
-// Uniform on SO(3) from a normalised Gaussian quaternion (independent of glm's conventions).
-glm::dmat3 random_rotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  double w = normal(rng), x = normal(rng), y = normal(rng), z = normal(rng);
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  w /= n, x /= n, y /= n, z /= n;
-  const double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
-                          {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
-                          {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
-  glm::dmat3 r;
-  for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 3; ++col) r[col][row] = m[row][col];
-  return r;
+// `count` floats uniform in [0, max), drawn from rng in order: random pixels of a test map.
+std::vector<float> random_pixels(size_t count, float max, std::mt19937_64& rng) {
+  std::uniform_real_distribution<float> uniform(0.0f, max);
+  std::vector<float> pixels(count);
+  for (float& v : pixels) v = uniform(rng);
+  return pixels;
 }
 
 double max_abs(const std::vector<double>& v) {
@@ -255,7 +242,7 @@ TEST(Environment, TexelDirectionsAndLookupAgree) {
   // Texel centres against the independent formulas.
   for (int j = 0; j < 19; ++j)
     for (int i = 0; i < 37; ++i)
-      ASSERT_LT(glm::length(equirect.texel_direction(j * 37 + i) - pixel_direction(i, j, 37, 19)), kExact);
+      ASSERT_LT(glm::length(equirect.texel_direction(j * 37 + i) - equirect_pixel_direction(i, j, 37, 19)), kExact);
   for (int f = 0; f < 6; ++f)
     for (int j = 0; j < 9; ++j)
       for (int i = 0; i < 9; ++i)
@@ -302,13 +289,8 @@ TEST(Environment, SolidAnglesAreExactAndSumToOne) {
 
 TEST(Environment, ProjectionEqualsTexelSum) {
   std::mt19937_64 rng(3);
-  std::uniform_real_distribution<float> uniform(0.0f, 5.0f);
-  std::vector<float> rgb(50 * 27 * 3);
-  for (float& v : rgb) v = uniform(rng);
-  const Environment equirect = Environment::from_equirect_pixels(50, 27, rgb);
-  std::vector<float> faces(6 * 7 * 7 * 3);
-  for (float& v : faces) v = uniform(rng);
-  const Environment cube = Environment::from_cube_pixels(7, faces);
+  const Environment equirect = Environment::from_equirect_pixels(50, 27, random_pixels(50 * 27 * 3, 5.0f, rng));
+  const Environment cube = Environment::from_cube_pixels(7, random_pixels(6 * 7 * 7 * 3, 5.0f, rng));
   for (const Environment* env : {&equirect, &cube}) {
     for (int order : {0, 3, 16}) {
       const std::vector<double> fast = env->sh(order), brute = brute_force_sh(*env, order);
@@ -321,17 +303,12 @@ TEST(Environment, ProjectionEqualsTexelSum) {
 
 TEST(Environment, ProjectionIsIndependentOfThreadCount) {
   std::mt19937_64 rng(4);
-  std::uniform_real_distribution<float> uniform(0.0f, 3.0f);
-  std::vector<float> rgb(257 * 130 * 3);
-  for (float& v : rgb) v = uniform(rng);
-  const Environment env = Environment::from_equirect_pixels(257, 130, rgb);
+  const Environment env = Environment::from_equirect_pixels(257, 130, random_pixels(257 * 130 * 3, 3.0f, rng));
   const std::vector<double> one = env.sh(8, 1);
   EXPECT_EQ(env.sh(8, 2), one);  // bit-identical
   EXPECT_EQ(env.sh(8, 3), one);
   EXPECT_EQ(env.sh(8, 0), one);
-  std::vector<float> faces(6 * 20 * 20 * 3);
-  for (float& v : faces) v = uniform(rng);
-  const Environment cube = Environment::from_cube_pixels(20, faces);
+  const Environment cube = Environment::from_cube_pixels(20, random_pixels(6 * 20 * 20 * 3, 3.0f, rng));
   EXPECT_EQ(cube.sh(6, 1), cube.sh(6, 2));
   EXPECT_EQ(cube.sh(6, 1), cube.sh(6, 5));
 }
@@ -446,9 +423,7 @@ TEST(EnvironmentFiles, MissingEmptyAndGarbageFilesThrowWithPath) {
 
 TEST(EnvironmentFiles, FloatFilesRoundTripAndNaNFilesThrow) {
   std::mt19937_64 rng(8);
-  std::uniform_real_distribution<float> uniform(0.0f, 40.0f);
-  std::vector<float> rgb(32 * 16 * 3);
-  for (float& v : rgb) v = uniform(rng);
+  std::vector<float> rgb = random_pixels(32 * 16 * 3, 40.0f, rng);
   rgb[7] = -0.5f;
   const std::string exr = temp_path("map.exr");
   write_image(exr, 32, 16, 3, rgb, OIIO::TypeDesc::FLOAT);
@@ -539,10 +514,7 @@ TEST(EnvironmentFiles, CubeMapFromSixFiles) {
 
 TEST(Environment, AreaAveragingPreservesMass) {
   std::mt19937_64 rng(9);
-  std::uniform_real_distribution<float> uniform(0.0f, 10.0f);
-  std::vector<float> rgb(100 * 50 * 3);
-  for (float& v : rgb) v = uniform(rng);
-  const Environment env = Environment::from_equirect_pixels(100, 50, rgb);
+  const Environment env = Environment::from_equirect_pixels(100, 50, random_pixels(100 * 50 * 3, 10.0f, rng));
   for (auto [w, h] : {std::pair{37, 19}, std::pair{50, 25}, std::pair{7, 3}, std::pair{150, 61}}) {
     const Environment small = env.area_averaged(w, h);
     EXPECT_EQ(small.width(), w);
@@ -562,9 +534,7 @@ TEST(Environment, AreaAveragingPreservesMass) {
       ASSERT_NEAR(half.texel_radiance(j * 50 + i).y, num / den, 1e-5);
     }
   }
-  std::vector<float> faces(6 * 20 * 20 * 3);
-  for (float& v : faces) v = uniform(rng);
-  const Environment cube = Environment::from_cube_pixels(20, faces);
+  const Environment cube = Environment::from_cube_pixels(20, random_pixels(6 * 20 * 20 * 3, 10.0f, rng));
   for (int m : {7, 10, 1}) {
     const Environment small = cube.area_averaged(m, m);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(small.mass(c), cube.mass(c), 1e-7 * cube.mass(c));
@@ -601,7 +571,7 @@ TEST(Environment, BandLimitedMatchesExpansionAndApproachesMap) {
   const std::vector<double> c8 = env.sh(8);
   for (int j = 0; j < 32; j += 3)
     for (int i = 0; i < 64; i += 5) {
-      const glm::dvec3 expected = evaluate_sh_rgb(c8, 8, pixel_direction(i, j, 64, 32));
+      const glm::dvec3 expected = evaluate_sh_rgb(c8, 8, equirect_pixel_direction(i, j, 64, 32));
       for (int c = 0; c < 3; ++c)
         ASSERT_NEAR(l8[3 * (j * 64 + i) + c], expected[c], 1e-6 * (1.0 + std::abs(expected[c])));
     }
@@ -646,7 +616,7 @@ TEST(Environment, TextureOfRotatedCoefficients) {
   double lowest = 1e300;
   for (int j = 0; j < 24; ++j)
     for (int i = 0; i < 48; ++i) {
-      const glm::dvec3 expected = f(g * pixel_direction(i, j, 48, 24));  // L(g x) at the texel centre
+      const glm::dvec3 expected = f(g * equirect_pixel_direction(i, j, 48, 24));  // L(g x) at the texel centre
       for (int c = 0; c < 3; ++c) {
         ASSERT_NEAR(texture[3 * (j * 48 + i) + c], expected[c], 1e-6 * f.c[c]);
         lowest = std::min(lowest, expected[0]);
@@ -743,29 +713,44 @@ TEST(Environment, BandEnergiesAreRotationInvariant) {
 // ---------------------------------------------------------------------------------------------
 // Lobe-filtered error
 
-// The relative RMS over axes a of B(a) − B̃_s(a), with B by brute force over the texels and the
-// RMS by a product rule over axes (Gauss–Legendre in cos θ × equally spaced φ).
-double brute_force_lobe_error(const Environment& env, const ZonalLobe& lobe, int s, int n_t, int n_phi) {
-  // Gauss–Legendre nodes by Newton on P_n.
-  std::vector<double> t(n_t), wt(n_t);
-  for (int k = 0; k < n_t; ++k) {
-    double x = std::cos(kPi * (k + 0.75) / (n_t + 0.5));
+// Gauss–Legendre nodes and weights on [−1, 1] (Newton on P_n, independent of the library's rules).
+void gauss_legendre(int n, std::vector<double>& t, std::vector<double>& w) {
+  t.assign(n, 0.0);
+  w.assign(n, 0.0);
+  for (int k = 0; k < n; ++k) {
+    double x = std::cos(kPi * (k + 0.75) / (n + 0.5));
     for (int it = 0; it < 100; ++it) {
       double p0 = 1.0, p1 = x;
-      for (int l = 2; l <= n_t; ++l) {
+      for (int l = 2; l <= n; ++l) {
         const double p2 = ((2.0 * l - 1.0) * x * p1 - (l - 1.0) * p0) / l;
         p0 = p1, p1 = p2;
       }
-      const double dp = n_t * (x * p1 - p0) / (x * x - 1.0);
+      const double dp = n * (x * p1 - p0) / (x * x - 1.0);
       const double dx = p1 / dp;
       x -= dx;
       if (std::abs(dx) < 1e-16) {
-        wt[k] = 2.0 / ((1.0 - x * x) * dp * dp);
+        w[k] = 2.0 / ((1.0 - x * x) * dp * dp);
         break;
       }
     }
     t[k] = x;
   }
+}
+
+// The product rule over axes or normals of the brute-force checks: gauss_legendre's n_t nodes in
+// cos θ × n_phi equally spaced φ = 2π (p + 0.5) / n_phi, weights summing to 1 (exact to degree
+// 2 n_t − 1 in cos θ).
+SphereRule gauss_legendre_product_rule(int n_t, int n_phi) {
+  std::vector<double> t, wt;
+  gauss_legendre(n_t, t, wt);
+  for (double& w : wt) w /= 2.0;
+  return test::product_rule(t, wt, n_phi, 0.5);
+}
+
+// The relative RMS over axes a of B(a) − B̃_s(a), with B by brute force over the texels and the
+// RMS by a product rule over axes (Gauss–Legendre in cos θ × equally spaced φ).
+double brute_force_lobe_error(const Environment& env, const ZonalLobe& lobe, int s, int n_t, int n_phi) {
+  const SphereRule axes = gauss_legendre_product_rule(n_t, n_phi);
   const std::vector<double> w = lobe.coefficients(s);
   const std::vector<double> c = env.sh(s);
   std::vector<double> ylum(sh_count(s));
@@ -777,20 +762,16 @@ double brute_force_lobe_error(const Environment& env, const ZonalLobe& lobe, int
     texel_weight.push_back(luminance(env.texel_radiance(q)) * env.texel_solid_angle(q));
   }
   double num = 0.0, den = 0.0;
-  for (int k = 0; k < n_t; ++k) {
-    for (int p = 0; p < n_phi; ++p) {
-      const double phi = 2.0 * kPi * (p + 0.5) / n_phi, st = std::sqrt(1.0 - t[k] * t[k]);
-      const glm::dvec3 a(st * std::cos(phi), st * std::sin(phi), t[k]);
-      double b = 0.0;
-      for (size_t q = 0; q < dirs.size(); ++q) b += texel_weight[q] * lobe.value(glm::dot(a, dirs[q]));
-      const std::vector<double> y = sh_basis(s, a);
-      double truncated = 0.0;
-      for (int l = 0; l <= s; ++l)
-        for (int m = -l; m <= l; ++m) truncated += w[l] * ylum[sh_index(l, m)] * y[sh_index(l, m)];
-      const double weight = wt[k] / 2.0 / n_phi;
-      num += weight * (b - truncated) * (b - truncated);
-      den += weight * b * b;
-    }
+  for (size_t k = 0; k < axes.dirs.size(); ++k) {
+    const glm::dvec3& a = axes.dirs[k];
+    double b = 0.0;
+    for (size_t q = 0; q < dirs.size(); ++q) b += texel_weight[q] * lobe.value(glm::dot(a, dirs[q]));
+    const std::vector<double> y = sh_basis(s, a);
+    double truncated = 0.0;
+    for (int l = 0; l <= s; ++l)
+      for (int m = -l; m <= l; ++m) truncated += w[l] * ylum[sh_index(l, m)] * y[sh_index(l, m)];
+    num += axes.weights[k] * (b - truncated) * (b - truncated);
+    den += axes.weights[k] * b * b;
   }
   return std::sqrt(num / den);
 }
@@ -971,30 +952,6 @@ TEST(EnvironmentSampler, SamplesHaveTheirDensityAndUnbiasedEstimates) {
 // ---------------------------------------------------------------------------------------------
 // Blender's HDRIs (datafiles/studiolights/world/*.exr)
 
-// Gauss–Legendre nodes and weights on [−1, 1] (Newton on P_n), for product rules over normals.
-void gauss_legendre(int n, std::vector<double>& t, std::vector<double>& w) {
-  t.assign(n, 0.0);
-  w.assign(n, 0.0);
-  for (int k = 0; k < n; ++k) {
-    double x = std::cos(kPi * (k + 0.75) / (n + 0.5));
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = x;
-      for (int l = 2; l <= n; ++l) {
-        const double p2 = ((2.0 * l - 1.0) * x * p1 - (l - 1.0) * p0) / l;
-        p0 = p1, p1 = p2;
-      }
-      const double dp = n * (x * p1 - p0) / (x * x - 1.0);
-      const double dx = p1 / dp;
-      x -= dx;
-      if (std::abs(dx) < 1e-16) {
-        w[k] = 2.0 / ((1.0 - x * x) * dp * dp);
-        break;
-      }
-    }
-    t[k] = x;
-  }
-}
-
 TEST(EnvironmentBlender, UnshadowedLambertAtOrder8AgainstBruteForce) {
   if (!have_blender_hdris()) GTEST_SKIP() << "Blender's studio lights are not installed at " << kBlenderWorlds;
   // B(n) = Σ_texels L 4 max(0, n·d) Δμ over the HDRI's own pixels against B̃_8(n) = Σ_{l<=8} ŵ_l
@@ -1006,16 +963,9 @@ TEST(EnvironmentBlender, UnshadowedLambertAtOrder8AgainstBruteForce) {
   // Parseval on real data. Per normal, the relative error is NOT within 1 %: where B is small
   // (normals facing away from a sun) it reaches tens of percent of B, while staying below 10 %
   // of the map's mean irradiance (∫ B dμ(n) = mass).
-  std::vector<double> t, wt;
-  gauss_legendre(16, t, wt);
-  std::vector<glm::dvec3> normals;
-  std::vector<double> normal_weights;
-  for (int k = 0; k < 16; ++k)
-    for (int p = 0; p < 32; ++p) {
-      const double phi = 2.0 * kPi * (p + 0.5) / 32, st = std::sqrt(1.0 - t[k] * t[k]);
-      normals.push_back({st * std::cos(phi), st * std::sin(phi), t[k]});
-      normal_weights.push_back(wt[k] / 2.0 / 32);
-    }
+  const SphereRule rule = gauss_legendre_product_rule(16, 32);
+  std::vector<glm::dvec3> normals = rule.dirs;
+  std::vector<double> normal_weights = rule.weights;
   for (const glm::dvec3 axis : {glm::dvec3(1, 0, 0), glm::dvec3(-1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, -1, 0),
                                 glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1)}) {
     normals.push_back(axis);

@@ -1,6 +1,6 @@
 #include "sdlighting/gaunt.h"
-#include "sdlighting/gauss_quadrature.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -18,11 +18,9 @@ namespace {
 constexpr double kExact = 1e-12;
 
 using Triple = std::tuple<int, int, int>;
-
-glm::dvec3 random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  return glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
-}
+using test::product_rule;
+using test::random_direction;
+using test::SphereRule;
 
 std::map<Triple, double> as_map(const std::vector<GauntEntry>& entries) {
   std::map<Triple, double> map;
@@ -37,27 +35,8 @@ double lookup(const std::map<Triple, double>& map, int a, int b, int c) {
 
 // Brute force, independent of the library's factorised rule: a full two-dimensional product
 // rule (Gauss–Legendre in z × equispaced φ) of more than enough degree, summing sh_basis values.
-struct SphereRule {
-  std::vector<glm::dvec3> dirs;
-  std::vector<double> weights;
-};
-
-SphereRule product_rule(int degree) {
-  const int n = degree / 2 + 1;
-  const Rule1D legendre_rule = gauss_rule(jacobi_recurrence_unit_interval(0.0, n), n);
-  const int rings = degree + 1;
-  SphereRule rule;
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * legendre_rule.nodes[i];
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    for (int j = 0; j < rings; ++j) {
-      const double phi = 2.0 * M_PI * (j + 0.3) / rings;
-      rule.dirs.push_back({r * std::cos(phi), r * std::sin(phi), z});
-      rule.weights.push_back(legendre_rule.weights[i] / rings);
-    }
-  }
-  return rule;
-}
+// Its azimuths start 0.3 of a spacing from φ = 0.
+constexpr double kBrutePhiOffset = 0.3;
 
 TEST(Gaunt, ClosedFormValues) {
   const auto g = as_map(gaunt_coefficients(2, 2, 2));
@@ -132,7 +111,7 @@ TEST(Gaunt, MatchesBruteForceIntegralIncludingZeros) {
   const int oa = 3, ob = 4, oc = 6;
   const auto g = as_map(gaunt_coefficients(oa, ob, oc));
   // Degree 3 + 4 + 6 = 13 suffices; 30 makes the rule unrelated to the library's.
-  const SphereRule rule = product_rule(30);
+  const SphereRule rule = product_rule(30, kBrutePhiOffset);
   const int ka = sh_count(oa), kb = sh_count(ob), kc = sh_count(oc);
   std::vector<double> brute(size_t(ka) * kb * kc, 0.0);
   for (size_t q = 0; q < rule.dirs.size(); ++q) {
@@ -152,7 +131,7 @@ TEST(Gaunt, MatchesBruteForceIntegralIncludingZeros) {
 
 TEST(Gaunt, HighOrderValuesMatchBruteForce) {
   const auto g = as_map(gaunt_coefficients(16, 8, 24));
-  const SphereRule rule = product_rule(60);
+  const SphereRule rule = product_rule(60, kBrutePhiOffset);
   const Triple probes[] = {
       {sh_index(16, 16), sh_index(8, -8), sh_index(24, -24)},
       {sh_index(16, -5), sh_index(8, 3), sh_index(20, -2)},

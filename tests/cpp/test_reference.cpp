@@ -1,6 +1,7 @@
 #include "sdlighting/reference.h"
 #include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -26,8 +27,7 @@ Environment smooth_sky(std::vector<double>& coefficients) {
   std::vector<double> y(sh_count(2));
   for (int j = 0; j < height; ++j) {
     for (int i = 0; i < width; ++i) {
-      const double theta = M_PI * (j + 0.5) / height, phi = M_PI - 2.0 * M_PI * (i + 0.5) / width;
-      sh_basis(2, {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)}, y.data());
+      sh_basis(2, test::equirect_pixel_direction(i, j, width, height), y.data());
       for (int c = 0; c < 3; ++c) {
         double value = 0.0;
         for (int k = 0; k < sh_count(2); ++k) value += coefficients[3 * k + c] * y[k];

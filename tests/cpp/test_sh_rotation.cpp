@@ -1,5 +1,6 @@
 #include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -15,27 +16,8 @@ namespace {
 
 constexpr double kExact = 1e-12;
 
-glm::dvec3 random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  return glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
-}
-
-// Uniform on SO(3): a normalised Gaussian quaternion, written out so that the test does not rely
-// on glm's quaternion conventions.
-glm::dmat3 random_rotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  double w = normal(rng), x = normal(rng), y = normal(rng), z = normal(rng);
-  const double norm = std::sqrt(w * w + x * x + y * y + z * z);
-  w /= norm, x /= norm, y /= norm, z /= norm;
-  const double m[3][3] = {  // m[row][col]
-      {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
-      {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
-      {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
-  glm::dmat3 r;
-  for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 3; ++col) r[col][row] = m[row][col];
-  return r;
-}
+using test::random_direction;
+using test::random_rotation;
 
 glm::dmat3 rotation_about_z(double angle) {
   glm::dmat3 r(1.0);
@@ -62,37 +44,31 @@ double band_entry(const ShRotation& d, int l, int m, int n) {
   return d.band(l)[(m + l) * (2 * l + 1) + (n + l)];
 }
 
+// max over i, j of |Σ_k D_ik D_jk − δ_ij| for band l of d: zero for an orthogonal band.
+double band_orthogonality_defect(const ShRotation& d, int l) {
+  double worst = 0.0;
+  for (int i = -l; i <= l; ++i)
+    for (int j = -l; j <= l; ++j) {
+      double dot = 0.0;
+      for (int k = -l; k <= l; ++k) dot += band_entry(d, l, i, k) * band_entry(d, l, j, k);
+      worst = std::max(worst, std::abs(dot - (i == j)));
+    }
+  return worst;
+}
+
 TEST(ShRotation, BandsAreOrthogonalUpToOrder16) {
   const int order = 16;
   std::mt19937_64 rng(11);
   for (int trial = 0; trial < 10; ++trial) {
     const ShRotation d(random_rotation(rng), order);
-    for (int l = 0; l <= order; ++l) {
-      double worst = 0.0;
-      for (int i = -l; i <= l; ++i)
-        for (int j = -l; j <= l; ++j) {
-          double dot = 0.0;
-          for (int k = -l; k <= l; ++k) dot += band_entry(d, l, i, k) * band_entry(d, l, j, k);
-          worst = std::max(worst, std::abs(dot - (i == j)));
-        }
-      EXPECT_LT(worst, kExact) << "l=" << l;
-    }
+    for (int l = 0; l <= order; ++l) EXPECT_LT(band_orthogonality_defect(d, l), kExact) << "l=" << l;
   }
 }
 
 TEST(ShRotation, StaysOrthogonalAtMaximumOrder) {
   std::mt19937_64 rng(5);
   const ShRotation d(random_rotation(rng), 64);
-  for (int l : {32, 48, 64}) {
-    double worst = 0.0;
-    for (int i = -l; i <= l; ++i)
-      for (int j = -l; j <= l; ++j) {
-        double dot = 0.0;
-        for (int k = -l; k <= l; ++k) dot += band_entry(d, l, i, k) * band_entry(d, l, j, k);
-        worst = std::max(worst, std::abs(dot - (i == j)));
-      }
-    EXPECT_LT(worst, 1e-10) << "l=" << l;
-  }
+  for (int l : {32, 48, 64}) EXPECT_LT(band_orthogonality_defect(d, l), 1e-10) << "l=" << l;
 }
 
 // The defining property: D(R) c are the coefficients of x ↦ f(Rᵀ x).

@@ -2,6 +2,7 @@
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/weighted_design.h"
 #include "sdlighting/zonal_design.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -14,6 +15,8 @@ namespace sd {
 namespace {
 
 constexpr double kEqualFormulas = 1e-9;  // relative: two exact formulas of the same quantity
+
+using test::random_direction;
 
 struct Scene {
   int s = 4, s_v = 2;
@@ -36,7 +39,7 @@ Scene random_scene(size_t count, int s, int s_v, unsigned seed) {
   for (size_t p = 0; p < count; ++p) {
     scene.visibility[p * sh_count(s_v)] = 0.7;
     for (auto* field : {&scene.normals, &scene.views}) {
-      const glm::dvec3 d = glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
+      const glm::dvec3 d = random_direction(rng, normal);
       field->insert(field->end(), {d.x, d.y, d.z});
     }
   }
@@ -91,11 +94,11 @@ TEST(Shading, MsdTheorem22EqualsProductMatrixPrt) {  // (13) = (8)-(9)
   std::vector<double> y(sh_count(std::max(s, s_v)));
   for (size_t p = 0; p < scene.count; ++p) {
     // A visibility function given by rays: escaping where the ray clears a random tilted plane.
-    const glm::dvec3 occluder = glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
+    const glm::dvec3 occluder = random_direction(rng, normal);
     std::vector<glm::dvec3> escaping;
     std::vector<double> m(size_t(k) * kv, 0.0);
     for (int r = 0; r < rays; ++r) {
-      const glm::dvec3 x = glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
+      const glm::dvec3 x = random_direction(rng, normal);
       if (glm::dot(x, occluder) < 0.3) continue;
       escaping.push_back(x);
       sh_basis(std::max(s, s_v), x, y.data());

@@ -1,6 +1,7 @@
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/weighted_design.h"
 #include "sdlighting/zonal_design.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -111,12 +112,7 @@ TEST(ZonalDesign, RejectsBadInput) {
   EXPECT_THROW(ZonalWeight::tabulated({0.0, 0.5}, {0.0, 0.0}), std::invalid_argument);
 }
 
-std::vector<glm::dvec3> random_directions(int count, std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  std::vector<glm::dvec3> dirs(count);
-  for (auto& d : dirs) d = glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
-  return dirs;
-}
+using test::random_directions;
 
 TEST(WeightedDesign, CompressesARandomMeasure) {
   std::mt19937_64 rng(11);

@@ -1,5 +1,5 @@
-#include "sdlighting/gauss_quadrature.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "sphere_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -12,34 +12,9 @@ namespace {
 
 constexpr double kExact = 1e-12;
 
-glm::dvec3 random_direction(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  return glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
-}
-
-// Product rule (Gauss–Legendre in z × equispaced φ) exact for degree 2·order: enough to
-// integrate y_a y_b exactly.
-struct SphereRule {
-  std::vector<glm::dvec3> dirs;
-  std::vector<double> weights;
-};
-
-SphereRule product_rule(int degree) {
-  const int n = degree / 2 + 1;
-  const Rule1D legendre_rule = gauss_rule(jacobi_recurrence_unit_interval(0.0, n), n);
-  const int rings = degree + 1;
-  SphereRule rule;
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * legendre_rule.nodes[i];
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    for (int j = 0; j < rings; ++j) {
-      const double phi = 2.0 * M_PI * (j + 0.5) / rings;
-      rule.dirs.push_back({r * std::cos(phi), r * std::sin(phi), z});
-      rule.weights.push_back(legendre_rule.weights[i] / rings);
-    }
-  }
-  return rule;
-}
+using test::product_rule;
+using test::random_direction;
+using test::SphereRule;
 
 TEST(SphericalHarmonics, LowOrderClosedForms) {
   const glm::dvec3 d = glm::normalize(glm::dvec3(0.3, -0.5, 0.8));
@@ -55,7 +30,9 @@ TEST(SphericalHarmonics, LowOrderClosedForms) {
 
 TEST(SphericalHarmonics, OrthonormalUpToOrder32) {
   const int order = 32;
-  const SphereRule rule = product_rule(2 * order);
+  // Product rule (Gauss–Legendre in z × equispaced φ, azimuths at half spacings) exact for degree
+  // 2·order: enough to integrate y_a y_b exactly.
+  const SphereRule rule = product_rule(2 * order, 0.5);
   const int k = sh_count(order);
   std::vector<double> gram(size_t(k) * k, 0.0), y(k);
   for (size_t q = 0; q < rule.dirs.size(); ++q) {

@@ -117,6 +117,26 @@ TransferBake bake(const Mesh& m, TransferOptions options, const OccluderMesh& oc
   return bake_transfer(m.vertices, m.normals, m.triangles, options, occluders);
 }
 
+// Options for `rays` rays per vertex from `seed` that keep every ray's V_r
+// (TransferBake::ray_visibility) for the exact checks; each test turns on the outputs it checks.
+TransferOptions recorded_rays(int rays, std::uint64_t seed) {
+  TransferOptions options;
+  options.rays = rays;
+  options.seed = seed;
+  options.record_rays = true;
+  return options;
+}
+
+// The directions of vertex v's escaping rays (V_r = 1), in ray order, of a bake made with
+// `options` (record_rays on).
+std::vector<glm::dvec3> escaping_rays(const TransferBake& b, const TransferOptions& options, std::size_t v) {
+  const auto dirs = vertex_ray_directions(options.rays, options.seed, v);
+  std::vector<glm::dvec3> escaping;
+  for (int r = 0; r < options.rays; ++r)
+    if (b.ray_visibility[v * options.rays + r]) escaping.push_back(dirs[r]);
+  return escaping;
+}
+
 // The SH expansion of the upper-hemisphere indicator: Ṽ_l0 = ½ √(2l+1) ∫_0^1 P_l, m ≠ 0: 0,
 // with ∫_0^1 P_l = (P_{l-1}(0) − P_{l+1}(0)) / (2l+1) for l >= 1.
 double hemisphere_coefficient(int l, int m) {
@@ -168,11 +188,7 @@ struct PlaneCase {
 
 TEST(VisibilityPlane, RaysEscapeExactlyAboveTheSurface) {
   PlaneCase plane;
-  TransferOptions options;
-  options.rays = 2048;
-  options.seed = 7;
-  options.record_rays = true;
-  const TransferBake b = bake(plane.mesh, options);
+  const TransferBake b = bake(plane.mesh, recorded_rays(2048, 7));
   EXPECT_DOUBLE_EQ(b.epsilon, ray_epsilon(plane.mesh.vertices));
   EXPECT_NEAR(b.epsilon, 1e-4 * std::sqrt(800.0), 1e-15);
   ASSERT_EQ(b.ray_visibility.size(), plane.mesh.vertices.size() * 2048);
@@ -225,23 +241,18 @@ TEST(VisibilityPlane, VisibilityIsTheHemisphereIndicator) {
 
 TEST(VisibilityPlane, TransferIsTheLambertLobe) {
   PlaneCase plane;
-  TransferOptions options;
-  options.rays = 4096;
-  options.seed = 3;
+  TransferOptions options = recorded_rays(4096, 3);
   options.transfer_order = 6;
-  options.record_rays = true;
   const TransferBake b = bake(plane.mesh, options);
   const auto w_hat = ZonalLobe::lambert().coefficients(6);
   const int k = sh_count(6);
   std::vector<double> y(k);
   for (std::size_t v : plane.interior) {
     // Exact: the sum over the escaping (upper) rays of 4 max(0, z) y_lm / R.
-    const auto dirs = vertex_ray_directions(4096, 3, v);
     std::vector<double> direct(k, 0.0);
-    for (int r = 0; r < 4096; ++r) {
-      if (!b.ray_visibility[v * 4096 + r]) continue;
-      sh_basis(6, dirs[r], y.data());
-      for (int i = 0; i < k; ++i) direct[i] += 4.0 * std::max(0.0, dirs[r].z) * y[i] / 4096.0;
+    for (const glm::dvec3& x : escaping_rays(b, options, v)) {
+      sh_basis(6, x, y.data());
+      for (int i = 0; i < k; ++i) direct[i] += 4.0 * std::max(0.0, x.z) * y[i] / 4096.0;
     }
     for (int i = 0; i < k; ++i) EXPECT_NEAR(b.transfer[v * k + i], direct[i], kExact);
     // Monte-Carlo: T = ŵ_l y_lm(+z) (Funk–Hecke), T_00 = 1.
@@ -297,11 +308,7 @@ TEST(VisibilityConvex, IcosphereHasNoSelfOcclusionAboveTheTangentPlane) {
                                                    sphere.vertices[f[2]] - sphere.vertices[f[0]]));
     inradius = std::min(inradius, std::abs(glm::dot(n, sphere.vertices[f[0]])));
   }
-  TransferOptions options;
-  options.rays = 1024;
-  options.seed = 11;
-  options.record_rays = true;
-  const TransferBake b = bake(sphere, options);
+  const TransferBake b = bake(sphere, recorded_rays(1024, 11));
   const double r = inradius / (1.0 + b.epsilon);
   const double must_block = std::sqrt(1.0 - r * r) + 1e-4;
   for (std::size_t v = 0; v < sphere.vertices.size(); ++v) {
@@ -329,30 +336,25 @@ TEST(VisibilityConvex, IcosphereHasNoSelfOcclusionAboveTheTangentPlane) {
 
 TEST(VisibilityExact, OutputsEqualTheDirectSumsOverTheRays) {
   const Mesh m = bumpy_sphere(2);
-  TransferOptions options;
-  options.rays = 512;
-  options.seed = 5;
+  TransferOptions options = recorded_rays(512, 5);
   options.visibility_order = 3;
   options.product_order = 4;
   options.product_visibility_order = 2;
   options.transfer_order = 5;
-  options.record_rays = true;
   const TransferBake b = bake(m, options);
   const int kv = sh_count(3), ks = sh_count(4), ksp = sh_count(2), kt = sh_count(5);
   std::vector<double> y(kt);
   double min_ao = 1.0;
   for (std::size_t v = 0; v < m.vertices.size(); ++v) {
-    const auto dirs = vertex_ray_directions(512, 5, v);
     std::vector<double> vis(kv, 0.0), prod(ks * ksp, 0.0), tr(kt, 0.0);
     double ao = 0.0;
-    for (int r = 0; r < 512; ++r) {
-      if (!b.ray_visibility[v * 512 + r]) continue;
-      sh_basis(5, dirs[r], y.data());
+    for (const glm::dvec3& x : escaping_rays(b, options, v)) {
+      sh_basis(5, x, y.data());
       ao += 1.0 / 512;
       for (int i = 0; i < kv; ++i) vis[i] += y[i] / 512;
       for (int i = 0; i < ks; ++i)
         for (int j = 0; j < ksp; ++j) prod[i * ksp + j] += y[i] * y[j] / 512;
-      const double c = 4.0 * std::max(0.0, glm::dot(glm::normalize(m.normals[v]), dirs[r]));
+      const double c = 4.0 * std::max(0.0, glm::dot(glm::normalize(m.normals[v]), x));
       for (int i = 0; i < kt; ++i) tr[i] += c * y[i] / 512;
     }
     min_ao = std::min(min_ao, ao);
@@ -400,16 +402,13 @@ void expect_same(const TransferBake& a, const TransferBake& b) {
 
 TEST(VisibilityDeterminism, SameSeedSameResultForAnyThreadCount) {
   const Mesh m = bumpy_sphere(2);
-  TransferOptions options;
-  options.rays = 256;
-  options.seed = 1234;
+  TransferOptions options = recorded_rays(256, 1234);
   options.visibility_order = 2;
   options.product_order = 2;
   options.product_visibility_order = 2;
   options.transfer_order = 2;
   options.design_order = 2;
   options.design_visibility_order = 2;
-  options.record_rays = true;
   options.threads = 1;
   const TransferBake one = bake(m, options);
   options.threads = 2;
@@ -429,9 +428,7 @@ TEST(VisibilityDeterminism, SameSeedSameResultForAnyThreadCount) {
 
 TEST(VisibilityDeterminism, ScalingByAPowerOfTwoChangesNothing) {
   Mesh m = bumpy_sphere(1);
-  TransferOptions options;
-  options.rays = 256;
-  options.record_rays = true;
+  const TransferOptions options = recorded_rays(256, 0);
   const TransferBake unit = bake(m, options);
   for (auto& v : m.vertices) v *= 1024.0;
   const TransferBake big = bake(m, options);
@@ -444,12 +441,9 @@ TEST(VisibilityDeterminism, ScalingByAPowerOfTwoChangesNothing) {
 TEST(VisibilityDesign, DesignsReproduceTheRayMeasure) {
   const Mesh m = bumpy_sphere(1);
   constexpr int kRays = 400, kDegree = 6;
-  TransferOptions options;
-  options.rays = kRays;
-  options.seed = 9;
+  TransferOptions options = recorded_rays(kRays, 9);
   options.design_order = 4;
   options.design_visibility_order = 2;
-  options.record_rays = true;
   const TransferBake b = bake(m, options);
   ASSERT_EQ(b.design_degree, kDegree);
   ASSERT_EQ(b.design_offsets.size(), m.vertices.size() + 1);
@@ -467,11 +461,9 @@ TEST(VisibilityDesign, DesignsReproduceTheRayMeasure) {
     for (double w : weights) EXPECT_GT(w, 0.0);
     EXPECT_NEAR(std::accumulate(weights.begin(), weights.end(), 0.0), b.ambient_occlusion[v], kExact);
     // Σ λ y_lm(x_ν) = (1/R) Σ V_r y_lm(x_r) for l <= s + s'.
-    const auto dirs = vertex_ray_directions(kRays, 9, v);
     std::vector<double> target(k, 0.0);
-    for (int r = 0; r < kRays; ++r) {
-      if (!b.ray_visibility[v * kRays + r]) continue;
-      sh_basis(kDegree, dirs[r], y.data());
+    for (const glm::dvec3& x : escaping_rays(b, options, v)) {
+      sh_basis(kDegree, x, y.data());
       for (int i = 0; i < k; ++i) target[i] += y[i] / kRays;
     }
     const auto moments = design_moments(nodes, weights, kDegree);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs every test: installs what is missing, builds, then the C++ (GoogleTest) and Python
-# (pytest) suites through CTest.
+# Runs every test: installs what is missing, builds, then the C++ (GoogleTest), Python (pytest)
+# and Blender (the add-on, headless) suites through CTest.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/scripts/install_dependencies.sh"

@@ -1,0 +1,228 @@
+"""Live shading: the viewport's POST_VIEW draw handler, and drawing baked objects for any view.
+
+Every baked, visible object is drawn with its baked mesh's geometry times the object's world
+matrix, with the shader variant of its bake (gpu_shading.py), depth-tested against the scene.
+Per frame and object, the environment's coefficients are rotated on the CPU to those of
+x -> L(g R x): g the environment rotation (environment.py), R the rotation of the object's matrix
+(the bake's directions are in the object's local frame). The eye is the viewport's own camera.
+
+Colour: the shader writes scene-linear radiance times 2^exposure (the scene's Film/colour
+management exposure); the viewport shows what a POST_VIEW handler draws with the sRGB curve
+only, i.e. the Standard view transform, whatever the scene's view transform is.
+"""
+
+import numpy as np
+
+from . import baking, environment, gpu_shading, native
+
+DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins over Blender's own draw
+
+_handler = None
+_objects = {}         # object name -> (key, ObjectData)
+last_error = ""
+
+
+class View:
+    """A camera for drawing: world-to-clip matrix and the eye (position, or direction to an
+    orthographic viewer with w = 0)."""
+
+    def __init__(self, view_projection, camera):
+        self.view_projection = np.asarray(view_projection, dtype=np.float64)
+        self.camera = np.asarray(camera, dtype=np.float64)
+
+    @classmethod
+    def from_region(cls, region_3d):
+        inverse = region_3d.view_matrix.inverted()
+        if region_3d.is_perspective:
+            camera = tuple(inverse.translation) + (1.0,)
+        else:
+            camera = tuple(inverse.col[2][:3]) + (0.0,)
+        return cls(region_3d.perspective_matrix, camera)
+
+    @classmethod
+    def from_camera(cls, camera_object, depsgraph, width, height, scene=None):
+        projection = camera_object.calc_matrix_camera(
+            depsgraph, x=width, y=height,
+            scale_x=scene.render.pixel_aspect_x if scene else 1.0,
+            scale_y=scene.render.pixel_aspect_y if scene else 1.0)
+        world = camera_object.matrix_world
+        view = world.inverted()
+        if camera_object.data.type == 'ORTHO':
+            camera = tuple(world.col[2][:3]) + (0.0,)
+        else:
+            camera = tuple(world.translation) + (1.0,)
+        return cls(projection @ view, camera)
+
+    def view_directions(self, world_positions, world_to_local):
+        """Unit directions to the eye, per point, in a local frame (float64, as the CPU does)."""
+        if self.camera[3] > 0.5:
+            to_eye = self.camera[:3] - world_positions
+        else:
+            to_eye = np.broadcast_to(self.camera[:3], world_positions.shape)
+        to_eye = to_eye / np.linalg.norm(to_eye, axis=1)[:, None]
+        local = to_eye @ world_to_local.T
+        return local / np.linalg.norm(local, axis=1)[:, None]
+
+
+def clear_cache():
+    _objects.clear()
+
+
+def object_data(obj, per_pixel=False, vertex_target=False):
+    """The GPU data of the object's bake (cached until the bake or the mode changes), or None."""
+    mesh = baking.baked_mesh(obj)
+    if mesh is None:
+        return None
+    key = (mesh.name, mesh["sd_bake"].get("bake_id", ""), per_pixel, vertex_target)
+    cache_key = (obj.name, vertex_target)
+    cached = _objects.get(cache_key)
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target)
+    _objects[cache_key] = (key, data)
+    return data
+
+
+def baked_objects(scene, view_layer=None):
+    """Visible objects with a bake."""
+    out = []
+    for obj in scene.objects:
+        try:
+            visible = obj.visible_get(view_layer=view_layer) if view_layer else obj.visible_get()
+        except (RuntimeError, TypeError):
+            visible = False
+        if visible and baking.baked_mesh(obj) is not None:
+            out.append(obj)
+    return out
+
+
+def local_light(scene, obj, order, source=None, rotation=None):
+    """Coefficients of x -> L(g R x) for the object: [(s+1)^2, 3] float64; and g R."""
+    source = source or environment.source(scene)
+    g = environment.rotation_matrix(scene) if rotation is None else rotation
+    gr = g @ gpu_shading.rotation_part(np.array(obj.matrix_world))
+    light = environment.light_coefficients(source, order)
+    return native.get().rotate_sh(light, gr.T), gr
+
+
+def exposure_scale(scene):
+    return 2.0 ** float(scene.view_settings.exposure)
+
+
+def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
+    """Draws the baked objects into the bound framebuffer with the current GPU state."""
+    source = environment.source(scene)
+    g = environment.rotation_matrix(scene)
+    for obj in objects:
+        data = object_data(obj, per_pixel=per_pixel)
+        if data is None:
+            continue
+        light, _ = local_light(scene, obj, data.light_order, source, g)
+        block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
+                                 light, scale, depth_bias=depth_bias)
+        data.draw(block)
+
+
+def _draw_handler():
+    global last_error
+    import bpy
+    import gpu
+    context = bpy.context
+    scene = context.scene
+    settings = getattr(scene, "sd_lighting", None)
+    if settings is None or not settings.live_shading or context.region_data is None:
+        return
+    try:
+        objects = baked_objects(scene, context.view_layer)
+        if not objects:
+            return
+        view = View.from_region(context.region_data)
+        gpu.state.depth_test_set('LESS_EQUAL')
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set('NONE')
+        draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set('NONE')
+        last_error = ""
+    except Exception as exc:  # never raise into Blender's draw loop; the panel shows it
+        message = "%s: %s" % (type(exc).__name__, exc)
+        if message != last_error:
+            print("sd_lighting: live shading failed:", message)
+        last_error = message
+
+
+# --------------------------------------------------------------------------------------------
+# Checks against the CPU evaluator (tests, and the panel's accuracy check)
+
+def cpu_reference(scene, obj, view):
+    """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
+    environment and rotation the live shading uses; exposure not applied. [N, 3]."""
+    from . import attributes
+    mesh = baking.baked_mesh(obj)
+    bake = dict(mesh["sd_bake"])
+    data = attributes.read(mesh)
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    positions = attributes.read_positions(mesh).astype(np.float64)
+    world = positions @ matrix[:3, :3].T + matrix[:3, 3]
+    source = environment.source(scene)
+    light = environment.light_coefficients(source, int(bake["light_order"]))
+    g = environment.rotation_matrix(scene)
+    r = gpu_shading.rotation_part(matrix)
+    kwargs = dict(views=view.view_directions(world, r.T), rotation=g @ r, lobe=bake["lobe"],
+                  exponent=float(bake["exponent"]))
+    method = bake["method"]
+    for key in ("ambient_occlusion", "transfer", "visibility", "product_matrices",
+                "design_offsets", "design_nodes", "design_weights"):
+        if key in data:
+            kwargs[key] = data[key]
+    if method == "msd_visibility":
+        kwargs["visibility_order"] = int(bake["visibility_order"])
+    if method in ("unshadowed", "prt_diffuse", "prt_matrix", "msd_visibility"):
+        kwargs.pop("visibility", None)
+    return native.get().shade(method, light, data["normals"], **kwargs)
+
+
+def gpu_vertex_values(scene, obj, view, per_pixel=False):
+    """B at every vertex as the shader computes it (exposure not applied): each vertex is drawn
+    as one pixel of an RGBA32F target and read back. Needs a GPU context. [N, 3] float32."""
+    import gpu
+    data = object_data(obj, per_pixel=per_pixel, vertex_target=True)
+    n = data.vertex_count
+    width = min(n, 1024)
+    height = (n + width - 1) // width
+    light, _ = local_light(scene, obj, data.light_order)
+    block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera, light,
+                             1.0, target=(width, height))
+    offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
+    try:
+        with offscreen.bind():
+            framebuffer = gpu.state.active_framebuffer_get()
+            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+            gpu.state.depth_test_set('NONE')
+            gpu.state.depth_mask_set(False)
+            gpu.state.blend_set('NONE')
+            gpu.state.face_culling_set('NONE')
+            gpu.state.point_size_set(1.0)
+            data.draw(block)
+            pixels = framebuffer.read_color(0, 0, width, height, 4, 0, 'FLOAT')
+        pixels.dimensions = width * height * 4
+        values = np.array(pixels, dtype=np.float32).reshape(-1, 4)
+    finally:
+        offscreen.free()
+    return values[:n, :3]
+
+
+def register():
+    global _handler
+    import bpy
+    if _handler is None:
+        _handler = bpy.types.SpaceView3D.draw_handler_add(_draw_handler, (), 'WINDOW', 'POST_VIEW')
+
+
+def unregister():
+    global _handler
+    import bpy
+    if _handler is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_handler, 'WINDOW')
+        _handler = None
+    clear_cache()

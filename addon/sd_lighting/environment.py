@@ -1,0 +1,206 @@
+"""The environment L that lights the scene, and its rotation g (eq. 1).
+
+Source (the scene's settings, `environment_source`):
+- 'WORLD' (default): the image of the world's Environment Texture node (the one feeding the
+  active World Output through a Background node, else any), times the Background's Strength.
+  A world without an Environment Texture lights with its uniform Background colour.
+- 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
+
+Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
+environment: for vector types Point, Vector and Normal the texture is looked up at R d, so the
+world is L(R d) and g = R; for type Texture g = R^T (R: the node's Euler rotation, XYZ order;
+location and scale are ignored). Without a Mapping node (or for 'FILE'), g is the settings'
+own `environment_rotation`. The panel's rotation slider writes the Mapping node when there is one.
+
+SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
+draw handler asks for them every frame.
+"""
+
+import os
+
+import numpy as np
+
+from . import native
+
+_cache = {}          # source key -> sdnative.Environment
+_sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
+
+
+def clear_cache():
+    _cache.clear()
+    _sh_cache.clear()
+
+
+# --------------------------------------------------------------------------------------------
+# World nodes
+
+def _active_output(tree):
+    outputs = [n for n in tree.nodes if n.type == 'OUTPUT_WORLD']
+    for node in outputs:
+        if getattr(node, "is_active_output", False):
+            return node
+    return outputs[0] if outputs else None
+
+
+def _linked_node(socket):
+    if socket is None or not socket.is_linked:
+        return None
+    return socket.links[0].from_node
+
+
+def world_nodes(world):
+    """(environment texture node, background node, mapping node), each None when absent."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return None, None, None
+    tree = world.node_tree
+    background = None
+    output = _active_output(tree)
+    if output is not None:
+        node = _linked_node(output.inputs.get("Surface"))
+        if node is not None and node.type == 'BACKGROUND':
+            background = node
+    env = None
+    if background is not None:
+        node = _linked_node(background.inputs.get("Color"))
+        if node is not None and node.type == 'TEX_ENVIRONMENT':
+            env = node
+    if env is None:
+        env = next((n for n in tree.nodes if n.type == 'TEX_ENVIRONMENT'), None)
+    mapping = None
+    if env is not None:
+        node = _linked_node(env.inputs.get("Vector"))
+        if node is not None and node.type == 'MAPPING':
+            mapping = node
+    return env, background, mapping
+
+
+def mapping_node(scene):
+    """The Mapping node that turns the world's environment, or None."""
+    settings = scene.sd_lighting
+    if settings.environment_source != 'WORLD':
+        return None
+    return world_nodes(scene.world)[2]
+
+
+def euler_xyz(angles):
+    """The rotation matrix of Blender's XYZ Euler angles, Rz Ry Rx, in float64 (mathutils works
+    in float32, not orthogonal enough for the SH rotation's 1e-9 check)."""
+    x, y, z = (float(a) for a in angles)
+    cx, sx, cy, sy, cz, sz = np.cos(x), np.sin(x), np.cos(y), np.sin(y), np.cos(z), np.sin(z)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ ry @ rx
+
+
+def rotation_matrix(scene):
+    """g as a float64 [3, 3] numpy array (eq. 1: the scene is lit by L(g x))."""
+    mapping = mapping_node(scene)
+    if mapping is not None:
+        g = euler_xyz(mapping.inputs["Rotation"].default_value)
+        if mapping.vector_type == 'TEXTURE':
+            g = g.T
+        return g
+    return euler_xyz(scene.sd_lighting.environment_rotation)
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+
+class Source:
+    """Where L comes from: a file, an image's pixels, or a uniform colour."""
+
+    def __init__(self, kind, key, description, strength=1.0, path=None, image=None, colour=None):
+        self.kind = kind              # "file", "pixels" or "uniform"
+        self.key = key                # cache key
+        self.description = description
+        self.strength = strength
+        self.path = path
+        self.image = image
+        self.colour = colour
+
+
+def _file_key(path):
+    try:
+        st = os.stat(path)
+        return ("file", path, st.st_mtime_ns, st.st_size)
+    except OSError:
+        return ("file", path, 0, 0)
+
+
+def source(scene):
+    """The environment Source of the scene's settings."""
+    import bpy
+    settings = scene.sd_lighting
+    if settings.environment_source == 'FILE':
+        path = bpy.path.abspath(settings.environment_path)
+        return Source("file", _file_key(path), path, path=path)
+    env, background, _ = world_nodes(scene.world)
+    strength = 1.0
+    if background is not None:
+        socket = background.inputs.get("Strength")
+        if socket is not None and not socket.is_linked:
+            strength = float(socket.default_value)
+    if env is not None and env.image is not None:
+        image = env.image
+        path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
+        if path and image.source == 'FILE' and image.packed_file is None and os.path.isfile(path):
+            return Source("file", _file_key(path), path, strength=strength, path=path)
+        return Source("pixels", ("pixels", image.name, tuple(image.size)), "image " + image.name,
+                      strength=strength, image=image)
+    colour = (0.05, 0.05, 0.05)
+    if background is not None:
+        socket = background.inputs.get("Color")
+        if socket is not None and not socket.is_linked:
+            colour = tuple(socket.default_value)[:3]
+    elif scene.world is not None:
+        colour = tuple(scene.world.color)
+    return Source("uniform", ("uniform",) + tuple(round(c, 9) for c in colour),
+                  "uniform colour (%.3g, %.3g, %.3g)" % colour, strength=strength, colour=colour)
+
+
+def _image_pixels(image):
+    """The image's RGB as float32 [H, W, 3], rows top-first, scene-linear."""
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    rgb = pixels.reshape(height, width, 4)[::-1, :, :3].copy()
+    if not image.is_float and image.colorspace_settings.name.lower().startswith("srgb"):
+        rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4).astype(np.float32)
+    return rgb
+
+
+def environment(src):
+    """The sdnative.Environment of a file or pixel Source (cached)."""
+    env = _cache.get(src.key)
+    if env is None:
+        sd = native.get()
+        if src.kind == "file":
+            env = sd.load_environment(src.path)
+        else:
+            env = sd.environment_from_pixels(_image_pixels(src.image))
+        _cache[src.key] = env
+    return env
+
+
+def light_coefficients(src, order):
+    """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied."""
+    if src.kind == "uniform":
+        light = np.zeros(((order + 1) ** 2, 3))
+        light[0] = np.asarray(src.colour, dtype=np.float64)
+    else:
+        key = (src.key, order)
+        light = _sh_cache.get(key)
+        if light is None:
+            light = np.asarray(environment(src).sh(order), dtype=np.float64).reshape(-1, 3)
+            _sh_cache[key] = light
+    return light * src.strength
+
+
+def smallest_order(src, lobe, exponent, target_error, max_order):
+    """Automatic s: the smallest order whose lobe-filtered relative error is within the target
+    (max_order when none up to it is)."""
+    if src.kind == "uniform":
+        return 0
+    order = environment(src).smallest_order(lobe, float(exponent), float(target_error), int(max_order))
+    return int(max_order) if order is None else int(order)

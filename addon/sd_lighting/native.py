@@ -1,0 +1,81 @@
+"""The native module `sdnative` (C++, pybind11): found inside the add-on, or in a development build.
+
+The add-on zip carries `sdnative.cpython-311-*.so` next to this file, so `from . import sdnative`
+finds it (an extension module's init function is named after the last part of the module name).
+For development without a zip, the directory in the environment variable `SDNATIVE_PATH`, or the
+repository's `build/native/`, is searched instead.
+"""
+
+import importlib.util
+import os
+import sys
+
+_module = None
+_error = None
+
+
+def _candidate_directories():
+    here = os.path.dirname(os.path.abspath(__file__))
+    yield here
+    env = os.environ.get("SDNATIVE_PATH")
+    if env:
+        yield env
+    # addon/sd_lighting/ inside the repository: ../../build/native
+    yield os.path.normpath(os.path.join(here, "..", "..", "build", "native"))
+
+
+def _load():
+    abi = "cpython-%d%d" % sys.version_info[:2]
+    for directory in _candidate_directories():
+        if not os.path.isdir(directory):
+            continue
+        for name in sorted(os.listdir(directory)):
+            if name.startswith("sdnative.") and name.endswith(".so") and abi in name:
+                path = os.path.join(directory, name)
+                spec = importlib.util.spec_from_file_location("sdnative", path)
+                module = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(module)
+                return module
+    raise ImportError(
+        "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
+        "$SDNATIVE_PATH or in the repository's build/native/" % abi)
+
+
+def get():
+    """The sdnative module; raises ImportError with the reason if it cannot be loaded."""
+    global _module, _error
+    if _module is None:
+        if _error is not None:
+            raise ImportError(_error)
+        try:
+            _module = _load()
+        except Exception as exc:  # a wrong ABI or a missing library shows up here
+            _error = str(exc)
+            raise ImportError(_error) from exc
+    return _module
+
+
+def available():
+    """True when sdnative can be loaded (the panel shows the reason otherwise)."""
+    try:
+        get()
+        return True
+    except ImportError:
+        return False
+
+
+def error_message():
+    """Why sdnative could not be loaded, or an empty string."""
+    try:
+        get()
+        return ""
+    except ImportError as exc:
+        return str(exc)
+
+
+def has(name):
+    """True when sdnative provides the function `name` (parts of it are still being written)."""
+    try:
+        return hasattr(get(), name)
+    except ImportError:
+        return False

@@ -1,0 +1,123 @@
+"""The sidebar panel (3D viewport > N > SD Lighting)."""
+
+import bpy
+
+from . import baking, drawing, environment, materials, methods, native, operators
+
+
+class SD_PT_lighting(bpy.types.Panel):
+    bl_label = "SD Lighting"
+    bl_idname = "SD_PT_lighting"
+    bl_space_type = 'VIEW_3D'
+    bl_region_type = 'UI'
+    bl_category = "SD Lighting"
+
+    def draw(self, context):
+        layout = self.layout
+        scene = context.scene
+        settings = scene.sd_lighting
+
+        problem = native.error_message()
+        if problem:
+            box = layout.box()
+            box.alert = True
+            box.label(text="Native module missing", icon='ERROR')
+            box.label(text=problem[:120])
+
+        # Environment
+        box = layout.box()
+        box.label(text="Environment", icon='WORLD')
+        box.row().prop(settings, "environment_source", expand=True)
+        if settings.environment_source == 'FILE':
+            box.prop(settings, "environment_path")
+        try:
+            box.label(text=environment.source(scene).description[-60:])
+        except Exception as exc:  # a broken world must not break the panel
+            box.label(text=str(exc), icon='ERROR')
+        mapping = environment.mapping_node(scene)
+        col = box.column()
+        col.prop(settings, "environment_rotation",
+                 text="Rotation (world Mapping node)" if mapping else "Rotation")
+        box.prop(scene.view_settings, "exposure")
+        box.label(text="Live shading uses the Standard view transform", icon='INFO')
+
+        # Orders
+        box = layout.box()
+        box.label(text="SH Orders", icon='SPHERE')
+        box.prop(settings, "automatic_orders")
+        if settings.automatic_orders:
+            row = box.row(align=True)
+            row.prop(settings, "target_error")
+            row.prop(settings, "max_automatic_order")
+        else:
+            box.prop(settings, "light_order")
+        box.prop(settings, "visibility_order")
+
+        # Material and method
+        box = layout.box()
+        box.label(text="Material", icon='MATERIAL')
+        box.prop(settings, "material_source", text="")
+        if settings.material_source == 'PHONG':
+            box.prop(settings, "phong_exponent")
+        elif settings.material_source == 'MATERIAL' and context.active_object is not None:
+            box.label(text=materials.lobe_from_material(context.active_object)[1][:60])
+        box.prop(settings, "method", text="")
+        row = box.row(align=True)
+        row.prop(settings, "rays")
+        row.prop(settings, "seed")
+
+        # Bake
+        job = operators.active_job
+        if job is not None:
+            row = layout.row(align=True)
+            row.label(text="Baking %d %%" % int(100 * job.fraction), icon='TIME')
+            row.operator("sd_lighting.cancel_bake", text="Cancel", icon='CANCEL')
+        else:
+            layout.operator("sd_lighting.bake", icon='RENDER_STILL')
+
+        # Live shading
+        box = layout.box()
+        row = box.row()
+        row.prop(settings, "live_shading")
+        row.prop(settings, "per_pixel")
+        if drawing.last_error:
+            box.label(text=drawing.last_error[:80], icon='ERROR')
+        box.operator("sd_lighting.render_preview", icon='IMAGE_DATA')
+
+        # What the active object's bake stored
+        obj = context.active_object
+        info = baking.bake_info(obj) if obj is not None else None
+        box = layout.box()
+        if info is None:
+            box.label(text="Active object: not baked")
+            return
+        box.label(text="Bake of %s" % obj.name, icon='CHECKMARK')
+        method = methods.BY_ID.get(info.get("method"))
+        col = box.column(align=True)
+        col.label(text="Method: %s" % (method.label if method else info.get("method")))
+        lobe = info.get("lobe", "?")
+        if lobe == "phong":
+            lobe = "Phong, sigma %.3g" % info.get("exponent", 0.0)
+        col.label(text="Material: %s" % lobe.capitalize() if lobe == "lambert" else "Material: " + lobe)
+        col.label(text="s = %d, s' = %d, %d rays" % (info.get("light_order", 0),
+                                                   info.get("visibility_order", 0), info.get("rays", 0)))
+        col.label(text="%d vertices, %d floats = %d bytes per vertex" % (
+            info.get("vertices", 0), info.get("floats_per_vertex", 0), info.get("bytes_per_vertex", 0)))
+        if "design_nodes_max" in info:
+            col.label(text="Design nodes per vertex: %.1f mean, %d max" % (
+                info.get("design_nodes_mean", 0.0), info.get("design_nodes_max", 0)))
+        col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
+        box.operator("sd_lighting.clear_bake", icon='X')
+
+
+CLASSES = (SD_PT_lighting,)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,101 @@
+"""The add-on's settings, per scene (`scene.sd_lighting`): what the next bake uses and how the
+live shading draws. What a bake actually used is stored per object (custom property `sd_bake`).
+"""
+
+
+import bpy
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
+                       IntProperty, PointerProperty, StringProperty)
+
+from . import environment, methods
+
+
+def _redraw(self, context):
+    for window in getattr(context.window_manager, "windows", ()):
+        for area in window.screen.areas:
+            if area.type == 'VIEW_3D':
+                area.tag_redraw()
+
+
+def _get_rotation(self):
+    mapping = environment.mapping_node(self.id_data)
+    if mapping is not None:
+        return tuple(mapping.inputs["Rotation"].default_value)
+    return tuple(self.get("stored_rotation", (0.0, 0.0, 0.0)))
+
+
+def _set_rotation(self, value):
+    mapping = environment.mapping_node(self.id_data)
+    if mapping is not None:
+        mapping.inputs["Rotation"].default_value = value
+    else:
+        self["stored_rotation"] = tuple(value)
+
+
+class SceneSettings(bpy.types.PropertyGroup):
+    environment_source: EnumProperty(
+        name="Environment",
+        items=[('WORLD', "World", "The world's Environment Texture (times the Background strength)"),
+               ('FILE', "File", "An equirectangular HDRI file")],
+        default='WORLD', update=_redraw)
+    environment_path: StringProperty(
+        name="File", subtype='FILE_PATH', description="Equirectangular HDRI (EXR or HDR)",
+        update=_redraw)
+    environment_rotation: FloatVectorProperty(
+        name="Rotation", subtype='EULER', size=3, get=_get_rotation, set=_set_rotation,
+        description="Rotation g of the environment (XYZ Euler). Drives the world's Mapping node "
+                    "in front of the Environment Texture when there is one")
+
+    automatic_orders: BoolProperty(
+        name="Automatic s", default=True,
+        description="Choose the environment's SH order s from the lobe-filtered truncation error")
+    target_error: FloatProperty(
+        name="Target error", default=0.05, min=0.001, max=1.0, subtype='FACTOR',
+        description="Relative RMS error of the lobe-filtered environment that automatic s aims for")
+    max_automatic_order: IntProperty(
+        name="Max s", default=8, min=1, max=16, description="Largest order automatic s may choose")
+    light_order: IntProperty(
+        name="s", default=4, min=0, max=16, description="SH order of the environment L~")
+    visibility_order: IntProperty(
+        name="s'", default=2, min=0, max=8, description="SH order of the visibility V~")
+
+    material_source: EnumProperty(
+        name="Material",
+        items=[('MATERIAL', "From Material", "Principled BSDF: rough dielectrics are Lambert, "
+                "others Phong with sigma from the roughness"),
+               ('LAMBERT', "Lambert", "Diffuse"),
+               ('PHONG', "Phong", "Glossy lobe around the mirrored view, exponent sigma")],
+        default='MATERIAL')
+    phong_exponent: FloatProperty(
+        name="Sigma", default=8.0, min=0.0, max=10000.0, soft_max=200.0,
+        description="Phong exponent sigma")
+
+    method: EnumProperty(name="Method", items=methods.enum_items(), default='msd_visibility')
+    rays: IntProperty(name="Rays", default=256, min=16, max=65536,
+                      description="Rays traced per vertex for the visibility")
+    seed: IntProperty(name="Seed", default=0, min=0, description="Seed of the ray directions")
+
+    live_shading: BoolProperty(
+        name="Live Shading", default=True, update=_redraw,
+        description="Draw baked objects in the viewport with the chosen formula")
+    per_pixel: BoolProperty(
+        name="Per Pixel", default=False, update=_redraw,
+        description="Evaluate the formula per pixel (the pixel's normal and view, the triangle's "
+                    "per-vertex data blended) instead of per vertex (the seed's way)")
+
+
+CLASSES = (SceneSettings,)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.sd_lighting = PointerProperty(type=SceneSettings)
+
+
+def unregister():
+    del bpy.types.Scene.sd_lighting
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)
+
+

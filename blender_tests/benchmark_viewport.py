@@ -1,0 +1,260 @@
+"""Viewport frame time of the live shading against Blender's own uniform-colour shader on the same
+geometry, for 10k, 100k and 1M vertices, as a ratio (one run).
+
+Each frame draws the mesh into a 1280x720 GPUOffScreen from the same camera and ends with a
+one-pixel readback, which waits for the GPU (llvmpipe here) to finish; the time per frame is the
+mean over several frames after a warm-up frame. The live shading is the add-on's default method,
+MSD Theorem 2.2 (eq. 13) with s = 4, s' = 2 and a Lambert lobe, per vertex (the seed's way) and,
+as an extra column, per pixel. Baking 1M vertices would take long, so the per-vertex designs are
+synthetic: each vertex gets as many nodes as a vertex of a real bake of a small scene (node counts
+drawn from that bake's distribution, padded to its maximum like the bake stores them) - the frame
+time depends on the node counts, not on the values.
+
+Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/benchmark_viewport.py -- --zip Z
+     (or blender -b ...: the GPU then comes from a Workbench render)
+A second table compares every method per vertex at --methods-size vertices (100k), with
+synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs).
+
+Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
+"""
+
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+WIDTH, HEIGHT = 1280, 720
+
+
+def options():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    out = {"sizes": [10000, 100000, 1000000], "frames": 5, "methods_size": 100000}
+    for i, arg in enumerate(argv):
+        if arg == "--sizes":
+            out["sizes"] = [int(s) for s in argv[i + 1].split(",")]
+        elif arg == "--frames":
+            out["frames"] = int(argv[i + 1])
+        elif arg == "--methods-size":
+            out["methods_size"] = int(argv[i + 1])
+    return out
+
+
+def heightfield(vertex_count):
+    """A bumpy n x n grid over [-2, 2]^2 with about vertex_count vertices: positions, unit normals,
+    triangles."""
+    n = max(2, int(round(vertex_count ** 0.5)))
+    xs = np.linspace(-2.0, 2.0, n)
+    x, y = np.meshgrid(xs, xs)
+    z = 0.15 * np.sin(3.0 * x) * np.cos(2.0 * y)
+    dzdx = 0.45 * np.cos(3.0 * x) * np.cos(2.0 * y)
+    dzdy = -0.3 * np.sin(3.0 * x) * np.sin(2.0 * y)
+    positions = np.c_[x.ravel(), y.ravel(), z.ravel()]
+    normals = np.c_[-dzdx.ravel(), -dzdy.ravel(), np.ones(n * n)]
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    a = (i * n + j).ravel()
+    triangles = np.concatenate([np.c_[a, a + 1, a + n], np.c_[a + 1, a + n + 1, a + n]]).astype(np.int32)
+    return positions, normals, triangles
+
+
+def synthetic_designs(normals, real_counts, seed=0):
+    """Per-vertex designs with node counts drawn from a real bake's, nodes on the upper hemisphere
+    of each normal, weights summing to 0.5 (an unoccluded vertex); the padding to the largest
+    count is as in a real bake, so the shader's work is the same."""
+    rng = np.random.default_rng(seed)
+    n = len(normals)
+    counts = rng.choice(np.asarray(real_counts), size=n)
+    counts[0] = max(real_counts)   # the texture stride is the bake's largest design
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    owner = np.repeat(np.arange(n), counts)
+    directions = rng.normal(size=(offsets[-1], 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    flip = (directions * normals[owner]).sum(axis=1) < 0
+    directions[flip] *= -1.0
+    weights = 0.5 / counts[owner]
+    return offsets, directions, weights
+
+
+def synthetic_result(method, normals, real_counts, s=4, sv=2, seed=0):
+    """Per-vertex data of a method's real shapes (values random: the frame time does not depend
+    on them)."""
+    rng = np.random.default_rng(seed)
+    n = len(normals)
+    k, kv = (s + 1) ** 2, (sv + 1) ** 2
+    result = {"ambient_occlusion": np.full(n, 0.5)}
+    if method in ("msd_lobe", "prt_gaunt"):
+        result["visibility"] = rng.normal(scale=0.1, size=(n, kv))
+    elif method == "prt_matrix":
+        result["product_matrices"] = rng.normal(scale=0.1, size=(n, k, kv))
+    elif method == "prt_diffuse":
+        result["transfer"] = rng.normal(scale=0.1, size=(n, k))
+    elif method == "msd_visibility":
+        offsets, design_nodes, weights = synthetic_designs(normals, real_counts)
+        result.update(design_offsets=offsets, design_nodes=design_nodes, design_weights=weights)
+    return result
+
+
+def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility"):
+    """A mesh object carrying a (synthetic) bake of the method, as the bake operator stores it."""
+    mesh = bpy.data.meshes.new("Benchmark")
+    mesh.vertices.add(len(positions))
+    mesh.vertices.foreach_set("co", positions.astype(np.float32).ravel())
+    mesh.loops.add(3 * len(triangles))
+    mesh.loops.foreach_set("vertex_index", triangles.ravel())
+    mesh.polygons.add(len(triangles))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(triangles), 3, dtype=np.int32))
+    if bpy.app.version < (4, 0, 0):
+        mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    result = synthetic_result(method, normals, real_counts)
+    floats = package.attributes.write(mesh, normals, result)
+    mesh["sd_bake"] = {"method": method, "lobe": "lambert", "exponent": 1.0, "light_order": 4,
+                       "visibility_order": 2, "rays": 0, "seed": 0, "floats_per_vertex": floats,
+                       "bake_id": "benchmark-%s-%d" % (method, len(positions))}
+    mesh.use_fake_user = True
+    obj = bpy.data.objects.new("Benchmark", mesh)
+    scene.collection.objects.link(obj)
+    obj["sd_baked_mesh"] = mesh
+    obj["sd_bake"] = dict(mesh["sd_bake"])
+    return obj
+
+
+def time_frames(draw, frames):
+    """Mean seconds per frame: clear, draw, read one pixel back (waits for the GPU)."""
+    import gpu
+    offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format='RGBA16F')
+    try:
+        def frame():
+            with offscreen.bind():
+                framebuffer = gpu.state.active_framebuffer_get()
+                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+                gpu.state.depth_test_set('LESS_EQUAL')
+                gpu.state.depth_mask_set(True)
+                gpu.state.face_culling_set('NONE')
+                draw()
+                framebuffer.read_color(WIDTH // 2, HEIGHT // 2, 1, 1, 4, 0, 'FLOAT')
+                gpu.state.depth_mask_set(False)
+                gpu.state.depth_test_set('NONE')
+        frame()  # warm-up: shader compilation, uploads
+        start = time.perf_counter()
+        for _ in range(frames):
+            frame()
+        return (time.perf_counter() - start) / frames
+    finally:
+        offscreen.free()
+
+
+def design_node_counts_of_a_real_bake(package, scene):
+    """Per-vertex node counts of a real MSD 2.2 bake (s = 4, s' = 2) of a small scene."""
+    ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.0, 0.0, 0.8), radius=0.7)
+    ground = sdtest.grid(scene, cuts=10, size=4.0)
+    settings = scene.sd_lighting
+    settings.method, settings.material_source = 'msd_visibility', 'LAMBERT'
+    settings.automatic_orders, settings.light_order, settings.visibility_order = False, 4, 2
+    settings.rays = 256
+    sdtest.select_only([ball, ground])
+    assert bpy.ops.sd_lighting.bake() == {'FINISHED'}
+    counts = []
+    for obj in (ball, ground):
+        counts.append(np.diff(package.attributes.read(package.baking.baked_mesh(obj))["design_offsets"]))
+    for obj in (ball, ground):
+        package.baking.clear(obj)
+        mesh = obj.data
+        bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+    return np.concatenate(counts)
+
+
+def main():
+    import gpu
+    from gpu_extras.batch import batch_for_shader
+    args = sdtest.arguments()
+    opts = options()
+    package = sdtest.install_addon(args.zip)
+    package.gpu_context.ensure()
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    camera = sdtest.camera(scene, location=(0.0, -4.5, 3.5), target=(0.0, 0.0, 0.0))
+    real_counts = design_node_counts_of_a_real_bake(package, scene)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    view = package.drawing.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
+    uniform = gpu.shader.from_builtin('3D_UNIFORM_COLOR' if bpy.app.version < (3, 5, 0) else 'UNIFORM_COLOR')
+    from mathutils import Matrix
+    projection = Matrix(view.view_projection.tolist())
+
+    print("\nsd_lighting viewport benchmark: %s, %s (%s)" % (
+        gpu.platform.renderer_get(), gpu.platform.version_get(), bpy.app.version_string))
+    print("MSD Theorem 2.2 (13), s = 4, s' = 2, Lambert; design nodes per vertex as a real bake's: "
+          "mean %.1f, max %d; %dx%d, mean of %d frames (per pixel: 1 frame)" % (
+              real_counts.mean(), real_counts.max(), WIDTH, HEIGHT, opts["frames"]))
+    print("%10s %10s %14s %14s %8s %14s %8s" % ("vertices", "triangles", "uniform (ms)",
+                                                "MSD/vertex(ms)", "ratio", "MSD/pixel(ms)", "ratio"))
+    rows = []
+    for size in opts["sizes"]:
+        positions, normals, triangles = heightfield(size)
+        obj = baked_object(package, scene, positions, normals, triangles, real_counts)
+        bpy.context.view_layer.update()
+        batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
+
+        def draw_uniform():
+            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+                gpu.matrix.load_matrix(Matrix.Identity(4))
+                gpu.matrix.load_projection_matrix(projection)
+                uniform.bind()
+                uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
+                batch.draw(uniform)
+
+        def draw_msd(per_pixel):
+            return lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel)
+
+        t_uniform = time_frames(draw_uniform, opts["frames"])
+        t_vertex = time_frames(draw_msd(False), opts["frames"])
+        t_pixel = time_frames(draw_msd(True), 1)
+        rows.append((len(positions), len(triangles), t_uniform, t_vertex, t_pixel))
+        print("%10d %10d %14.2f %14.2f %8.1f %14.2f %8.1f" % (
+            len(positions), len(triangles), 1e3 * t_uniform, 1e3 * t_vertex, t_vertex / t_uniform,
+            1e3 * t_pixel, t_pixel / t_uniform), flush=True)
+        package.drawing.clear_cache()
+        del batch
+        mesh = obj.data
+        bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+    print("ratio = frame time of the live shading / frame time of Blender's uniform-colour shader")
+
+    if opts["methods_size"]:
+        positions, normals, triangles = heightfield(opts["methods_size"])
+        batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
+
+        def draw_uniform():
+            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+                gpu.matrix.load_matrix(Matrix.Identity(4))
+                gpu.matrix.load_projection_matrix(projection)
+                uniform.bind()
+                uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
+                batch.draw(uniform)
+
+        t_uniform = time_frames(draw_uniform, opts["frames"])
+        print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
+              % (len(positions), 1e3 * t_uniform))
+        print("%-20s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        for method in package.methods.METHODS:
+            obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
+            floats = obj["sd_bake"]["floats_per_vertex"]
+            t = time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
+                            opts["frames"])
+            print("%-20s %10d %12.2f %8.1f" % (method.label, floats, 1e3 * t, t / t_uniform), flush=True)
+            package.drawing.clear_cache()
+            mesh = obj.data
+            bpy.data.objects.remove(obj)
+            bpy.data.meshes.remove(mesh)
+        del batch
+    return 0
+
+
+sdtest.run(main)

@@ -1,0 +1,123 @@
+"""The main job: the default scene, baked and shaded by the add-on, headless.
+
+Builds Suzanne (Subdivision modifier, a rough Principled material, so the lobe read from the
+material is Lambert) sitting on a subdivided ground plane, under a Blender-shipped HDRI (forest)
+turned by a Mapping node, with a camera; installs and enables the add-on from its zip; bakes both
+objects with MSD Theorem 2.2 (eq. 13, s = 4, s' = 2 - the seed's orders) against each other, so
+Suzanne shadows herself and the ground (contact shadows); saves the .blend (the bake lives in it:
+open it with the add-on enabled and the viewport shades it live) and renders the live shading from
+the scene camera to a PNG (Standard view transform) and an EXR (scene-linear), plus a PNG with the
+world turned by 120 degrees. Prints the paths.
+
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/run_default_scene.py -- \
+         --zip build/sd_lighting.zip --out out/
+     (set BLENDER_USER_SCRIPTS to a scratch folder to keep the install out of ~/.config/blender)
+Options after --: --rays 1024 --hdri forest.exr --width 960 --height 540 --exposure -1
+"""
+
+import math
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def options():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    out = {"rays": 1024, "hdri": "forest.exr", "width": 960, "height": 540, "exposure": -1.0}
+    for i, arg in enumerate(argv[:-1]):
+        key = arg.lstrip("-")
+        if key in out:
+            out[key] = type(out[key])(argv[i + 1])
+    return out
+
+
+def suzanne(scene):
+    bpy.ops.mesh.primitive_monkey_add(size=2.0, location=(0.0, 0.0, 0.0))
+    monkey = bpy.context.active_object
+    monkey.name = "Suzanne"
+    monkey.rotation_euler = (math.radians(-20.0), 0.0, math.radians(-25.0))
+    monkey.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+    bpy.ops.object.shade_smooth()
+    material = bpy.data.materials.new("Clay")
+    material.use_nodes = True
+    principled = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    principled.inputs["Roughness"].default_value = 0.7
+    monkey.data.materials.append(material)
+    # Sit her on the ground: the lowest point of the evaluated mesh at z = 0.
+    bpy.context.view_layer.update()
+    evaluated = monkey.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = evaluated.to_mesh()
+    co = np.empty(len(mesh.vertices) * 3)
+    mesh.vertices.foreach_get("co", co)
+    matrix = np.array(monkey.matrix_world)
+    lowest = (co.reshape(-1, 3) @ matrix[:3, :3].T)[:, 2].min()
+    evaluated.to_mesh_clear()
+    monkey.location.z = -lowest
+    return monkey
+
+
+def main():
+    args = sdtest.arguments()
+    opts = options()
+    start = time.perf_counter()
+    sdtest.install_addon(args.zip)
+
+    scene = sdtest.empty_scene()
+    _, mapping = sdtest.hdri_world(scene, sdtest.hdri(opts["hdri"]), rotation_z=math.radians(30.0))
+    monkey = suzanne(scene)
+    ground = sdtest.grid(scene, name="Ground", cuts=72, size=6.0)
+    sdtest.camera(scene, location=(3.2, -6.2, 3.0), target=(0.0, 0.0, 0.75), lens=45.0)
+    scene.render.resolution_x, scene.render.resolution_y = opts["width"], opts["height"]
+    scene.render.resolution_percentage = 100
+    # The live shading shows the Standard view transform; make Blender's own views agree, and
+    # bring the bright forest sky (B up to about 1.5) into range.
+    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.exposure = opts["exposure"]
+
+    settings = scene.sd_lighting
+    settings.method = 'msd_visibility'
+    settings.material_source = 'MATERIAL'
+    settings.automatic_orders = False
+    settings.light_order = 4
+    settings.visibility_order = 2
+    settings.rays = opts["rays"]
+    settings.live_shading = True
+    sdtest.select_only([monkey, ground])
+    print("sd_lighting: baking %s and %s (MSD Theorem 2.2, s = 4, s' = 2, %d rays per vertex)..."
+          % (monkey.name, ground.name, settings.rays), flush=True)
+    if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+        raise RuntimeError("the bake failed")
+    for obj in (monkey, ground):
+        info = dict(obj["sd_bake"])
+        print("  %-8s %6d vertices, %s (%s), %d bytes per vertex, %.1f s" % (
+            obj.name, info["vertices"], info["method"], info["lobe"], info["bytes_per_vertex"],
+            info["seconds"]), flush=True)
+
+    blend = os.path.join(args.out, "sd_default_scene.blend")
+    png = os.path.join(args.out, "sd_preview.png")
+    exr = os.path.join(args.out, "sd_preview.exr")
+    rotated = os.path.join(args.out, "sd_preview_world_turned_120.png")
+    for path in (png, exr):
+        if bpy.ops.sd_lighting.render_preview(filepath=path) != {'FINISHED'}:
+            raise RuntimeError("render_preview failed for " + path)
+    mapping.inputs["Rotation"].default_value[2] += math.radians(120.0)
+    if bpy.ops.sd_lighting.render_preview(filepath=rotated) != {'FINISHED'}:
+        raise RuntimeError("render_preview failed for " + rotated)
+    mapping.inputs["Rotation"].default_value[2] -= math.radians(120.0)
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+
+    print("\nsd_lighting main job done in %.1f s" % (time.perf_counter() - start))
+    print("blend file:    %s" % blend)
+    print("preview (PNG): %s" % png)
+    print("preview (EXR): %s" % exr)
+    print("world turned:  %s" % rotated)
+    return 0
+
+
+sdtest.run(main)

@@ -1,0 +1,210 @@
+"""Shared helpers of the Blender-run tests: arguments, installing the add-on zip, test scenes,
+checks with a one-line summary, and a crash-free exit.
+
+Every test script is run by Blender:
+    blender [-b] --factory-startup --python-exit-code 1 --python blender_tests/<test>.py -- \
+        --zip build/sd_lighting.zip --out build/blender_tests
+(run.py does that for all of them; GPU tests run under xvfb-run).
+"""
+
+import argparse
+import gc
+import os
+import sys
+import time
+import traceback
+
+import bpy
+
+BLENDER_HDRI_DIR = "/usr/share/blender/datafiles/studiolights/world"
+
+
+def hdri(name="forest.exr"):
+    """A Blender-shipped HDRI (CC0)."""
+    candidates = [os.path.join(BLENDER_HDRI_DIR, name)]
+    datafiles = bpy.utils.system_resource('DATAFILES')
+    if datafiles:
+        candidates.append(os.path.join(datafiles, "studiolights", "world", name))
+    for path in candidates:
+        if os.path.isfile(path):
+            return path
+    raise FileNotFoundError("Blender's HDRI %s not found" % name)
+
+
+def arguments():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--zip", default=None, help="the add-on zip to install")
+    parser.add_argument("--out", default=os.path.join(os.getcwd(), "blender_test_output"))
+    args, _ = parser.parse_known_args(argv)
+    args.out = os.path.abspath(args.out)
+    os.makedirs(args.out, exist_ok=True)
+    return args
+
+
+def install_addon(zip_path):
+    """Installs the zip as a legacy add-on and enables it; returns the add-on's package."""
+    import addon_utils
+    if not zip_path or not os.path.isfile(zip_path):
+        raise FileNotFoundError("add-on zip not found: %r (pass --zip)" % zip_path)
+    result = bpy.ops.preferences.addon_install(filepath=os.path.abspath(zip_path), overwrite=True)
+    if result != {'FINISHED'}:
+        raise RuntimeError("addon_install returned %s" % result)
+    addon_utils.modules_refresh()
+    bpy.ops.preferences.addon_enable(module="sd_lighting")
+    import sd_lighting
+    return sd_lighting
+
+
+class Checks:
+    """Collects named checks; `summary()` prints one line and returns the exit code."""
+
+    def __init__(self, name):
+        self.name = name
+        self.failed = []
+        self.passed = 0
+        self.start = time.perf_counter()
+
+    def check(self, ok, what, detail=""):
+        tag = "PASS" if ok else "FAIL"
+        print("[%s] %s%s" % (tag, what, (": " + detail) if detail else ""), flush=True)
+        if ok:
+            self.passed += 1
+        else:
+            self.failed.append(what)
+        return ok
+
+    def summary(self):
+        seconds = time.perf_counter() - self.start
+        if self.failed:
+            print("%s: FAILED %d of %d checks (%s) in %.1f s" % (
+                self.name, len(self.failed), len(self.failed) + self.passed,
+                "; ".join(self.failed), seconds), flush=True)
+            return 1
+        print("%s: OK, %d checks passed in %.1f s" % (self.name, self.passed, seconds), flush=True)
+        return 0
+
+
+def finish(code):
+    """Disables the add-on (freeing its GPU data while the context lives) and exits with `code`
+    without running Blender's exit path (no crash at exit can change the test's result)."""
+    try:
+        import addon_utils
+        addon_utils.disable("sd_lighting")
+    except Exception:
+        traceback.print_exc()
+        code = code or 1
+    gc.collect()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+def run(main):
+    """Runs main() -> exit code; any exception fails the test."""
+    try:
+        code = main()
+    except Exception:
+        traceback.print_exc()
+        print("test aborted by an exception", flush=True)
+        code = 1
+    finish(code)
+
+
+# ----------------------------------------------------------------------------------------------
+# Scenes
+
+def empty_scene():
+    """The current scene emptied of objects and their data (read_factory_settings would also
+    disable the add-on)."""
+    scene = bpy.context.scene
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    for collection in (bpy.data.meshes, bpy.data.cameras, bpy.data.lights, bpy.data.materials):
+        for block in list(collection):
+            collection.remove(block)
+    return scene
+
+
+def hdri_world(scene, path, rotation_z=0.0, strength=1.0):
+    """World: Texture Coordinate > Mapping > Environment Texture > Background."""
+    world = bpy.data.worlds.new("SD World")
+    world.use_nodes = True
+    scene.world = world
+    tree = world.node_tree
+    background = tree.nodes["Background"]
+    background.inputs["Strength"].default_value = strength
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(path, check_existing=True)
+    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    tree.links.new(env.outputs["Color"], background.inputs["Color"])
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, rotation_z)
+    return world, mapping
+
+
+def add_object(scene, name, mesh):
+    obj = bpy.data.objects.new(name, mesh)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.0, 1.0)):
+    import bmesh
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    kwargs = {"subdivisions": subdivisions}
+    kwargs["radius" if bpy.app.version >= (3, 0, 0) else "diameter"] = radius
+    bmesh.ops.create_icosphere(bm, **kwargs)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = add_object(scene, name, mesh)
+    obj.location = location
+    return obj
+
+
+def grid(scene, name="Ground", cuts=10, size=4.0, location=(0.0, 0.0, 0.0)):
+    import bmesh
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_grid(bm, x_segments=cuts, y_segments=cuts, size=size / 2.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = add_object(scene, name, mesh)
+    obj.location = location
+    return obj
+
+
+def camera(scene, location=(0.0, -6.0, 3.0), target=(0.0, 0.0, 0.7), lens=40.0):
+    from mathutils import Vector
+    data = bpy.data.cameras.new("Camera")
+    data.lens = lens
+    obj = add_object(scene, "Camera", data)
+    obj.location = location
+    direction = Vector(target) - Vector(location)
+    obj.rotation_euler = direction.to_track_quat('-Z', 'Y').to_euler()
+    scene.camera = obj
+    return obj
+
+
+def select_only(objects):
+    bpy.context.view_layer.update()  # creates the bases of newly linked objects
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(obj in objects)
+    if objects:
+        bpy.context.view_layer.objects.active = objects[0]
+
+
+def relative_error(gpu_values, cpu_values):
+    """max |gpu - cpu| / max |cpu| (over all vertices and channels) and the per-vertex worst
+    |gpu - cpu| / max(|cpu|, 1 % of the largest)."""
+    import numpy as np
+    cpu_values = np.asarray(cpu_values, dtype=np.float64)
+    diff = np.abs(np.asarray(gpu_values, dtype=np.float64) - cpu_values)
+    scale = max(float(np.abs(cpu_values).max()), 1e-30)
+    per_vertex = diff / np.maximum(np.abs(cpu_values), 0.01 * scale)
+    return float(diff.max() / scale), float(per_vertex.max())
+
+

@@ -1,0 +1,201 @@
+"""Baking from the operator: the evaluated mesh, attributes, settings, all-or-nothing on cancel and
+failure, rebake, save and reload.
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_bake.py -- --zip Z --out DIR
+"""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def snapshot():
+    """What a failed or cancelled bake must leave unchanged."""
+    out = {"meshes": sorted(m.name for m in bpy.data.meshes)}
+    for obj in bpy.data.objects:
+        mesh = obj.get("sd_baked_mesh")
+        out[obj.name] = (mesh.name if mesh else None,
+                         dict(obj["sd_bake"]).get("bake_id") if "sd_bake" in obj else None,
+                         len(obj.data.vertices) if obj.type == 'MESH' else None,
+                         sorted(a.name for a in obj.data.attributes) if obj.type == 'MESH' else None)
+    return out
+
+
+def main():
+    checks = sdtest.Checks("test_bake")
+    args = sdtest.arguments()
+    package = sdtest.install_addon(args.zip)
+    attributes = package.attributes
+
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    ball = sdtest.ico_sphere(scene, subdivisions=1, location=(0.0, 0.0, 0.8))
+    ball.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+    ground = sdtest.grid(scene, cuts=12, size=4.0)
+    sdtest.camera(scene)
+    settings = scene.sd_lighting
+    settings.method = 'msd_visibility'
+    settings.material_source = 'LAMBERT'
+    settings.rays = 128
+    settings.automatic_orders = False
+    settings.light_order = 3
+    settings.visibility_order = 1
+    original_ball_vertices = len(ball.data.vertices)
+    sdtest.select_only([ball, ground])
+
+    result = bpy.ops.sd_lighting.bake()
+    checks.check(result == {'FINISHED'}, "bake operator finishes", str(result))
+    baked = package.baking.baked_mesh(ball)
+    checks.check(baked is not None and baked.name == "SD Ball", "baked mesh linked from the object",
+                 baked.name if baked else "none")
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = ball.evaluated_get(depsgraph).to_mesh()
+    evaluated_count = len(evaluated.vertices)
+    ball.evaluated_get(depsgraph).to_mesh_clear()
+    checks.check(len(baked.vertices) == evaluated_count != original_ball_vertices,
+                 "baked the evaluated mesh (modifiers applied)",
+                 "%d baked, %d evaluated, %d original" % (len(baked.vertices), evaluated_count,
+                                                           original_ball_vertices))
+    checks.check(not any(a.name.startswith("sd_") for a in ball.data.attributes),
+                 "the object's own mesh is untouched")
+    checks.check(baked.use_fake_user, "baked mesh has a fake user")
+    names = sorted(a.name for a in baked.attributes if a.name.startswith("sd_"))
+    design_names = [n for n in names if n.startswith("sd_design_")]
+    checks.check("sd_normal" in names and "sd_ambient_occlusion" in names and design_names and
+                 not any(n.startswith(("sd_visibility", "sd_matrix", "sd_transfer")) for n in names),
+                 "MSD 2.2 stores normal, AO and designs only", ", ".join(names[:6]) + "...")
+    for name in ("sd_normal", "sd_ambient_occlusion", "sd_design_000"):
+        attribute = baked.attributes[name]
+        checks.check(attribute.domain == 'POINT' and attribute.data_type in
+                     {'FLOAT', 'FLOAT_VECTOR', 'FLOAT_COLOR'}, "attribute %s is POINT float 1-4" % name)
+    info = dict(ball["sd_bake"])
+    checks.check(info["method"] == "msd_visibility" and info["light_order"] == 3 and
+                 info["visibility_order"] == 1 and info["rays"] == 128 and info["lobe"] == "lambert",
+                 "bake settings in the object's custom properties", str(info))
+    checks.check(info["bytes_per_vertex"] == 4 * (1 + 4 * len(design_names)) and info["seconds"] > 0,
+                 "memory per vertex and time recorded",
+                 "%d B, %.3f s" % (info["bytes_per_vertex"], info["seconds"]))
+    data = attributes.read(baked)
+    offsets = data["design_offsets"]
+    sums = np.add.reduceat(data["design_weights"], offsets[:-1]) if len(data["design_weights"]) else []
+    nonempty = np.diff(offsets) > 0
+    checks.check(np.allclose(np.asarray(sums)[nonempty], data["ambient_occlusion"][nonempty], atol=1e-5),
+                 "design weights sum to the ambient occlusion")
+
+    ground_mesh = package.baking.baked_mesh(ground)
+    ao = attributes.read(ground_mesh)["ambient_occlusion"]
+    co = attributes.read_positions(ground_mesh)
+    r = np.hypot(co[:, 0], co[:, 1])
+    under, far = ao[r < 0.5].mean(), ao[r > 1.6].mean()
+    checks.check(under < far - 0.05, "contact shadow: AO under the ball below AO far away",
+                 "%.3f vs %.3f" % (under, far))
+
+    # Cancelled bake: nothing changes.
+    before = snapshot()
+    settings.method = 'prt_matrix'
+    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    job.cancel()
+    job.run()
+    checks.check(job.cancelled and not job.error, "cancel stops the bake", str(job.error))
+    checks.check(snapshot() == before, "a cancelled bake changes nothing")
+    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    job.start()
+    job.cancel()
+    job.join(60)
+    checks.check(job.finished and job.cancelled, "cancel from another thread stops the worker")
+    checks.check(snapshot() == before, "a cancelled threaded bake changes nothing")
+
+    # Failed bakes: nothing changes, with a reason.
+    settings.method = 'prt_diffuse'
+    settings.material_source = 'PHONG'
+    try:
+        result = str(bpy.ops.sd_lighting.bake())
+    except RuntimeError as exc:  # the operator's error report surfaces as an exception in scripts
+        result = str(exc)
+    checks.check("needs a Lambert material" in result and snapshot() == before,
+                 "PRT (2) on a Phong material is refused, nothing changed", result.strip())
+    settings.material_source = 'LAMBERT'
+    settings.method = 'msd_lobe'
+    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    job.tasks[1].geometry.vertices[0, 0] = float("nan")
+    job.run()
+    checks.check(job.error is not None and "ValueError" in job.error, "a failing native bake reports why",
+                 str(job.error))
+    checks.check(snapshot() == before, "a failed bake changes nothing")
+
+    # Rebake with another method replaces the baked mesh.
+    old_names = {m.name for m in bpy.data.meshes}
+    result = bpy.ops.sd_lighting.bake()
+    checks.check(result == {'FINISHED'}, "rebake with MSD Theorem 2.1")
+    baked = package.baking.baked_mesh(ball)
+    names = {a.name for a in baked.attributes}
+    checks.check("sd_visibility_000" in names and not any(n.startswith("sd_design") for n in names),
+                 "rebake stores V~ and no designs")
+    checks.check(baked.name == "SD Ball" and len(bpy.data.meshes) == len(old_names),
+                 "the old baked meshes were replaced", str(sorted(m.name for m in bpy.data.meshes)))
+    visibility = attributes.read(baked)["visibility"].copy()
+
+    # Environment sources: the world's file, the same image packed (read from its pixels), a file
+    # from the panel, and a world without an Environment Texture (uniform colour).
+    environment = package.environment
+    source = environment.source(scene)
+    file_light = environment.light_coefficients(source, 2)
+    checks.check(source.kind == "file" and source.path.endswith("forest.exr"), "world HDRI found", source.description)
+    env_node = environment.world_nodes(scene.world)[0]
+    env_node.image.pack()
+    source = environment.source(scene)
+    pixel_light = environment.light_coefficients(source, 2)
+    checks.check(source.kind == "pixels" and np.allclose(pixel_light, file_light, rtol=1e-3, atol=1e-4 * abs(file_light).max()),
+                 "a packed HDRI gives the same coefficients from its pixels",
+                 "max diff %.2e" % abs(pixel_light - file_light).max())
+    env_node.image.unpack(method='REMOVE')
+    scene.sd_lighting.environment_source = 'FILE'
+    scene.sd_lighting.environment_path = sdtest.hdri("forest.exr")
+    checks.check(np.allclose(environment.light_coefficients(environment.source(scene), 2), file_light),
+                 "an HDRI file chosen in the panel")
+    scene.sd_lighting.environment_source = 'WORLD'
+    background = environment.world_nodes(scene.world)[1]
+    background.inputs["Strength"].default_value = 2.0
+    checks.check(np.allclose(environment.light_coefficients(environment.source(scene), 2), 2 * file_light),
+                 "the Background strength scales L")
+    background.inputs["Strength"].default_value = 1.0
+    plain = bpy.data.worlds.new("Plain")
+    plain.use_nodes = True
+    plain.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
+    world, scene.world = scene.world, plain
+    light = environment.light_coefficients(environment.source(scene), 2)
+    checks.check(np.allclose(light[0], (0.2, 0.3, 0.4)) and not light[1:].any(),
+                 "a world without an Environment Texture lights with its uniform colour")
+    scene.world = world
+    mapping = environment.world_nodes(world)[2]
+    mapping.inputs["Rotation"].default_value = (0.1, 0.2, 0.3)
+    g = environment.rotation_matrix(scene)
+    mapping.vector_type = 'TEXTURE'
+    checks.check(np.allclose(environment.rotation_matrix(scene), g.T) and np.allclose(g @ g.T, np.eye(3)),
+                 "Mapping rotation: g for Point, g^T for Texture")
+    mapping.vector_type = 'POINT'
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
+
+    # Save and reload.
+    path = os.path.join(args.out, "test_bake.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    ball = bpy.data.objects["Ball"]
+    baked = package.baking.baked_mesh(ball)
+    checks.check(baked is not None and ball["sd_bake"]["method"] == "msd_lobe",
+                 "bake survives save and reload")
+    checks.check(np.array_equal(attributes.read(baked)["visibility"], visibility),
+                 "attributes survive save and reload")
+
+    sdtest.select_only([ball])
+    result = bpy.ops.sd_lighting.clear_bake()
+    checks.check(result == {'FINISHED'} and "sd_bake" not in ball and "SD Ball" not in bpy.data.meshes,
+                 "clear bake removes the baked mesh and properties")
+    return checks.summary()
+
+
+sdtest.run(main)

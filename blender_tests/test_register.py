@@ -1,0 +1,70 @@
+"""The add-on installs from the zip, registers, and unregisters leaving nothing behind.
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_register.py -- --zip Z
+"""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+
+
+def operator_exists(name):
+    try:
+        getattr(bpy.ops.sd_lighting, name).get_rna_type()
+        return True
+    except (AttributeError, KeyError):
+        return False
+
+
+def state():
+    return {
+        "scene_property": hasattr(bpy.types.Scene, "sd_lighting"),
+        "panel": hasattr(bpy.types, "SD_PT_lighting"),
+        "bake_operator": operator_exists("bake"),
+        "preview_operator": operator_exists("render_preview"),
+        "load_post": len(bpy.app.handlers.load_post),
+    }
+
+
+def main():
+    checks = sdtest.Checks("test_register")
+    args = sdtest.arguments()
+    before = state()
+    package = sdtest.install_addon(args.zip)
+    checks.check(os.path.dirname(package.__file__).endswith("sd_lighting") and
+                 "scripts" in package.__file__, "imported from the installed zip", package.__file__)
+    checks.check(package.bl_info["blender"] <= (3, 4, 0), "bl_info targets Blender 3.4")
+    on = state()
+    for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
+        checks.check(on[key], "registered: " + key)
+    checks.check(on["load_post"] == before["load_post"] + 1, "one load_post handler added")
+    checks.check(package.drawing._handler is not None, "draw handler added")
+    checks.check(package.native.available(), "sdnative loads from the zip",
+                 package.native.error_message())
+    sd = package.native.get()
+    checks.check(os.path.dirname(sd.__file__) == os.path.dirname(package.__file__),
+                 "sdnative is the zip's copy", sd.__file__)
+    checks.check(os.path.isdir(package.gpu_shading.shader_directory()) and
+                 package.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
+                 "shaders are the zip's copy", package.gpu_shading.shader_directory())
+    settings = bpy.context.scene.sd_lighting
+    checks.check(settings.method == "msd_visibility" and settings.visibility_order == 2,
+                 "default settings: MSD Theorem 2.2, s' = 2")
+    drawing = package.drawing
+
+    import addon_utils
+    for cycle in range(2):
+        addon_utils.disable("sd_lighting")
+        off = state()
+        checks.check(off == before, "unregister leaves nothing behind (cycle %d)" % cycle,
+                     "%s vs %s" % (off, before))
+        checks.check(drawing._handler is None, "draw handler removed (cycle %d)" % cycle)
+        addon_utils.enable("sd_lighting")
+        checks.check(state() == on, "registers again (cycle %d)" % cycle)
+    return checks.summary()
+
+
+sdtest.run(main)

@@ -1,0 +1,245 @@
+"""The add-on in a running Blender UI (under Xvfb): the modal bake runs in a worker thread with
+progress while the UI keeps running, cancels on request leaving everything as it was, and the
+live shading's POST_VIEW handler draws the baked objects in the viewport with the values of the
+CPU evaluator for the viewport's own camera (read back from the viewport's framebuffer).
+Run: xvfb-run -a blender --factory-startup --enable-event-simulate --python-exit-code 1 \
+         --python blender_tests/test_viewport.py -- --zip Z
+(--enable-event-simulate lets the test press Esc; without it, it cancels with the Cancel button.)
+"""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+TIMEOUT = 240.0
+
+
+def unoccluded(scene, depsgraph, eye, points):
+    """Points the eye sees (Blender's scene ray cast finds nothing in front of them)."""
+    from mathutils import Vector
+    out = np.zeros(len(points), dtype=bool)
+    for i, point in enumerate(points):
+        direction = Vector(point) - Vector(eye)
+        hit = scene.ray_cast(depsgraph, Vector(eye), direction.normalized(), distance=direction.length - 1e-3)
+        out[i] = not hit[0]
+    return out
+
+
+def boundary_vertices(triangles, count):
+    """Vertices on the mesh's border (their pixels mix in the background)."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    out = np.zeros(count, dtype=bool)
+    out[unique[counts == 1].ravel()] = True
+    return out
+
+
+def bilinear(image, x, y):
+    """RGB at sub-pixel positions (pixel centres at i + 0.5)."""
+    fx, fy = x - 0.5, y - 0.5
+    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+    tx, ty = (fx - x0)[:, None], (fy - y0)[:, None]
+    c = lambda yy, xx: image[yy, xx, :3]  # noqa: E731
+    return ((1 - ty) * ((1 - tx) * c(y0, x0) + tx * c(y0, x0 + 1)) +
+            ty * ((1 - tx) * c(y0 + 1, x0) + tx * c(y0 + 1, x0 + 1)))
+
+
+class Stub:
+    """Accepts any layout call (to run the panel's draw() without a visible sidebar)."""
+
+    def __getattr__(self, name):
+        return Stub()
+
+    def __call__(self, *args, **kwargs):
+        return Stub()
+
+    def __setattr__(self, name, value):
+        pass
+
+
+class Test:
+    def __init__(self):
+        self.checks = sdtest.Checks("test_viewport")
+        self.args = sdtest.arguments()
+        self.package = sdtest.install_addon(self.args.zip)
+        self.steps = self.run()
+        self.ticks = 0
+        self.samples = None
+        self.start = None
+
+    # -- helpers
+    def viewport(self):
+        window = bpy.context.window_manager.windows[0]
+        area = next(a for a in window.screen.areas if a.type == 'VIEW_3D')
+        region = next(r for r in area.regions if r.type == 'WINDOW')
+        return window, area, region
+
+    def override(self):
+        window, area, region = self.viewport()
+        return bpy.context.temp_override(window=window, area=area, region=region)
+
+    def build_scene(self):
+        scene = sdtest.empty_scene()
+        sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+        self.ball = sdtest.ico_sphere(scene, subdivisions=3, location=(0.0, 0.0, 0.75), radius=0.75)
+        self.ground = sdtest.grid(scene, cuts=30, size=4.0)
+        sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
+        settings = scene.sd_lighting
+        settings.method = 'msd_visibility'
+        settings.material_source = 'PHONG'
+        settings.phong_exponent = 4.0
+        settings.automatic_orders = False
+        settings.light_order = 4
+        settings.visibility_order = 2
+        settings.rays = 256
+        sdtest.select_only([self.ball, self.ground])
+        return scene
+
+    def read_viewport(self):
+        """A POST_PIXEL handler copies the viewport's colour buffer (scene-linear before the
+        view transform) once."""
+        import gpu
+
+        def grab():
+            if self.samples is None:
+                region = bpy.context.region
+                framebuffer = gpu.state.active_framebuffer_get()
+                buffer = framebuffer.read_color(0, 0, region.width, region.height, 4, 0, 'FLOAT')
+                buffer.dimensions = region.width * region.height * 4
+                self.samples = np.array(buffer, dtype=np.float32).reshape(region.height, region.width, 4)
+                self.view = self.package.drawing.View.from_region(bpy.context.region_data)
+        return bpy.types.SpaceView3D.draw_handler_add(grab, (), 'WINDOW', 'POST_PIXEL')
+
+    # -- the test, one step per timer tick
+    def run(self):
+        checks = self.checks
+        package = self.package
+        scene = self.build_scene()
+
+        # Modal bake in a worker thread.
+        with self.override():
+            result = bpy.ops.sd_lighting.bake('INVOKE_DEFAULT')
+        checks.check(result == {'RUNNING_MODAL'}, "bake starts as a modal operator", str(result))
+        ticks_at_start, fractions = self.ticks, []
+        while package.operators.active_job is not None:
+            fractions.append(package.operators.active_job.fraction)
+            yield
+        checks.check(self.ticks - ticks_at_start >= 2, "the UI kept running during the bake",
+                     "%d timer ticks" % (self.ticks - ticks_at_start))
+        checks.check(fractions == sorted(fractions), "progress only grows",
+                     "%s" % [round(f, 2) for f in fractions[:8]])
+        checks.check(package.baking.baked_mesh(self.ball) is not None and
+                     package.baking.baked_mesh(self.ground) is not None, "modal bake stored results")
+
+        # Esc/cancel during a bake: nothing changes.
+        bake_id = self.ball["sd_bake"]["bake_id"]
+        scene.sd_lighting.rays = 8192
+        with self.override():
+            bpy.ops.sd_lighting.bake('INVOKE_DEFAULT')
+        yield
+        checks.check(package.operators.active_job is not None, "second bake running")
+        window = self.viewport()[0]
+        if getattr(bpy.app, "use_event_simulate", False):
+            # Blender started with --enable-event-simulate: press Esc for real.
+            window.event_simulate(type='ESC', value='PRESS')
+            window.event_simulate(type='ESC', value='RELEASE')
+            how = "Esc"
+        else:
+            with self.override():
+                bpy.ops.sd_lighting.cancel_bake()
+            how = "the Cancel button"
+        while package.operators.active_job is not None:
+            yield
+        checks.check(self.ball["sd_bake"]["bake_id"] == bake_id and
+                     sorted(m.name for m in bpy.data.meshes) == ["Ball", "Ground", "SD Ball", "SD Ground"],
+                     "%s cancels a modal bake and nothing changes" % how)
+
+        # The panel draws without errors.
+        panel = Stub()
+        try:
+            with self.override():
+                bpy.types.SD_PT_lighting.draw(panel, bpy.context)
+            ok, detail = True, ""
+        except Exception as exc:
+            ok, detail = False, "%s: %s" % (type(exc).__name__, exc)
+        checks.check(ok, "panel draws", detail)
+
+        # Live shading in the viewport, seen through the scene camera.
+        window, area, region = self.viewport()
+        space = area.spaces.active
+        space.shading.type = 'SOLID'
+        space.region_3d.view_perspective = 'CAMERA'
+        space.overlay.show_overlays = False
+        scene.camera.data.show_passepartout = False
+        handler = self.read_viewport()
+        area.tag_redraw()
+        for _ in range(3):
+            yield
+        bpy.types.SpaceView3D.draw_handler_remove(handler, 'WINDOW')
+        checks.check(self.samples is not None, "viewport redrawn")
+        checks.check(package.drawing.last_error == "", "draw handler ran without error",
+                     package.drawing.last_error)
+        if self.samples is None:
+            return
+        package.preview.write_png(os.path.join(self.args.out, "viewport.png"),
+                                  np.round(255 * np.clip(self.samples[::-1], 0, 1)).astype(np.uint8))
+        drawing = package.drawing
+        for obj in (self.ball, self.ground):
+            cpu = drawing.cpu_reference(scene, obj, self.view)
+            mesh = package.baking.baked_mesh(obj)
+            matrix = np.array(obj.matrix_world)
+            world = package.attributes.read_positions(mesh) @ matrix[:3, :3].T + matrix[:3, 3]
+            clip = np.c_[world, np.ones(len(world))] @ self.view.view_projection.T
+            ndc = clip[:, :3] / clip[:, 3:4]
+            h, w = self.samples.shape[:2]
+            x, y = (ndc[:, 0] + 1) * 0.5 * w, (ndc[:, 1] + 1) * 0.5 * h   # rows bottom-first here
+            to_eye = self.view.camera[:3] - world
+            normals = package.attributes.read_normals(mesh) @ matrix[:3, :3].T
+            facing = (to_eye * normals).sum(axis=1) > 0.3 * np.linalg.norm(to_eye, axis=1)
+            inside = facing & (x > 2) & (x < w - 2) & (y > 2) & (y < h - 2)
+            inside &= ~boundary_vertices(package.attributes.read_triangles(mesh), len(world))
+            inside &= unoccluded(scene, bpy.context.evaluated_depsgraph_get(), self.view.camera[:3], world)
+            # The viewport's buffer holds the display values: sRGB(B) in 8 bits (Standard view
+            # transform), read back as they are stored.
+            inside &= (cpu.min(axis=1) > 0.02) & (cpu.max(axis=1) < 0.98)
+            px = bilinear(self.samples, x[inside], y[inside])
+            expected = package.preview.srgb_encode(cpu[inside])
+            error = 255.0 * np.abs(px - expected).max(axis=1)
+            checks.check(inside.sum() > 20 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,
+                         "viewport shows sRGB(B of the CPU evaluator) on the %s" % obj.name,
+                         "median %.2f / 255 over %d vertices, %.0f %% within 4 / 255" % (
+                             np.median(error), inside.sum(), 100 * np.mean(error < 4.0)))
+
+    def tick(self):
+        self.ticks += 1
+        try:
+            next(self.steps)
+        except StopIteration:
+            sdtest.finish(self.checks.summary())
+        except Exception:
+            import traceback
+            traceback.print_exc()
+            sdtest.finish(1)
+        if self.start is not None and self.ticks * 0.1 > TIMEOUT:
+            print("test_viewport: timed out")
+            sdtest.finish(1)
+        return 0.1
+
+
+def main():
+    test = Test()
+    test.start = 0.0
+    bpy.app.timers.register(test.tick, first_interval=0.5)
+
+
+try:
+    main()
+except Exception:
+    import traceback
+    traceback.print_exc()
+    sdtest.finish(1)

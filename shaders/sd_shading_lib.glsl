@@ -1,0 +1,313 @@
+/* sd-lighting: the shading formulas of the method of spherical designs (MSD) and of PRT, in GLSL.
+ *
+ * This file is the GPU twin of native/src/shading.cpp (sdnative.shade): every function below
+ * follows the CPU evaluator step by step, so that the viewport agrees with it to float32 rounding.
+ * Equation numbers are the seed's (msd-notes.md).
+ *
+ * Everything happens in the baked object's local frame: the per-vertex data (normals, visibility,
+ * designs) were baked there, and the environment coefficients in sd.light[] are those of
+ * x -> L(g R x), with g the environment rotation and R the rotation part of the object's matrix
+ * (rotated on the CPU once per frame and per object).
+ *
+ * The shader is specialised with defines (see addon/sd_lighting/gpu_shading.py); exactly one
+ * SD_METHOD_* is defined:
+ *   SD_METHOD_UNSHADOWED         sum_l w_l sum_m L_lm y_lm(a)                 (V = 1)
+ *   SD_METHOD_AMBIENT_OCCLUSION  AO x unshadowed
+ *   SD_METHOD_PRT_DIFFUSE        eq. (2): sum_i L_i T_i
+ *   SD_METHOD_PRT_MATRIX         eqs. (8)-(9): sum_i L_i sum_j M_ij w_j y_j(a)
+ *   SD_METHOD_PRT_GAUNT          eq. (10): sum over real Gaunt coefficients G_abc L_a V_b w_c y_c(a)
+ *   SD_METHOD_MSD_LOBE           eq. (12), Theorem 2.1: sum_nu lambda_nu L~(g_a x_nu) V~(g_a x_nu)
+ *   SD_METHOD_MSD_VISIBILITY     eq. (13), Theorem 2.2: sum_nu lambda_Vnu L~(x_Vnu) w~(x_Vnu . a)
+ * and:
+ *   SD_GLOSSY            Phong lobe around the mirrored view (otherwise Lambert around the normal)
+ *   SD_LIGHT_COUNT       (s+1)^2 environment coefficients
+ *   SD_VIS_COUNT         (s'+1)^2 visibility coefficients (methods with V~ or M)
+ *   SD_VIS_ORDER         s' (truncated lobe of eq. 13)
+ *   SD_BASIS_ORDER/COUNT order of the SH basis evaluated at a direction, and its (order+1)^2
+ *   SD_SH_DIAGONAL, SD_SH_A, SD_SH_B, SD_SH_TABLE_SIZE   its recurrence constants (see below)
+ *   SD_LOBE_VEC4S        vec4s holding the Funk-Hecke factors w_l (four per vec4)
+ *   SD_LOBE_DESIGN_SIZE  nodes of the lobe design (eq. 12)
+ *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none)
+ *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
+ *   SD_DESIGN_TEXELS     texels (nodes) of a vertex's V design (eq. 13)
+ *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
+ *
+ * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
+ * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture (2^SD_TEXTURE_WIDTH_LOG2
+ * texels wide); they are the bake's
+ * FLOAT_COLOR attributes in order (see addon/sd_lighting/attributes.py).
+ *
+ * Metal-safe: explicit float literals, no implicit int/float conversions.
+ */
+
+/* ---------------------------------------------------------------------------------------------
+ * Real spherical harmonics in the sdnative convention (spherical_harmonics.h): orthonormal for
+ * dmu = dx / 4pi, y_00 = 1, y_1,-1 = sqrt(3) y, y_10 = sqrt(3) z, y_11 = sqrt(3) x, no
+ * Condon-Shortley phase, flat index l^2 + l + m. The fully normalised recurrences:
+ *   Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}, Q_00 = 1, Q_11 = sqrt(3)          (SD_SH_DIAGONAL)
+ *   Q_lm = a_lm z Q_{l-1,m} - b_lm Q_{l-2,m}                                 (SD_SH_A, SD_SH_B)
+ *     with a_{m+1,m} = sqrt(2m+3), b_{m+1,m} = 0, and for l >= m+2
+ *     a_lm = sqrt((2l-1)(2l+1) / ((l-m)(l+m))),
+ *     b_lm = sqrt((2l+1)(l+m-1)(l-m-1) / ((l-m)(l+m)(2l-3)))
+ *   y_l,+m = Q_lm Re (x + i y)^m,  y_l,-m = Q_lm Im (x + i y)^m.
+ * The constants come as defines (comma-separated, computed in float64 by gpu_shading.py); the
+ * a/b tables are indexed l (l + 1) / 2 + m.
+ * ------------------------------------------------------------------------------------------- */
+#ifdef SD_BASIS_ORDER
+const float sd_sh_diagonal[SD_BASIS_ORDER + 1] = float[SD_BASIS_ORDER + 1](SD_SH_DIAGONAL);
+const float sd_sh_a[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_A);
+const float sd_sh_b[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_B);
+
+void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
+{
+  float re = 1.0;
+  float im = 0.0;
+  for (int m = 0; m <= SD_BASIS_ORDER; m++) {
+    if (m > 0) {
+      float r = re * d.x - im * d.y;
+      im = re * d.y + im * d.x;
+      re = r;
+    }
+    float q_prev2 = 0.0;
+    float q_prev = 0.0;
+    float q = sd_sh_diagonal[m];
+    for (int l = m; l <= SD_BASIS_ORDER; l++) {
+      if (l > m) {
+        int k = (l * (l + 1)) / 2 + m;
+        q = sd_sh_a[k] * d.z * q_prev - sd_sh_b[k] * q_prev2;
+      }
+      q_prev2 = q_prev;
+      q_prev = q;
+      int center = l * l + l;
+      y[center + m] = q * re;
+      if (m > 0) {
+        y[center - m] = q * im;
+      }
+    }
+  }
+}
+#endif
+
+#if defined(SD_BASIS_ORDER) && defined(SD_METHOD_MSD_VISIBILITY)
+/* L~(d) = sum_i L_i y_i(d) (order SD_BASIS_ORDER = s), summed while the basis is generated: the
+ * same recurrences as sd_sh_basis without a basis array (faster where arrays spill). */
+vec3 sd_light_at(vec3 d)
+{
+  vec3 sum = vec3(0.0);
+  float re = 1.0;
+  float im = 0.0;
+  for (int m = 0; m <= SD_BASIS_ORDER; m++) {
+    if (m > 0) {
+      float r = re * d.x - im * d.y;
+      im = re * d.y + im * d.x;
+      re = r;
+    }
+    float q_prev2 = 0.0;
+    float q_prev = 0.0;
+    float q = sd_sh_diagonal[m];
+    for (int l = m; l <= SD_BASIS_ORDER; l++) {
+      if (l > m) {
+        int k = (l * (l + 1)) / 2 + m;
+        q = sd_sh_a[k] * d.z * q_prev - sd_sh_b[k] * q_prev2;
+      }
+      q_prev2 = q_prev;
+      q_prev = q;
+      int center = l * l + l;
+      sum += sd.light[center + m].rgb * (q * re);
+      if (m > 0) {
+        sum += sd.light[center - m].rgb * (q * im);
+      }
+    }
+  }
+  return sum;
+}
+#endif
+
+/* Funk-Hecke factor w_l of the lobe (w_0 = 1), from the frame block. */
+float sd_lobe_factor(int l)
+{
+  return sd.lobe[l / 4][l % 4];
+}
+
+#if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT)
+/* L~(x) = sum_i L_i y_i(x) for the rotated environment, given the basis at x. */
+vec3 sd_light_sum(float y[SD_BASIS_COUNT])
+{
+  vec3 sum = vec3(0.0);
+  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
+    sum += sd.light[i].rgb * y[i];
+  }
+  return sum;
+}
+#endif
+
+/* The lobe axis a: the normal for Lambert, the mirrored view v_n = 2 (n.v) n - v for Phong;
+ * normalised (as the CPU evaluator does). */
+vec3 sd_lobe_axis(vec3 normal, vec3 view)
+{
+#ifdef SD_GLOSSY
+  return normalize(2.0 * dot(normal, view) * normal - view);
+#else
+  return normalize(normal);
+#endif
+}
+
+/* Per-vertex data: texel k of vertex p. The texture is 2^SD_TEXTURE_WIDTH_LOG2 texels wide, so
+ * the row and column are a shift and a mask (integer division is slow on CPU rasterisers). */
+#if SD_DATA_STRIDE > 0
+vec4 sd_vertex_texel(int p, int k)
+{
+  int index = p * SD_DATA_STRIDE + k;
+  return texelFetch(sd_data, ivec2(index & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), index >> SD_TEXTURE_WIDTH_LOG2), 0);
+}
+
+/* Coefficient i of a vertex's SH data whose texels start at `first`. */
+float sd_vertex_coefficient(int p, int first, int i)
+{
+  return sd_vertex_texel(p, first + i / 4)[i % 4];
+}
+#endif
+
+#ifdef SD_METHOD_MSD_LOBE
+/* Two tangents completing a to an orthonormal frame: any rotation g_a taking e3 to a (Duff et
+ * al. 2017, as the CPU evaluator); the twist does not matter for a zonal lobe (Theorem 2.1). */
+void sd_frame_around(vec3 a, out vec3 t1, out vec3 t2)
+{
+  float sign_z = (a.z >= 0.0) ? 1.0 : -1.0;
+  float c = -1.0 / (sign_z + a.z);
+  float d = a.x * a.y * c;
+  t1 = vec3(1.0 + sign_z * a.x * a.x * c, sign_z * d, -sign_z * a.x);
+  t2 = vec3(d, sign_z + a.y * a.y * c, -a.y);
+}
+#endif
+
+#ifdef SD_METHOD_MSD_VISIBILITY
+/* The lobe truncated at order s': w~(t) = sum_{l<=s'} (2l+1) w_l P_l(t). */
+float sd_truncated_lobe(float t)
+{
+  float p_prev = 1.0;
+  float p = t;
+  float sum = sd_lobe_factor(0);
+  if (SD_VIS_ORDER >= 1) {
+    sum += 3.0 * sd_lobe_factor(1) * t;
+  }
+  for (int l = 2; l <= SD_VIS_ORDER; l++) {
+    float fl = float(l);
+    float next = ((2.0 * fl - 1.0) * t * p - (fl - 1.0) * p_prev) / fl;
+    p_prev = p;
+    p = next;
+    sum += (2.0 * fl + 1.0) * sd_lobe_factor(l) * p;
+  }
+  return sum;
+}
+#endif
+
+/* B for vertex p seen along `view` (unit, from the surface to the eye) with surface normal
+ * `normal`, both in the object's local frame. */
+vec3 sd_shade(int p, vec3 normal, vec3 view)
+{
+  vec3 a = sd_lobe_axis(normal, view);
+  vec3 rgb = vec3(0.0);
+
+#if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
+  /* Funk-Hecke: sum_l w_l sum_m L_lm y_lm(a). */
+  float y[SD_BASIS_COUNT];
+  sd_sh_basis(a, y);
+  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
+    vec3 band = vec3(0.0);
+    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
+      band += sd.light[i].rgb * y[i];
+    }
+    rgb += sd_lobe_factor(l) * band;
+  }
+#  ifdef SD_METHOD_AMBIENT_OCCLUSION
+  rgb *= sd_vertex_texel(p, 0).x;
+#  endif
+
+#elif defined(SD_METHOD_PRT_DIFFUSE)
+  /* Eq. (2): one dot product with the transfer vector. */
+  for (int t = 0; t < SD_DATA_STRIDE; t++) {
+    vec4 texel = sd_vertex_texel(p, t);
+    for (int c = 0; c < 4; c++) {
+      int i = 4 * t + c;
+      if (i < SD_LIGHT_COUNT) {
+        rgb += sd.light[i].rgb * texel[c];
+      }
+    }
+  }
+
+#elif defined(SD_METHOD_PRT_MATRIX)
+  /* Eqs. (8)-(9): T_i = sum_j M_ij w_j y_j(a), B = sum_i L_i T_i; M row-major in the texels. */
+  float y[SD_BASIS_COUNT];
+  sd_sh_basis(a, y);
+  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
+    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
+      y[i] *= sd_lobe_factor(l);
+    }
+  }
+  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
+    float t_i = 0.0;
+    for (int j = 0; j < SD_VIS_COUNT; j++) {
+      t_i += sd_vertex_coefficient(p, 0, i * SD_VIS_COUNT + j) * y[j];
+    }
+    rgb += sd.light[i].rgb * t_i;
+  }
+
+#elif defined(SD_METHOD_PRT_GAUNT)
+  /* Eq. (10): sum over G_abc != 0 of L_a V~_b G_abc w_c y_c(a). */
+  float y[SD_BASIS_COUNT];
+  sd_sh_basis(a, y);
+  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
+    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
+      y[i] *= sd_lobe_factor(l);
+    }
+  }
+  float v[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    v[j] = sd_vertex_coefficient(p, 0, j);
+  }
+  for (int e = 0; e < SD_GAUNT_COUNT; e++) {
+    vec4 entry = texelFetch(sd_gaunt, ivec2(e & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), e >> SD_TEXTURE_WIDTH_LOG2), 0); /* a, b, c, G */
+    float f = v[int(entry.y)] * entry.w * y[int(entry.z)];
+    rgb += sd.light[int(entry.x)].rgb * f;
+  }
+
+#elif defined(SD_METHOD_MSD_LOBE)
+  /* Eq. (12), Theorem 2.1: the lobe design turned onto the axis, L~ and V~ at its nodes. */
+  vec3 t1, t2;
+  sd_frame_around(a, t1, t2);
+  float v[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    v[j] = sd_vertex_coefficient(p, 0, j);
+  }
+  float y[SD_BASIS_COUNT];
+  for (int nu = 0; nu < SD_LOBE_DESIGN_SIZE; nu++) {
+    vec4 node = sd.design[nu];
+    sd_sh_basis(node.x * t1 + node.y * t2 + node.z * a, y);
+    float v_tilde = 0.0;
+    for (int j = 0; j < SD_VIS_COUNT; j++) {
+      v_tilde += v[j] * y[j];
+    }
+    rgb += (node.w * v_tilde) * sd_light_sum(y);
+  }
+
+#elif defined(SD_METHOD_MSD_VISIBILITY)
+  /* Eq. (13), Theorem 2.2: the vertex's design of V, L~ and the truncated lobe at its nodes. */
+  for (int nu = 0; nu < SD_DESIGN_TEXELS; nu++) {
+    vec4 node = sd_vertex_texel(p, nu); /* x, y, z, lambda; lambda = 0 pads after the last node */
+    if (node.w <= 0.0) {
+      break;
+    }
+    rgb += (node.w * sd_truncated_lobe(dot(node.xyz, a))) * sd_light_at(node.xyz);
+  }
+#endif
+
+  return rgb;
+}
+
+/* Unit direction from a world-space point to the eye, in the object's local frame. */
+vec3 sd_view_direction(vec3 world_position)
+{
+  vec3 to_eye = (sd.camera.w > 0.5) ? (sd.camera.xyz - world_position) : sd.camera.xyz;
+  return normalize(mat3(sd.world_to_local) * normalize(to_eye));
+}

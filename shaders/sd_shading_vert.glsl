@@ -1,0 +1,36 @@
+/* sd-lighting vertex shader (prepended by sd_shading_lib.glsl).
+ *
+ * Per-vertex shading (the seed's way, default): B is evaluated here for the vertex whose index is
+ * gl_VertexID (an indexed batch: gl_VertexID is the index) and interpolated over the triangle.
+ * SD_PER_PIXEL: the vertex only passes its frame on; the fragment shader evaluates B with the
+ * pixel's normal and view for each of the triangle's three vertices' data (non-indexed batch with
+ * the triangle's vertex indices in `corners` and the barycentric corner in `bary`).
+ * SD_VERTEX_TARGET (tests): vertex p is drawn as a point at pixel (p % width, p / width) of a
+ * float target, so the readback holds exactly what the shader computed for every vertex.
+ */
+void main()
+{
+  vec4 world = sd.model * vec4(pos, 1.0);
+
+#ifdef SD_VERTEX_TARGET
+  int p = gl_VertexID;
+  float width = sd.params.y;
+  float height = sd.params.z;
+  vec2 pixel = vec2(float(p % int(width)), float(p / int(width))) + vec2(0.5);
+  gl_Position = vec4(2.0 * pixel.x / width - 1.0, 2.0 * pixel.y / height - 1.0, 0.0, 1.0);
+#else
+  gl_Position = sd.view_projection * world;
+  /* A small pull towards the eye, so that the overlay wins the depth test against the viewport's
+   * own drawing of the same surface. */
+  gl_Position.z -= sd.params.w * gl_Position.w;
+#endif
+
+#ifdef SD_PER_PIXEL
+  sd_world_position = world.xyz;
+  sd_normal = nrm;
+  sd_bary = bary;
+  sd_corners = corners;
+#else
+  sd_color = sd.params.x * sd_shade(gl_VertexID, normalize(nrm), sd_view_direction(world.xyz));
+#endif
+}

@@ -13,7 +13,10 @@ time depends on the node counts, not on the values.
 Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/benchmark_viewport.py -- --zip Z
      (or blender -b ...: the GPU then comes from a Workbench render)
 A second table compares every method per vertex at --methods-size vertices (100k), with
-synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs).
+synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs); the MSD
+methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the band-limited
+environment texture (the light-texture option). It ends with MSD (13) and (12), SH and texture,
+as ratios to PRT (8) and PRT (10).
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
 """
@@ -128,19 +131,11 @@ def baked_object(package, scene, positions, normals, triangles, real_counts, met
 def time_frames(draw, frames):
     """Mean seconds per frame: clear, draw, read one pixel back (waits for the GPU)."""
     import gpu
+    from sd_lighting import drawing
     offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format='RGBA16F')
     try:
         def frame():
-            with offscreen.bind():
-                framebuffer = gpu.state.active_framebuffer_get()
-                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-                gpu.state.depth_test_set('LESS_EQUAL')
-                gpu.state.depth_mask_set(True)
-                gpu.state.face_culling_set('NONE')
-                draw()
-                framebuffer.read_color(WIDTH // 2, HEIGHT // 2, 1, 1, 4, 0, 'FLOAT')
-                gpu.state.depth_mask_set(False)
-                gpu.state.depth_test_set('NONE')
+            drawing.draw_offscreen(offscreen, draw, region=(WIDTH // 2, HEIGHT // 2, 1, 1))
         frame()  # warm-up: shader compilation, uploads
         start = time.perf_counter()
         for _ in range(frames):
@@ -154,11 +149,7 @@ def design_node_counts_of_a_real_bake(package, scene):
     """Per-vertex node counts of a real MSD 2.2 bake (s = 4, s' = 2) of a small scene."""
     ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.0, 0.0, 0.8), radius=0.7)
     ground = sdtest.grid(scene, cuts=10, size=4.0)
-    settings = scene.sd_lighting
-    settings.method, settings.material_source = 'msd_visibility', 'LAMBERT'
-    settings.automatic_orders, settings.light_order, settings.visibility_order = False, 4, 2
-    settings.rays = 256
-    sdtest.select_only([ball, ground])
+    sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 4, 2, rays=256, select=[ball, ground])
     assert bpy.ops.sd_lighting.bake() == {'FINISHED'}
     counts = []
     for obj in (ball, ground):
@@ -171,9 +162,33 @@ def design_node_counts_of_a_real_bake(package, scene):
     return np.concatenate(counts)
 
 
-def main():
+def uniform_drawer(uniform, projection, positions, triangles):
+    """(draw function, batch) of Blender's uniform-colour shader on the mesh."""
     import gpu
     from gpu_extras.batch import batch_for_shader
+    from mathutils import Matrix
+    batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
+
+    def draw():
+        with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+            gpu.matrix.load_matrix(Matrix.Identity(4))
+            gpu.matrix.load_projection_matrix(projection)
+            uniform.bind()
+            uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
+            batch.draw(uniform)
+    return draw, batch
+
+
+def remove_object(package, obj):
+    """Drops the benchmark object, its mesh and the cached GPU data."""
+    package.drawing.clear_cache()
+    mesh = obj.data
+    bpy.data.objects.remove(obj)
+    bpy.data.meshes.remove(mesh)
+
+
+def main():
+    import gpu
     args = sdtest.arguments()
     opts = options()
     package = sdtest.install_addon(args.zip)
@@ -200,15 +215,7 @@ def main():
         positions, normals, triangles = heightfield(size)
         obj = baked_object(package, scene, positions, normals, triangles, real_counts)
         bpy.context.view_layer.update()
-        batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
-
-        def draw_uniform():
-            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-                gpu.matrix.load_matrix(Matrix.Identity(4))
-                gpu.matrix.load_projection_matrix(projection)
-                uniform.bind()
-                uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
-                batch.draw(uniform)
+        draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)
 
         def draw_msd(per_pixel):
             return lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel)
@@ -220,40 +227,48 @@ def main():
         print("%10d %10d %14.2f %14.2f %8.1f %14.2f %8.1f" % (
             len(positions), len(triangles), 1e3 * t_uniform, 1e3 * t_vertex, t_vertex / t_uniform,
             1e3 * t_pixel, t_pixel / t_uniform), flush=True)
-        package.drawing.clear_cache()
         del batch
-        mesh = obj.data
-        bpy.data.objects.remove(obj)
-        bpy.data.meshes.remove(mesh)
+        remove_object(package, obj)
     print("ratio = frame time of the live shading / frame time of Blender's uniform-colour shader")
 
     if opts["methods_size"]:
         positions, normals, triangles = heightfield(opts["methods_size"])
-        batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
-
-        def draw_uniform():
-            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-                gpu.matrix.load_matrix(Matrix.Identity(4))
-                gpu.matrix.load_projection_matrix(projection)
-                uniform.bind()
-                uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
-                batch.draw(uniform)
-
+        draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)
         t_uniform = time_frames(draw_uniform, opts["frames"])
         print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
               % (len(positions), 1e3 * t_uniform))
-        print("%-20s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        print("%-34s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        settings = scene.sd_lighting
+        times = {}
         for method in package.methods.METHODS:
             obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
             floats = obj["sd_bake"]["floats_per_vertex"]
-            t = time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
-                            opts["frames"])
-            print("%-20s %10d %12.2f %8.1f" % (method.label, floats, 1e3 * t, t / t_uniform), flush=True)
-            package.drawing.clear_cache()
-            mesh = obj.data
-            bpy.data.objects.remove(obj)
-            bpy.data.meshes.remove(mesh)
+            textures = (False, True) if method.id in package.gpu_shading.LIGHT_TEXTURE_METHODS else (False,)
+            for texture in textures:
+                settings.light_texture = texture
+                t = time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
+                                opts["frames"])
+                times[method.id, texture] = t
+                label = method.label + (", L~ texture" if texture else "")
+                print("%-34s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
+            settings.light_texture = False
+            remove_object(package, obj)
         del batch
+        width, height = package.gpu_shading.light_texture_size(4)
+        print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
+              "L~ texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
+        print("%-34s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
+        labels = {m.id: m.label for m in package.methods.METHODS}
+        for method, texture in (("msd_visibility", False), ("msd_visibility", True),
+                                ("msd_lobe", False), ("msd_lobe", True),
+                                ("prt_matrix", False), ("prt_gaunt", False)):
+            if (method, texture) not in times:
+                continue
+            t = times[method, texture]
+            label = labels[method] + ((", L~ texture" if texture else ", L~ SH sum")
+                                      if method in package.gpu_shading.LIGHT_TEXTURE_METHODS else "")
+            print("%-34s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
+                                                  t / times["prt_gaunt", False]), flush=True)
     return 0
 
 

@@ -80,15 +80,9 @@ def main():
     scene.view_settings.view_transform = 'Standard'
     scene.view_settings.exposure = opts["exposure"]
 
-    settings = scene.sd_lighting
-    settings.method = 'msd_visibility'
-    settings.material_source = 'MATERIAL'
-    settings.automatic_orders = False
-    settings.light_order = 4
-    settings.visibility_order = 2
-    settings.rays = opts["rays"]
+    settings = sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 4, 2, rays=opts["rays"],
+                                    select=[monkey, ground])
     settings.live_shading = True
-    sdtest.select_only([monkey, ground])
     print("sd_lighting: baking %s and %s (MSD Theorem 2.2, s = 4, s' = 2, %d rays per vertex)..."
           % (monkey.name, ground.name, settings.rays), flush=True)
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:

@@ -197,6 +197,37 @@ def select_only(objects):
         bpy.context.view_layer.objects.active = objects[0]
 
 
+def bake_settings(scene, method, material, light_order, visibility_order=None, rays=256,
+                  phong_exponent=None, select=()):
+    """Sets what the next bake uses (fixed orders, no automatic s) and selects `select`; returns
+    the scene's settings."""
+    settings = scene.sd_lighting
+    settings.method = method
+    settings.material_source = material
+    if phong_exponent is not None:
+        settings.phong_exponent = phong_exponent
+    settings.automatic_orders = False
+    settings.light_order = light_order
+    if visibility_order is not None:
+        settings.visibility_order = visibility_order
+    settings.rays = rays
+    if select:
+        select_only(list(select))
+    return settings
+
+
+def bilinear(image, x, y):
+    """RGB at sub-pixel positions (pixel centres at i + 0.5): Gouraud shading is linear inside a
+    triangle, so this recovers a vertex's value up to the triangles' kinks."""
+    import numpy as np
+    fx, fy = x - 0.5, y - 0.5
+    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+    tx, ty = (fx - x0)[:, None], (fy - y0)[:, None]
+    c = lambda yy, xx: image[yy, xx, :3]  # noqa: E731
+    return ((1 - ty) * ((1 - tx) * c(y0, x0) + tx * c(y0, x0 + 1)) +
+            ty * ((1 - tx) * c(y0 + 1, x0) + tx * c(y0 + 1, x0 + 1)))
+
+
 def relative_error(gpu_values, cpu_values):
     """max |gpu - cpu| / max |cpu| (over all vertices and channels) and the per-vertex worst
     |gpu - cpu| / max(|cpu|, 1 % of the largest)."""

@@ -37,15 +37,9 @@ def main():
     ball.modifiers.new("Subdivision", 'SUBSURF').levels = 1
     ground = sdtest.grid(scene, cuts=12, size=4.0)
     sdtest.camera(scene)
-    settings = scene.sd_lighting
-    settings.method = 'msd_visibility'
-    settings.material_source = 'LAMBERT'
-    settings.rays = 128
-    settings.automatic_orders = False
-    settings.light_order = 3
-    settings.visibility_order = 1
+    settings = sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 3, 1, rays=128,
+                                    select=[ball, ground])
     original_ball_vertices = len(ball.data.vertices)
-    sdtest.select_only([ball, ground])
 
     result = bpy.ops.sd_lighting.bake()
     checks.check(result == {'FINISHED'}, "bake operator finishes", str(result))

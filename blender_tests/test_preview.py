@@ -61,7 +61,7 @@ def agreement(package, scene, image, obj):
     inside = (x > 2) & (x < WIDTH - 2) & (y > 2) & (y < HEIGHT - 2) & facing
     inside &= unoccluded(scene, depsgraph, view.camera[:3], world)
     inside[inside] &= covered(image, x[inside], y[inside])
-    px = bilinear(image, x[inside], y[inside])
+    px = sdtest.bilinear(image, x[inside], y[inside])
     reference = cpu[inside]
     relative = np.abs(px - reference).max(axis=1) / np.maximum(np.abs(reference).max(axis=1), 1e-3)
     return float(np.mean(relative < 0.02)), float(np.median(relative)), int(inside.sum())
@@ -86,17 +86,6 @@ def covered(image, x, y):
     return (a[y0, x0] > 0.5) & (a[y0, x0 + 1] > 0.5) & (a[y0 + 1, x0] > 0.5) & (a[y0 + 1, x0 + 1] > 0.5)
 
 
-def bilinear(image, x, y):
-    """RGB at sub-pixel positions (pixel centres at i + 0.5): Gouraud shading is linear inside a
-    triangle, so this recovers a vertex's value up to the triangles' kinks."""
-    fx, fy = x - 0.5, y - 0.5
-    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
-    tx, ty = (fx - x0)[:, None], (fy - y0)[:, None]
-    c = lambda yy, xx: image[yy, xx, :3]  # noqa: E731
-    return ((1 - ty) * ((1 - tx) * c(y0, x0) + tx * c(y0, x0 + 1)) +
-            ty * ((1 - tx) * c(y0 + 1, x0) + tx * c(y0 + 1, x0 + 1)))
-
-
 def main():
     checks = sdtest.Checks("test_preview")
     args = sdtest.arguments()
@@ -107,15 +96,9 @@ def main():
     ball = sdtest.ico_sphere(scene, subdivisions=3, location=(0.0, 0.0, 0.75), radius=0.75)
     ground = sdtest.grid(scene, cuts=24, size=4.0)
     sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
-    settings = scene.sd_lighting
-    settings.method = 'msd_visibility'
-    settings.material_source = 'LAMBERT'
-    settings.automatic_orders = False
-    settings.light_order = 4
-    settings.visibility_order = 2
-    settings.rays = 128
+    settings = sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 4, 2, rays=128,
+                                    select=[ball, ground])
     scene.view_settings.view_transform = 'Standard'
-    sdtest.select_only([ball, ground])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
 
     exr = render(package, os.path.join(args.out, "preview.exr"))
@@ -160,7 +143,7 @@ def main():
     on_screen = (x > 2) & (x < WIDTH - 2) & (y > 2) & (y < HEIGHT - 2)
     seen = np.zeros(len(co), dtype=bool)
     pixels = np.zeros(len(co))
-    pixels[on_screen] = bilinear(exr, x[on_screen], y[on_screen]).mean(axis=1)
+    pixels[on_screen] = sdtest.bilinear(exr, x[on_screen], y[on_screen]).mean(axis=1)
     seen[on_screen] = np.abs(pixels[on_screen] - ground_values[on_screen]) < 0.02 * ground_values[on_screen]
     near, far = seen & (r < 1.0), seen & (r > 1.5)
     checks.check(near.any() and far.any() and pixels[near].min() < 0.6 * np.median(pixels[far]),

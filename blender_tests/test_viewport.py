@@ -39,16 +39,6 @@ def boundary_vertices(triangles, count):
     return out
 
 
-def bilinear(image, x, y):
-    """RGB at sub-pixel positions (pixel centres at i + 0.5)."""
-    fx, fy = x - 0.5, y - 0.5
-    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
-    tx, ty = (fx - x0)[:, None], (fy - y0)[:, None]
-    c = lambda yy, xx: image[yy, xx, :3]  # noqa: E731
-    return ((1 - ty) * ((1 - tx) * c(y0, x0) + tx * c(y0, x0 + 1)) +
-            ty * ((1 - tx) * c(y0 + 1, x0) + tx * c(y0 + 1, x0 + 1)))
-
-
 class Stub:
     """Accepts any layout call (to run the panel's draw() without a visible sidebar)."""
 
@@ -89,15 +79,8 @@ class Test:
         self.ball = sdtest.ico_sphere(scene, subdivisions=3, location=(0.0, 0.0, 0.75), radius=0.75)
         self.ground = sdtest.grid(scene, cuts=30, size=4.0)
         sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
-        settings = scene.sd_lighting
-        settings.method = 'msd_visibility'
-        settings.material_source = 'PHONG'
-        settings.phong_exponent = 4.0
-        settings.automatic_orders = False
-        settings.light_order = 4
-        settings.visibility_order = 2
-        settings.rays = 256
-        sdtest.select_only([self.ball, self.ground])
+        sdtest.bake_settings(scene, 'msd_visibility', 'PHONG', 4, 2, rays=256, phong_exponent=4.0,
+                             select=[self.ball, self.ground])
         return scene
 
     def read_viewport(self):
@@ -207,7 +190,7 @@ class Test:
             # The viewport's buffer holds the display values: sRGB(B) in 8 bits (Standard view
             # transform), read back as they are stored.
             inside &= (cpu.min(axis=1) > 0.02) & (cpu.max(axis=1) < 0.98)
-            px = bilinear(self.samples, x[inside], y[inside])
+            px = sdtest.bilinear(self.samples, x[inside], y[inside])
             expected = package.preview.srgb_encode(cpu[inside])
             error = 255.0 * np.abs(px - expected).max(axis=1)
             checks.check(inside.sum() > 20 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,

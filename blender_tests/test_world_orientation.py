@@ -79,13 +79,7 @@ def main():
     ball.data.materials.append(material)
     sdtest.camera(scene, location=(0.0, -4.5, 0.0), target=(0.0, 0.0, 0.0), lens=60.0)
 
-    settings = scene.sd_lighting
-    settings.method = 'unshadowed'
-    settings.material_source = 'LAMBERT'
-    settings.automatic_orders = False
-    settings.light_order = 8
-    settings.rays = 16
-    sdtest.select_only([ball])
+    sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[ball])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
 
     def preview(path):

@@ -31,6 +31,9 @@
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
  *   SD_DESIGN_TEXELS     texels (nodes) of a vertex's V design (eq. 13)
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
+ *   SD_LIGHT_TEXTURE     (MSD 12, 13 only) L~ is looked up in the band-limited equirect texture
+ *                        sd_light_texture (SD_LIGHT_TEXTURE_WIDTH x _HEIGHT, unrotated L~) at
+ *                        g R x (sd.light_rotation) instead of summed from sd.light[]
  *
  * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
  * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture (2^SD_TEXTURE_WIDTH_LOG2
@@ -58,42 +61,20 @@ const float sd_sh_diagonal[SD_BASIS_ORDER + 1] = float[SD_BASIS_ORDER + 1](SD_SH
 const float sd_sh_a[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_A);
 const float sd_sh_b[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_B);
 
-void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
-{
-  float re = 1.0;
-  float im = 0.0;
-  for (int m = 0; m <= SD_BASIS_ORDER; m++) {
-    if (m > 0) {
-      float r = re * d.x - im * d.y;
-      im = re * d.y + im * d.x;
-      re = r;
-    }
-    float q_prev2 = 0.0;
-    float q_prev = 0.0;
-    float q = sd_sh_diagonal[m];
-    for (int l = m; l <= SD_BASIS_ORDER; l++) {
-      if (l > m) {
-        int k = (l * (l + 1)) / 2 + m;
-        q = sd_sh_a[k] * d.z * q_prev - sd_sh_b[k] * q_prev2;
-      }
-      q_prev2 = q_prev;
-      q_prev = q;
-      int center = l * l + l;
-      y[center + m] = q * re;
-      if (m > 0) {
-        y[center - m] = q * im;
-      }
-    }
-  }
-}
-#endif
-
-#if defined(SD_BASIS_ORDER) && defined(SD_METHOD_MSD_VISIBILITY)
-/* L~(d) = sum_i L_i y_i(d) (order SD_BASIS_ORDER = s), summed while the basis is generated: the
- * same recurrences as sd_sh_basis without a basis array (faster where arrays spill). */
+/* SD_SH_SUM (MSD 13 with the SH path, whose only use of the basis is L~ at a direction): the
+ * recurrences below compute L~(d) = sum_i L_i y_i(d) (order SD_BASIS_ORDER = s), summed while the
+ * basis is generated, without a basis array (faster where arrays spill). Otherwise they fill the
+ * basis y_i(d). */
+#  if defined(SD_METHOD_MSD_VISIBILITY) && !defined(SD_LIGHT_TEXTURE)
+#    define SD_SH_SUM
 vec3 sd_light_at(vec3 d)
+#  else
+void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
+#  endif
 {
+#  ifdef SD_SH_SUM
   vec3 sum = vec3(0.0);
+#  endif
   float re = 1.0;
   float im = 0.0;
   for (int m = 0; m <= SD_BASIS_ORDER; m++) {
@@ -113,14 +94,67 @@ vec3 sd_light_at(vec3 d)
       q_prev2 = q_prev;
       q_prev = q;
       int center = l * l + l;
+#  ifdef SD_SH_SUM
       sum += sd.light[center + m].rgb * (q * re);
       if (m > 0) {
         sum += sd.light[center - m].rgb * (q * im);
       }
+#  else
+      y[center + m] = q * re;
+      if (m > 0) {
+        y[center - m] = q * im;
+      }
+#  endif
     }
   }
+#  ifdef SD_SH_SUM
   return sum;
+#  endif
 }
+#endif
+
+#ifdef SD_LIGHT_TEXTURE
+/* Texel (i, j) of the band-limited environment texture (rows bottom-first: j = 0 at the south
+ * pole), wrapped in u (the seam) and continued across the poles: the virtual row past a pole is
+ * the edge row half a turn round (colatitude -h/2 at phi is +h/2 at phi + pi). */
+vec3 sd_light_texel(int i, int j)
+{
+  if (j < 0 || j >= SD_LIGHT_TEXTURE_HEIGHT) {
+    j = (j < 0) ? 0 : SD_LIGHT_TEXTURE_HEIGHT - 1;
+    i += SD_LIGHT_TEXTURE_WIDTH / 2;
+  }
+  /* i is in [-1, 3 W / 2] here; no % (undefined for negative operands) */
+  if (i < 0) {
+    i += SD_LIGHT_TEXTURE_WIDTH;
+  }
+  else if (i >= SD_LIGHT_TEXTURE_WIDTH) {
+    i -= SD_LIGHT_TEXTURE_WIDTH;
+  }
+  return texelFetch(sd_light_texture, ivec2(i, j), 0).rgb;
+}
+
+/* L~(g R d) from the texture of the unrotated L~ (Blender's equirect orientation: u = 0.5 -
+ * atan2(y, x) / 2pi, v = 1 - acos(z) / pi, texel centres at (i + 0.5) / W, (j + 0.5) / H),
+ * bilinear between the four nearest texel centres (done here: exact wrap at the seam and across
+ * the poles whatever the sampler state). */
+vec3 sd_light_at(vec3 d)
+{
+  vec3 e = normalize(mat3(sd.light_rotation) * d);
+  float u = 0.5 - atan(e.y, e.x) * 0.15915494309189535;
+  float v = 1.0 - acos(clamp(e.z, -1.0, 1.0)) * 0.3183098861837907;
+  float x = u * float(SD_LIGHT_TEXTURE_WIDTH) - 0.5;
+  float y = v * float(SD_LIGHT_TEXTURE_HEIGHT) - 0.5;
+  float x0 = floor(x);
+  float y0 = floor(y);
+  float fx = x - x0;
+  float fy = y - y0;
+  int i = int(x0);
+  int j = int(y0);
+  vec3 bottom = mix(sd_light_texel(i, j), sd_light_texel(i + 1, j), fx);
+  vec3 top = mix(sd_light_texel(i, j + 1), sd_light_texel(i + 1, j + 1), fx);
+  return mix(bottom, top, fy);
+}
+
 #endif
 
 /* Funk-Hecke factor w_l of the lobe (w_0 = 1), from the frame block. */
@@ -129,7 +163,7 @@ float sd_lobe_factor(int l)
   return sd.lobe[l / 4][l % 4];
 }
 
-#if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT)
+#if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT) && !defined(SD_LIGHT_TEXTURE)
 /* L~(x) = sum_i L_i y_i(x) for the rotated environment, given the basis at x. */
 vec3 sd_light_sum(float y[SD_BASIS_COUNT])
 {
@@ -138,6 +172,19 @@ vec3 sd_light_sum(float y[SD_BASIS_COUNT])
     sum += sd.light[i].rgb * y[i];
   }
   return sum;
+}
+#endif
+
+#if defined(SD_METHOD_PRT_MATRIX) || defined(SD_METHOD_PRT_GAUNT)
+/* The lobe's Funk-Hecke expansion at the axis: w_l y_lm(a) (PRT 8-10). */
+void sd_lobe_basis(vec3 a, out float y[SD_BASIS_COUNT])
+{
+  sd_sh_basis(a, y);
+  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
+    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
+      y[i] *= sd_lobe_factor(l);
+    }
+  }
 }
 #endif
 
@@ -239,12 +286,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 #elif defined(SD_METHOD_PRT_MATRIX)
   /* Eqs. (8)-(9): T_i = sum_j M_ij w_j y_j(a), B = sum_i L_i T_i; M row-major in the texels. */
   float y[SD_BASIS_COUNT];
-  sd_sh_basis(a, y);
-  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
-    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
-      y[i] *= sd_lobe_factor(l);
-    }
-  }
+  sd_lobe_basis(a, y);
   for (int i = 0; i < SD_LIGHT_COUNT; i++) {
     float t_i = 0.0;
     for (int j = 0; j < SD_VIS_COUNT; j++) {
@@ -256,12 +298,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 #elif defined(SD_METHOD_PRT_GAUNT)
   /* Eq. (10): sum over G_abc != 0 of L_a V~_b G_abc w_c y_c(a). */
   float y[SD_BASIS_COUNT];
-  sd_sh_basis(a, y);
-  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
-    for (int i = l * l; i < (l + 1) * (l + 1); i++) {
-      y[i] *= sd_lobe_factor(l);
-    }
-  }
+  sd_lobe_basis(a, y);
   float v[SD_VIS_COUNT];
   for (int j = 0; j < SD_VIS_COUNT; j++) {
     v[j] = sd_vertex_coefficient(p, 0, j);
@@ -283,12 +320,17 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
   float y[SD_BASIS_COUNT];
   for (int nu = 0; nu < SD_LOBE_DESIGN_SIZE; nu++) {
     vec4 node = sd.design[nu];
-    sd_sh_basis(node.x * t1 + node.y * t2 + node.z * a, y);
+    vec3 x = node.x * t1 + node.y * t2 + node.z * a;
+    sd_sh_basis(x, y);
     float v_tilde = 0.0;
     for (int j = 0; j < SD_VIS_COUNT; j++) {
       v_tilde += v[j] * y[j];
     }
+#  ifdef SD_LIGHT_TEXTURE
+    rgb += (node.w * v_tilde) * sd_light_at(x);
+#  else
     rgb += (node.w * v_tilde) * sd_light_sum(y);
+#  endif
   }
 
 #elif defined(SD_METHOD_MSD_VISIBILITY)

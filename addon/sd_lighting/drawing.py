@@ -68,17 +68,18 @@ def clear_cache():
     _objects.clear()
 
 
-def object_data(obj, per_pixel=False, vertex_target=False):
+def object_data(obj, per_pixel=False, vertex_target=False, light_texture=False):
     """The GPU data of the object's bake (cached until the bake or the mode changes), or None."""
     mesh = baking.baked_mesh(obj)
     if mesh is None:
         return None
-    key = (mesh.name, mesh["sd_bake"].get("bake_id", ""), per_pixel, vertex_target)
+    key = (mesh.name, mesh["sd_bake"].get("bake_id", ""), per_pixel, vertex_target, light_texture)
     cache_key = (obj.name, vertex_target)
     cached = _objects.get(cache_key)
     if cached is not None and cached[0] == key:
         return cached[1]
-    data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target)
+    data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target,
+                                  light_texture=light_texture)
     _objects[cache_key] = (key, data)
     return data
 
@@ -105,6 +106,23 @@ def local_light(scene, obj, order, source=None, rotation=None):
     return native.get().rotate_sh(light, gr.T), gr
 
 
+def use_light_texture(scene):
+    """The scene's option: MSD (12), (13) look L~ up in a band-limited texture."""
+    settings = getattr(scene, "sd_lighting", None)
+    return bool(settings is not None and settings.light_texture)
+
+
+def _frame(scene, obj, data, view, scale, source=None, rotation=None, **kwargs):
+    """(uniform block, environment texture or None) of one draw of the object's data."""
+    light, gr = local_light(scene, obj, data.light_order, source, rotation)
+    block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
+                             light, scale, light_rotation=gr, **kwargs)
+    texture = None
+    if data.uses_light_texture:
+        texture = gpu_shading.environment_texture(source or environment.source(scene), data.light_order)
+    return block, texture
+
+
 def exposure_scale(scene):
     return 2.0 ** float(scene.view_settings.exposure)
 
@@ -113,14 +131,13 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
     """Draws the baked objects into the bound framebuffer with the current GPU state."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
+    light_texture = use_light_texture(scene)
     for obj in objects:
-        data = object_data(obj, per_pixel=per_pixel)
+        data = object_data(obj, per_pixel=per_pixel, light_texture=light_texture)
         if data is None:
             continue
-        light, _ = local_light(scene, obj, data.light_order, source, g)
-        block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
-                                 light, scale, depth_bias=depth_bias)
-        data.draw(block)
+        block, texture = _frame(scene, obj, data, view, scale, source, g, depth_bias=depth_bias)
+        data.draw(block, texture)
 
 
 def _draw_handler():
@@ -186,30 +203,40 @@ def gpu_vertex_values(scene, obj, view, per_pixel=False):
     """B at every vertex as the shader computes it (exposure not applied): each vertex is drawn
     as one pixel of an RGBA32F target and read back. Needs a GPU context. [N, 3] float32."""
     import gpu
-    data = object_data(obj, per_pixel=per_pixel, vertex_target=True)
+    data = object_data(obj, per_pixel=per_pixel, vertex_target=True,
+                       light_texture=use_light_texture(scene))
     n = data.vertex_count
     width = min(n, 1024)
     height = (n + width - 1) // width
-    light, _ = local_light(scene, obj, data.light_order)
-    block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera, light,
-                             1.0, target=(width, height))
+    block, texture = _frame(scene, obj, data, view, 1.0, target=(width, height))
     offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
     try:
-        with offscreen.bind():
-            framebuffer = gpu.state.active_framebuffer_get()
-            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set('NONE')
-            gpu.state.depth_mask_set(False)
-            gpu.state.blend_set('NONE')
-            gpu.state.face_culling_set('NONE')
-            gpu.state.point_size_set(1.0)
-            data.draw(block)
-            pixels = framebuffer.read_color(0, 0, width, height, 4, 0, 'FLOAT')
-        pixels.dimensions = width * height * 4
-        values = np.array(pixels, dtype=np.float32).reshape(-1, 4)
+        values = draw_offscreen(offscreen, lambda: data.draw(block, texture), depth_test=False)
     finally:
         offscreen.free()
-    return values[:n, :3]
+    return values.reshape(-1, 4)[:n, :3]
+
+
+def draw_offscreen(offscreen, draw, depth_test=True, region=None):
+    """Clears the offscreen target (colour 0, depth 1), calls draw() into it - depth-tested
+    (LESS_EQUAL, written) or not, no blending, no culling - and reads back the region
+    (x, y, width, height; default: all) as float32 [height, width, 4], rows bottom-first."""
+    import gpu
+    x, y, width, height = region or (0, 0, offscreen.width, offscreen.height)
+    with offscreen.bind():
+        framebuffer = gpu.state.active_framebuffer_get()
+        framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+        gpu.state.depth_test_set('LESS_EQUAL' if depth_test else 'NONE')
+        gpu.state.depth_mask_set(depth_test)
+        gpu.state.blend_set('NONE')
+        gpu.state.face_culling_set('NONE')
+        gpu.state.point_size_set(1.0)
+        draw()
+        pixels = framebuffer.read_color(x, y, width, height, 4, 0, 'FLOAT')
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set('NONE')
+    pixels.dimensions = width * height * 4
+    return np.array(pixels, dtype=np.float32).reshape(height, width, 4)
 
 
 def register():

@@ -80,6 +80,7 @@ class SD_PT_lighting(bpy.types.Panel):
         row = box.row()
         row.prop(settings, "live_shading")
         row.prop(settings, "per_pixel")
+        box.prop(settings, "light_texture")
         if drawing.last_error:
             box.label(text=drawing.last_error[:80], icon='ERROR')
         box.operator("sd_lighting.render_preview", icon='IMAGE_DATA')

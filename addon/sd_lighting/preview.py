@@ -62,30 +62,22 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
     view = drawing.View.from_camera(camera, depsgraph, width, height, scene)
     objects = drawing.baked_objects(scene, view_layer)
     others = _other_mesh_batches(scene, depsgraph, view_layer, {o.name for o in objects})
+
+    def draw():
+        drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel)
+        if others:
+            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+                from mathutils import Matrix
+                gpu.matrix.load_matrix(Matrix.Identity(4))
+                gpu.matrix.load_projection_matrix(Matrix(view.view_projection.tolist()))
+                for shader, batch in others:
+                    shader.bind()
+                    shader.uniform_float("color", (OTHER_MESH_GREY,) * 3 + (1.0,))
+                    batch.draw(shader)
+
     offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
     try:
-        with offscreen.bind():
-            framebuffer = gpu.state.active_framebuffer_get()
-            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set('LESS_EQUAL')
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set('NONE')
-            gpu.state.face_culling_set('NONE')
-            drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel)
-            if others:
-                with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-                    from mathutils import Matrix
-                    gpu.matrix.load_matrix(Matrix.Identity(4))
-                    gpu.matrix.load_projection_matrix(Matrix(view.view_projection.tolist()))
-                    for shader, batch in others:
-                        shader.bind()
-                        shader.uniform_float("color", (OTHER_MESH_GREY,) * 3 + (1.0,))
-                        batch.draw(shader)
-            pixels = framebuffer.read_color(0, 0, width, height, 4, 0, 'FLOAT')
-            gpu.state.depth_mask_set(False)
-            gpu.state.depth_test_set('NONE')
-        pixels.dimensions = width * height * 4
-        image = np.array(pixels, dtype=np.float32).reshape(height, width, 4)
+        image = drawing.draw_offscreen(offscreen, draw)
     finally:
         offscreen.free()
     return image[::-1].copy()

@@ -82,6 +82,11 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Per Pixel", default=False, update=_redraw,
         description="Evaluate the formula per pixel (the pixel's normal and view, the triangle's "
                     "per-vertex data blended) instead of per vertex (the seed's way)")
+    light_texture: BoolProperty(
+        name="Environment Texture", default=False, update=_redraw,
+        description="MSD (12), (13): look the environment L~ up in a band-limited equirect float "
+                    "texture (bilinear, about 5e-4 relative) instead of summing its (s+1)^2 SH "
+                    "terms at every design node (exact)")
 
 
 CLASSES = (SceneSettings,)

@@ -234,20 +234,26 @@ LoadedImage read_image_file(const std::string& path) {
 
 // ---- SH projection ----
 
+// cos(mφ_i) and sin(mφ_i) of every equirect column i, m < mc, stored by column: [i mc + m].
+struct AzimuthTables {
+  std::vector<double> cos, sin;
+  AzimuthTables(int width, int mc) : cos(static_cast<size_t>(width) * mc), sin(static_cast<size_t>(width) * mc) {
+    for (int i = 0; i < width; ++i) {
+      const double phi = equirect_phi(i, width);
+      for (int m = 0; m < mc; ++m) {
+        cos[static_cast<size_t>(i) * mc + m] = std::cos(m * phi);
+        sin[static_cast<size_t>(i) * mc + m] = std::sin(m * phi);
+      }
+    }
+  }
+};
+
 // Coefficient-major RGB: out[3 i + c]. Cost ∝ W H (order+1) + H (order+1)²; bit-identical for any
 // thread count: every row's azimuthal sums are computed by one thread, then combined in row order.
 std::vector<double> project_equirect(const float* rgb, int width, int height, int order, int threads) {
   const int mc = order + 1;  // number of m >= 0
   const int k = sh_count(order);
-  // cos(mφ_i), sin(mφ_i), column-major by pixel: table[i mc + m].
-  std::vector<double> cos_table(static_cast<size_t>(width) * mc), sin_table(static_cast<size_t>(width) * mc);
-  for (int i = 0; i < width; ++i) {
-    const double phi = equirect_phi(i, width);
-    for (int m = 0; m < mc; ++m) {
-      cos_table[static_cast<size_t>(i) * mc + m] = std::cos(m * phi);
-      sin_table[static_cast<size_t>(i) * mc + m] = std::sin(m * phi);
-    }
-  }
+  const AzimuthTables azimuth(width, mc);
   // Per row j: Σ_i L_c cos(mφ_i) and Σ_i L_c sin(mφ_i), six arrays of mc: (cos R, G, B, sin R, G, B).
   std::vector<double> sums(static_cast<size_t>(height) * 6 * mc, 0.0);
   parallel_for(
@@ -264,8 +270,8 @@ std::vector<double> project_equirect(const float* rgb, int width, int height, in
           for (int i = 0; i < width; ++i) {
             const double r = row[3 * i], g = row[3 * i + 1], b = row[3 * i + 2];
             if (r == 0.0 && g == 0.0 && b == 0.0) continue;
-            const double* __restrict ct = cos_table.data() + static_cast<size_t>(i) * mc;
-            const double* __restrict st = sin_table.data() + static_cast<size_t>(i) * mc;
+            const double* __restrict ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
+            const double* __restrict st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
             for (int m = 0; m < mc; ++m) {
               cr[m] += ct[m] * r;
               cg[m] += ct[m] * g;
@@ -782,14 +788,7 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
     const double sigma = ringing_window_factor(window, l, order);
     for (int q = 3 * l * l; q < 3 * (l + 1) * (l + 1); ++q) coefficients[q] *= sigma;
   }
-  std::vector<double> cos_table(static_cast<size_t>(width) * mc), sin_table(static_cast<size_t>(width) * mc);
-  for (int i = 0; i < width; ++i) {
-    const double phi = equirect_phi(i, width);
-    for (int m = 0; m < mc; ++m) {
-      cos_table[static_cast<size_t>(i) * mc + m] = std::cos(m * phi);
-      sin_table[static_cast<size_t>(i) * mc + m] = std::sin(m * phi);
-    }
-  }
+  const AzimuthTables azimuth(width, mc);
   std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
   // Per-row statistics, reduced in row order afterwards.
   std::vector<std::array<double, 6>> row_extrema(height);
@@ -817,8 +816,8 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
       int64_t negative = 0;
       float* out = rgb.data() + j * 3 * static_cast<size_t>(width);
       for (int i = 0; i < width; ++i) {
-        const double* ct = cos_table.data() + static_cast<size_t>(i) * mc;
-        const double* st = sin_table.data() + static_cast<size_t>(i) * mc;
+        const double* ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
+        const double* st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
         bool below = false;
         for (int c = 0; c < 3; ++c) {
           const double* ac = a.data() + c * mc;

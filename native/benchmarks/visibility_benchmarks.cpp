@@ -119,6 +119,21 @@ struct RawScene {
   }
 };
 
+// One occlusion ray in float32 from origin o along direction d, as the raw loops hand Embree.
+RTCRay raw_ray(const float* o, const float* d) {
+  RTCRay ray{};
+  ray.org_x = o[0];
+  ray.org_y = o[1];
+  ray.org_z = o[2];
+  ray.dir_x = d[0];
+  ray.dir_y = d[1];
+  ray.dir_z = d[2];
+  ray.tnear = 0.0f;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  return ray;
+}
+
 // Origins and directions of every ray of the bake, as the floats Embree gets.
 struct Rays {
   int per_vertex = 0;
@@ -148,23 +163,11 @@ size_t raw_occluded1(RTCScene scene, const Rays& rays) {
   const size_t n = rays.origins.size() / 3;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRay ray;
   for (size_t v = 0; v < n; ++v) {
     const float* o = &rays.origins[3 * v];
     const float* d = &rays.directions[3 * v * rays.per_vertex];
     for (int i = 0; i < rays.per_vertex; ++i) {
-      ray.org_x = o[0];
-      ray.org_y = o[1];
-      ray.org_z = o[2];
-      ray.tnear = 0.0f;
-      ray.dir_x = d[3 * i];
-      ray.dir_y = d[3 * i + 1];
-      ray.dir_z = d[3 * i + 2];
-      ray.time = 0.0f;
-      ray.tfar = std::numeric_limits<float>::infinity();
-      ray.mask = 0xFFFFFFFFu;
-      ray.id = 0;
-      ray.flags = 0;
+      RTCRay ray = raw_ray(o, d + 3 * i);
       rtcOccluded1(scene, &context, &ray);
       escaped += ray.tfar >= 0.0f;
     }
@@ -187,19 +190,7 @@ size_t raw_stream(RTCScene scene, const Rays& rays, int block, bool coherent) {
     const int count = std::min(block, rays.per_vertex - start);
     const float* d = d0 + 3 * start;
     for (int i = 0; i < count; ++i) {
-      RTCRay& ray = batch[i];
-      ray.org_x = o[0];
-      ray.org_y = o[1];
-      ray.org_z = o[2];
-      ray.tnear = 0.0f;
-      ray.dir_x = d[3 * i];
-      ray.dir_y = d[3 * i + 1];
-      ray.dir_z = d[3 * i + 2];
-      ray.time = 0.0f;
-      ray.tfar = std::numeric_limits<float>::infinity();
-      ray.mask = 0xFFFFFFFFu;
-      ray.id = 0;
-      ray.flags = 0;
+      batch[i] = raw_ray(o, d + 3 * i);
     }
     rtcOccluded1M(scene, &context, batch.data(), static_cast<unsigned>(count), sizeof(RTCRay));
     for (int i = 0; i < count; ++i) escaped += batch[i].tfar >= 0.0f;

@@ -25,12 +25,12 @@ def gauss_legendre(n, a=-1.0, b=1.0):
     return 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
 
 
-def sphere_product_rule(n_t, n_phi, t_range=(-1.0, 1.0)):
+def sphere_product_rule(n_t, n_phi, t_range=(-1.0, 1.0), phi_offset=0.25):
     """Product rule for dmu = dx / 4pi restricted to t = z in t_range: Gauss-Legendre in t times
     n_phi equally spaced azimuths. Over the whole sphere it integrates every polynomial of degree
     <= min(2 n_t - 1, n_phi - 1) exactly; the weights sum to the measure of the band."""
     t, wt = gauss_legendre(n_t, *t_range)
-    phi = 2.0 * np.pi * (np.arange(n_phi) + 0.25) / n_phi
+    phi = 2.0 * np.pi * (np.arange(n_phi) + phi_offset) / n_phi
     r = np.sqrt(np.maximum(0.0, 1.0 - t * t))
     dirs = np.stack(
         [np.outer(r, np.cos(phi)), np.outer(r, np.sin(phi)), np.outer(t, np.ones(n_phi))], axis=-1

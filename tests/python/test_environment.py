@@ -15,7 +15,7 @@ import zlib
 import numpy as np
 import pytest
 
-from sd_test_utils import EXACT, gauss_legendre, random_rotation, sh_count, sh_index
+from sd_test_utils import EXACT, random_rotation, sh_count, sh_index, sphere_product_rule
 
 BLENDER_WORLDS = "/usr/share/blender/datafiles/studiolights/world"
 BLENDER_HDRIS = ["city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"]
@@ -385,11 +385,7 @@ def test_lobe_filtered_error_and_smallest_order(sd):
         assert errors[s] <= 0.05 and (s == 0 or errors[s - 1] > 0.05)
     assert env.smallest_order("phong", 32.0, 1e-9) is None  # max_order = 16
     # Against the definition: relative RMS over axes of B - B~_s, B by brute force over the texels.
-    t, wt = gauss_legendre(48)
-    phi = 2 * np.pi * (np.arange(96) + 0.5) / 96
-    st = np.sqrt(1 - t * t)
-    axes = np.stack([np.outer(st, np.cos(phi)), np.outer(st, np.sin(phi)), np.outer(t, np.ones(96))], -1).reshape(-1, 3)
-    weights = np.outer(wt / 2, np.full(96, 1 / 96)).ravel()
+    axes, weights = sphere_product_rule(48, 96, phi_offset=0.5)
     dirs, dmu, rgb = env.texels()
     lum = rgb @ LUMINANCE * dmu
     for sigma, s in ((8.0, 4), (32.0, 6)):
@@ -457,11 +453,7 @@ def test_blender_lambert_order8_against_brute_force(sd, name):
     (0.1-1.4 % on Blender's maps; per normal, where B is small, the error is a larger fraction of B
     but stays below 10 % of the mean irradiance)."""
     env = sd.load_environment(os.path.join(BLENDER_WORLDS, name + ".exr"))
-    t, wt = gauss_legendre(16)
-    phi = 2 * np.pi * (np.arange(32) + 0.5) / 32
-    st = np.sqrt(1 - t * t)
-    normals = np.stack([np.outer(st, np.cos(phi)), np.outer(st, np.sin(phi)), np.outer(t, np.ones(32))], -1).reshape(-1, 3)
-    weights = np.outer(wt / 2, np.full(32, 1 / 32)).ravel()
+    normals, weights = sphere_product_rule(16, 32, phi_offset=0.5)
     dirs, dmu, rgb = env.texels()
     weighted = rgb * dmu[:, None]
     direct = np.concatenate([4.0 * np.maximum(chunk @ dirs.T, 0.0) @ weighted for chunk in np.array_split(normals, 16)])

@@ -18,6 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
+#include <cstring>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -108,7 +109,9 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
   }
   out["rays"] = bake.rays;
   out["seed"] = bake.seed;
-  out["epsilon"] = bake.epsilon;
+  py::array_t<double> origins({n, py::ssize_t(3)});
+  std::memcpy(origins.mutable_data(), bake.ray_origins.data(), bake.ray_origins.size() * sizeof(glm::dvec3));
+  out["ray_origins"] = std::move(origins);
   out["seconds"] = bake.seconds;
   return out;
 }
@@ -192,7 +195,8 @@ void bind_visibility(py::module_& m) {
         py::arg("return_rays") = false,
         R"doc(Per-vertex visibility and transfer precompute with Embree (ray casting over the whole sphere).
 
-For vertex p with unit normal n, `rays` rays x_r start at p + epsilon n (tnear 0, tfar inf) in the
+For vertex p with unit normal n, `rays` rays x_r start at an origin q next to p in free space (off
+the walls at concave edges, above a floor the object stands on; returned as "ray_origins") in the
 directions of a spherical Fibonacci set turned by a random rotation drawn per vertex from the seed
 (vertex_ray_directions gives them): deterministic, independent of the thread count. V_r = 1 if ray r
 escapes the scene (the mesh's triangles plus the occluders; triangles are two-sided). With equal
@@ -225,9 +229,9 @@ Returns a dict: "ambient_occlusion" (N,); "visibility" (N, (s'+1)**2); "product_
 (N, (s+1)**2, (s'+1)**2); "transfer" (N, (s+1)**2); "design_offsets" int64 (N+1,) (vertex i's nodes
 are design_nodes[design_offsets[i]:design_offsets[i+1]]), "design_nodes" (total, 3),
 "design_weights" (total,), "design_residuals" (N,) (certified moment residual / mass, 0 for an empty
-design), "design_degree" (int); each only when requested; plus "rays", "seed", "epsilon" (the
-origin offset used: 1e-4 x the bounding-box diagonal of the vertices, at least 1e-5 x their largest
-absolute coordinate) and "seconds" (wall time). Raises ValueError on bad input, BakeCancelled when
+design), "design_degree" (int); each only when requested; plus "rays", "seed", "ray_origins"
+(N, 3) (where each vertex's rays start: about 1e-3 of the shortest edge around it away from p) and
+"seconds" (wall time). Raises ValueError on bad input, BakeCancelled when
 cancelled, RuntimeError naming the vertex if a design cannot be certified. Releases the GIL.)doc");
 
   m.def("bake_visibility", &py_bake_visibility, py::arg("vertices"), py::arg("normals"), py::arg("triangles"),

@@ -73,8 +73,8 @@ EmbreeScene::~EmbreeScene() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-void EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles) {
-  if (triangles.empty()) return;
+int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles) {
+  if (triangles.empty()) return -1;
   RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
   check("rtcNewGeometry");
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -91,14 +91,22 @@ void EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector
     vb[3 * i + 1] = static_cast<float>(vertices[i].y);
     vb[3 * i + 2] = static_cast<float>(vertices[i].z);
   }
+  std::vector<glm::vec3> normals(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) ib[3 * t + k] = static_cast<unsigned>(triangles[t][k]);
+    const glm::dvec3& a = vertices[triangles[t][0]];
+    normals[t] = glm::vec3(glm::cross(vertices[triangles[t][1]] - a, vertices[triangles[t][2]] - a));
   }
+  // Only rtcIntersect1 (first_side) calls it: the bake's rtcOccluded1M rays run without a filter.
+  rtcSetGeometryIntersectFilterFunction(geometry, &EmbreeScene::probe_filter);
   rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
   rtcCommitGeometry(geometry);
-  rtcAttachGeometry(scene_, geometry);
+  const unsigned id = rtcAttachGeometry(scene_, geometry);
   rtcReleaseGeometry(geometry);
   check("building the geometry");
+  if (face_normals_.size() <= id) face_normals_.resize(id + 1);
+  face_normals_[id] = std::move(normals);
+  return static_cast<int>(id);
 }
 
 void EmbreeScene::commit() {
@@ -112,6 +120,65 @@ bool EmbreeScene::occluded(const glm::dvec3& origin, const glm::dvec3& dir) cons
   RTCRay ray = occlusion_ray(origin, dir);
   rtcOccluded1(scene_, &context, &ray);
   return is_occluded(ray);
+}
+
+namespace {
+
+// rtcIntersect1's context, extended with the probe's state (Embree passes the pointer through).
+struct ProbeContext {
+  RTCIntersectContext context;
+  const std::vector<std::vector<glm::vec3>>* face_normals;
+  int skipped_geometry;
+  const std::vector<unsigned>* skipped;
+  float tolerance;
+  float first_t;
+  EmbreeScene::Side first_side;
+};
+
+}  // namespace
+
+void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
+  auto* probe = reinterpret_cast<ProbeContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    args->valid[i] = 0;  // every hit is rejected, so traversal reports every triangle on the segment
+    const unsigned geometry = RTCHitN_geomID(args->hit, args->N, i);
+    const unsigned primitive = RTCHitN_primID(args->hit, args->N, i);
+    if (static_cast<int>(geometry) == probe->skipped_geometry &&
+        std::find(probe->skipped->begin(), probe->skipped->end(), primitive) != probe->skipped->end()) {
+      continue;
+    }
+    const glm::vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+                        RTCRayN_dir_z(args->ray, args->N, i));
+    const float t = RTCRayN_tfar(args->ray, args->N, i);  // the candidate hit's distance
+    const float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
+    const Side side = facing > 0.0f ? Side::kBack : (facing < 0.0f ? Side::kFront : Side::kNothing);
+    if (side == Side::kNothing) continue;  // the segment runs in the triangle's plane
+    if (probe->first_side == Side::kNothing || t < probe->first_t - probe->tolerance) {
+      probe->first_t = t;
+      probe->first_side = side;
+    } else if (t <= probe->first_t + probe->tolerance && side == Side::kBack) {
+      probe->first_side = Side::kBack;
+    }
+  }
+}
+
+EmbreeScene::Side EmbreeScene::first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
+                                          int skipped_geometry, const std::vector<unsigned>& skipped) const {
+  ProbeContext probe;
+  rtcInitIntersectContext(&probe.context);
+  probe.face_normals = &face_normals_;
+  probe.skipped_geometry = skipped_geometry;
+  probe.skipped = &skipped;
+  probe.tolerance = static_cast<float>(1e-4 * t_max);
+  probe.first_t = 0.0f;
+  probe.first_side = Side::kNothing;
+  RTCRayHit query{};
+  query.ray = occlusion_ray(origin, dir);
+  query.ray.tfar = static_cast<float>(t_max);
+  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene_, &probe.context, &query);
+  return probe.first_side;
 }
 
 std::string EmbreeScene::error_name(RTCError code) {

@@ -51,8 +51,9 @@ class EmbreeScene {
   EmbreeScene& operator=(const EmbreeScene&) = delete;
   ~EmbreeScene();
 
-  /// Adds a triangle mesh (indices already checked).
-  void add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles);
+  /// Adds a triangle mesh (indices already checked); returns its geometry ID, or -1 when it has no
+  /// triangles (nothing is added).
+  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles);
   /// Builds the BVH; call once, after every add().
   void commit();
   RTCScene scene() const { return scene_; }
@@ -60,14 +61,26 @@ class EmbreeScene {
   /// Whether the ray origin + t dir, t in [0, ∞), hits a triangle; thread-safe after commit().
   bool occluded(const glm::dvec3& origin, const glm::dvec3& dir) const;
 
+  /// What a probe segment meets first.
+  enum class Side { kNothing, kFront, kBack };
+  /// The side of the first triangle the segment origin + t dir, t in [0, t_max], meets: the front
+  /// is the side its normal points to by the right-hand rule of its winding (Blender's). Triangles
+  /// met at the same t (coplanar ones: a box standing on a floor) count as kBack when any of them
+  /// is met from behind. Triangles `skipped` of geometry `skipped_geometry` are not seen.
+  /// Thread-safe after commit().
+  Side first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
+                  const std::vector<unsigned>& skipped = {}) const;
+
  private:
   static std::string error_name(RTCError code);
+  static void probe_filter(const RTCFilterFunctionNArguments* args);
   static void on_error(void* self, RTCError code, const char* message);
   void check(const char* what);
 
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::string error_;
+  std::vector<std::vector<glm::vec3>> face_normals_;  // per geometry ID, per triangle (unnormalised)
 };
 
 }  // namespace sd

@@ -1,6 +1,6 @@
 #include "sdlighting/reference.h"
 
-#include "embree_scene.h"
+#include "traced_scene.h"
 #include "lobe_frame.h"
 #include "parallel_for.h"
 
@@ -28,19 +28,15 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   const ZonalLobe lobe = material.lobe();
 
-  EmbreeScene scene;
-  scene.add(vertices, triangles);
-  scene.add(occluders.vertices, occluders.triangles);
-  scene.commit();
+  const int threads = options.threads > 0 ? options.threads : default_thread_count();
+  const TracedScene traced(vertices, unit, triangles, occluders, threads);  // the bake's origins
   const EnvironmentSampler sampler(environment);
   const glm::dmat3 g_inverse = glm::transpose(rotation);
 
   ReferenceResult result;
   result.samples = options.samples;
-  result.epsilon = ray_epsilon(vertices, occluders);
   result.radiance.assign(3 * vertices.size(), 0.0);
   result.standard_error.assign(3 * vertices.size(), 0.0);
-  const int threads = options.threads > 0 ? options.threads : default_thread_count();
   parallel_for(vertices.size(), 4, [&](size_t begin, size_t end) {
     for (size_t p = begin; p < end; ++p) {
       std::mt19937_64 rng(options.seed * 0x9e3779b97f4a7c15ULL + p);
@@ -52,13 +48,13 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
       const glm::dvec3 a = glm::normalize(glm::dvec3(axis[0], axis[1], axis[2]));
       glm::dvec3 t1, t2;
       frame_around(a, t1, t2);
-      const glm::dvec3 origin = vertices[p] + result.epsilon * n;
+      const glm::dvec3& origin = traced.origin(p);
       // f(x)/(pdf_env + pdf_lobe) for a direction x in the object's frame; L is looked up at g x.
       auto balanced = [&](const glm::dvec3& x) {
         const double w = lobe.value(glm::dot(a, x));
         const glm::dvec3 y = rotation * x;
         const double pdf = sampler.pdf(y) + w;
-        if (w <= 0.0 || pdf <= 0.0 || scene.occluded(origin, x)) return glm::dvec3(0.0);
+        if (w <= 0.0 || pdf <= 0.0 || traced.scene().occluded(origin, x)) return glm::dvec3(0.0);
         return environment.radiance(y) * (w / pdf);
       };
       glm::dvec3 sum(0.0), sum_squares(0.0);

@@ -6,6 +6,7 @@
 #include "sdlighting/weighted_design.h"
 
 #include "embree_scene.h"
+#include "traced_scene.h"
 
 #include <embree3/rtcore.h>
 
@@ -72,7 +73,6 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 
 struct Plan {
   int rays = 0;
-  double epsilon = 0.0;
   int basis_order = -1;  // SH order evaluated at the escaping rays (-1: none)
   int visibility_count = 0, product_rows = 0, product_cols = 0, transfer_count = 0;
   int design_degree = -1;
@@ -97,10 +97,9 @@ struct Outputs {
   std::vector<SphericalDesign>* designs;
 };
 
-void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& p, const glm::dvec3& n, std::size_t v,
+void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
                  Scratch& s, const Outputs& out) {
   const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, v);
-  const glm::dvec3 origin = p + plan.epsilon * n;
   const std::vector<glm::dvec3>& base = *plan.fibonacci;
   const int rays = plan.rays;
   std::uint8_t* record = plan.record_rays ? out.bake->ray_visibility.data() + v * static_cast<std::size_t>(rays)
@@ -288,7 +287,6 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   Plan plan;
   plan.rays = options.rays;
   plan.seed = options.seed;
-  plan.epsilon = ray_epsilon(vertices, occluders);
   plan.fibonacci = &fibonacci;
   plan.record_rays = options.record_rays;
   plan.basis_order = std::max({options.visibility_order, options.product_order, options.product_visibility_order,
@@ -305,7 +303,6 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   bake.vertex_count = n;
   bake.rays = options.rays;
   bake.seed = options.seed;
-  bake.epsilon = plan.epsilon;
   bake.visibility_order = options.visibility_order;
   bake.product_order = options.product_order;
   bake.product_visibility_order = options.product_visibility_order;
@@ -319,14 +316,12 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   std::vector<SphericalDesign> designs(plan.design_degree >= 0 ? n : 0);
   const Outputs outputs{&bake, &designs};
 
-  // ---- the scene ----
-  EmbreeScene scene;
-  scene.add(vertices, triangles);
-  scene.add(occluders.vertices, occluders.triangles);
-  scene.commit();
-
   // ---- the workers; the calling thread reports progress ----
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
+
+  // ---- the scene and the ray origins ----
+  const TracedScene traced(vertices, units, triangles, occluders, threads);
+  bake.ray_origins = traced.object_frame_origins();
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> stop{false}, cancel_seen{false};
   std::exception_ptr worker_error;
@@ -358,7 +353,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
             stop = true;
             break;
           }
-          bake_vertex(scene.scene(), plan, vertices[v], units[v], v, scratch, outputs);
+          bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, scratch, outputs);
           done.fetch_add(1, std::memory_order_relaxed);
         }
       }

@@ -189,13 +189,14 @@ struct PlaneCase {
 TEST(VisibilityPlane, RaysEscapeExactlyAboveTheSurface) {
   PlaneCase plane;
   const TransferBake b = bake(plane.mesh, recorded_rays(2048, 7));
-  EXPECT_DOUBLE_EQ(b.epsilon, ray_epsilon(plane.mesh.vertices));
-  EXPECT_NEAR(b.epsilon, 1e-4 * std::sqrt(800.0), 1e-15);
+  ASSERT_EQ(b.ray_origins.size(), plane.mesh.vertices.size());
   ASSERT_EQ(b.ray_visibility.size(), plane.mesh.vertices.size() * 2048);
   int grazing = 0;
   for (std::size_t v : plane.interior) {
     const auto dirs = vertex_ray_directions(2048, 7, v);
-    const glm::dvec3 origin = plane.mesh.vertices[v] + glm::dvec3(0, 0, b.epsilon);
+    const glm::dvec3& origin = b.ray_origins[v];
+    EXPECT_GT(origin.z, 0.0);  // above the surface, 1e-3 of the shortest edge (1) from the vertex
+    EXPECT_NEAR(glm::length(origin - plane.mesh.vertices[v]), 1e-3, 1e-12);
     for (int r = 0; r < 2048; ++r) {
       const bool escaped = b.ray_visibility[v * 2048 + r] != 0;
       const glm::dvec3& x = dirs[r];
@@ -299,9 +300,8 @@ TEST(VisibilityBox, PointsInsideAClosedCubeSeeNothing) {
 
 TEST(VisibilityConvex, IcosphereHasNoSelfOcclusionAboveTheTangentPlane) {
   const Mesh sphere = icosphere(3);
-  // Inradius of the polytope: a ray from the origin p + εn (|p| = 1) with c = −n·x passes the
-  // centre at distance (1 + ε) sqrt(1 − c²); below r_in it crosses the inscribed ball and must be
-  // blocked.
+  // Inradius of the polytope: a ray from an origin q with c = −n·x passes the centre at distance
+  // about |q| sqrt(1 − c²); below r_in it crosses the inscribed ball and must be blocked.
   double inradius = 1.0;
   for (const auto& f : sphere.triangles) {
     const glm::dvec3 n = glm::normalize(glm::cross(sphere.vertices[f[1]] - sphere.vertices[f[0]],
@@ -309,7 +309,9 @@ TEST(VisibilityConvex, IcosphereHasNoSelfOcclusionAboveTheTangentPlane) {
     inradius = std::min(inradius, std::abs(glm::dot(n, sphere.vertices[f[0]])));
   }
   const TransferBake b = bake(sphere, recorded_rays(1024, 11));
-  const double r = inradius / (1.0 + b.epsilon);
+  double farthest = 0.0;
+  for (const auto& q : b.ray_origins) farthest = std::max(farthest, glm::length(q));
+  const double r = inradius / farthest;
   const double must_block = std::sqrt(1.0 - r * r) + 1e-4;
   for (std::size_t v = 0; v < sphere.vertices.size(); ++v) {
     const auto dirs = vertex_ray_directions(1024, 11, v);
@@ -388,7 +390,7 @@ TEST(VisibilityExact, ProductMatrixColumnZeroIsTheVisibility) {
 // ---- determinism ----
 
 void expect_same(const TransferBake& a, const TransferBake& b) {
-  EXPECT_EQ(a.epsilon, b.epsilon);
+  EXPECT_EQ(a.ray_origins, b.ray_origins);
   EXPECT_EQ(a.ambient_occlusion, b.ambient_occlusion);
   EXPECT_EQ(a.visibility, b.visibility);
   EXPECT_EQ(a.product_matrices, b.product_matrices);
@@ -432,7 +434,9 @@ TEST(VisibilityDeterminism, ScalingByAPowerOfTwoChangesNothing) {
   const TransferBake unit = bake(m, options);
   for (auto& v : m.vertices) v *= 1024.0;
   const TransferBake big = bake(m, options);
-  EXPECT_DOUBLE_EQ(big.epsilon, 1024.0 * unit.epsilon);  // ε follows the scale
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    EXPECT_EQ(big.ray_origins[v], 1024.0 * unit.ray_origins[v]);  // the origins follow the scale exactly
+  }
   EXPECT_EQ(unit.ray_visibility, big.ray_visibility);
 }
 

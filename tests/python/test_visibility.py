@@ -103,14 +103,15 @@ def plane():
 def test_open_plane_visibility_is_the_hemisphere_indicator(sd, plane):
     v, n, t, interior = plane
     out = sd.bake_transfer(v, n, t, 4096, seed=2, visibility_order=8)
-    assert set(out) == {"visibility", "ambient_occlusion", "rays", "seed", "epsilon", "seconds"}
+    assert set(out) == {"visibility", "ambient_occlusion", "rays", "seed", "ray_origins", "seconds"}
     assert out["visibility"].shape == (len(v), 81)
     vis = out["visibility"][interior]
     np.testing.assert_allclose(out["ambient_occlusion"][interior], 0.5, atol=FRACTION_4096)
     np.testing.assert_array_equal(vis[:, 0], out["ambient_occlusion"][interior])
     np.testing.assert_allclose(vis, np.tile(hemisphere_coefficients(8), (len(interior), 1)), atol=FIBONACCI_4096)
     assert abs(hemisphere_coefficients(1)[2] - math.sqrt(3) / 4) < 1e-15
-    assert out["epsilon"] == pytest.approx(1e-4 * math.sqrt(800.0), rel=1e-12)
+    assert out["ray_origins"].shape == (len(v), 3) and out["ray_origins"].dtype == np.float64
+    assert np.all(out["ray_origins"][:, 2] > 0.0)  # above the plane the vertices lie in
 
 
 def test_open_plane_rays_above_escape_and_rays_below_are_blocked(sd, plane):

@@ -26,7 +26,6 @@ struct ReferenceResult {
   std::vector<double> radiance;
   std::vector<double> standard_error;
   int samples = 0;
-  double epsilon = 0.0;  ///< the ray-origin offset, the same as the bake's (ray_epsilon)
 };
 
 /// B_p(v, g) = ∫ L(g x) V_p(x) w(a_p·x) dμ(x), eq. (1), for every vertex: each sample pair draws one

@@ -2,7 +2,9 @@
 // (8)-(9), Theorem 2.2).
 //
 // For every vertex p with unit normal n, R rays x_1 .. x_R cover the WHOLE sphere (rays into the
-// surface are blocked by the surface itself) and start at p + ε n, tnear = 0, tfar = ∞. V_r = 1 when
+// surface are blocked by the surface itself) and start at an origin q next to p in free space
+// (off the walls at concave edges, above a floor the object stands on: src/traced_scene.h), tnear
+// = 0, tfar = ∞. V_r = 1 when
 // ray r escapes the scene, else 0. The scene is one Embree scene of the object's triangles plus
 // optional occluder triangles (two-sided, float32, RTC_SCENE_FLAG_ROBUST, high build quality),
 // traced as rtcOccluded1M streams of each vertex's rays. The directions are a spherical Fibonacci set of R points (an equal-weight rule, weights 1/R) turned
@@ -20,9 +22,6 @@
 // for every polynomial f of degree <= s + s', its weights summing to AO. A vertex none of whose rays
 // escapes gets an EMPTY design (0 nodes): its B of (13) is 0.
 //
-// ε is scale-aware: 1e-4 × the diagonal of the bounding box of the object's vertices, but at least
-// 1e-5 × their largest absolute coordinate (Embree works in float32: the floor keeps ε above the
-// rounding of coordinates far from the origin). See ray_epsilon().
 #pragma once
 
 #include <glm/mat3x3.hpp>
@@ -50,7 +49,8 @@ constexpr int kMaxVisibilityOrder = 8;
 constexpr int kMaxTransferOrder = 16;
 /// Most rays per vertex a bake accepts (a guard against absurd allocations).
 constexpr int kMaxRaysPerVertex = 1 << 24;
-/// ε = kRayEpsilonScale × bounding-box diagonal of the object (see ray_epsilon()).
+/// A vertex without faces starts its rays at p + ε n, ε = kRayEpsilonScale × the bounding-box
+/// diagonal of the object (see ray_epsilon()).
 constexpr double kRayEpsilonScale = 1e-4;
 /// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.
 constexpr double kRayEpsilonFloat = 1e-5;
@@ -89,7 +89,7 @@ struct TransferBake {
   std::size_t vertex_count = 0;
   int rays = 0;
   std::uint64_t seed = 0;
-  double epsilon = 0.0;  ///< the ray-origin offset used
+  std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object frame
   double seconds = 0.0;  ///< wall time of the whole bake (scene build included)
 
   std::vector<double> ambient_occlusion;  ///< [N]
@@ -135,8 +135,9 @@ std::vector<double> bake_visibility(const std::vector<glm::dvec3>& vertices, con
                                     std::uint64_t seed = 0, const OccluderMesh& occluders = {},
                                     std::function<bool(std::size_t, std::size_t)> progress = {});
 
-/// The ray-origin offset bake_transfer uses for these object vertices (see the file comment);
-/// when all coincide at the origin, 1e-4 × the occluders' diagonal, or 1e-6 if that is 0 too.
+/// The ray-origin offset of vertices without faces for these object vertices (see
+/// kRayEpsilonScale); when all coincide at the origin, 1e-4 × the occluders' diagonal, or 1e-6 if
+/// that is 0 too.
 double ray_epsilon(const std::vector<glm::dvec3>& vertices, const OccluderMesh& occluders = {});
 
 /// The spherical Fibonacci set of `count` points: z_i = 1 − (2i+1)/count, azimuth 2π frac(i φ⁻¹)

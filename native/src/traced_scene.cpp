@@ -114,6 +114,11 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
         if (scene_.first_side(q, to_p / distance, 2.0 * distance, object, fan) == EmbreeScene::Side::kBack) {
           return false;
         }
+        // In front of every face around p, a segment from q to a face's centroid can meet those
+        // faces only from the front: the probes towards them can fail only at concave vertices.
+        if (std::all_of(fan.begin(), fan.end(), [&](unsigned t) { return glm::dot(q - p, area_normals[t]) > 0.0; })) {
+          return true;
+        }
         for (unsigned t : probed) {
           const glm::dvec3 to_face = centroids[t] - q;
           const double length = glm::length(to_face);

@@ -16,9 +16,10 @@
 //       kCandidateDirections spherical-Fibonacci directions by decreasing u·m;
 //   q fails a probe when the first surface a segment from q meets is met from behind (the side
 //       opposite its normal by the right-hand rule of its winding): q is then inside a solid or under
-//       a surface. The probes run from q to the centroid of each face around p (the largest
-//       kProbedFaces), and from q through p to 2|q − p| with p's own faces skipped (other surfaces
-//       through p: a floor the object stands on).
+//       a surface. The probes run from q through p to 2|q − p| with p's own faces skipped (other
+//       surfaces through p: a floor the object stands on) and, unless q is in front of every face
+//       around p (then no segment from q can meet them from behind), from q to the centroid of
+//       each face around p (the largest kProbedFaces).
 //   When no candidate passes (an enclosed vertex, a mesh with inconsistent winding) the first is used.
 //   A vertex without faces (a probe point) starts at p + η n with η from the object's size.
 // The traced frame is the object's shifted by the centre of its vertices' bounding box, so Embree's

@@ -100,16 +100,8 @@ def synthetic_result(package, method, normals, real_counts, s=4, sv=2, seed=0):
 
 def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility"):
     """A mesh object carrying a (synthetic) bake of the method, as the bake operator stores it."""
-    mesh = bpy.data.meshes.new("Benchmark")
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", positions.astype(np.float32).ravel())
-    mesh.loops.add(3 * len(triangles))
-    mesh.loops.foreach_set("vertex_index", triangles.ravel())
-    mesh.polygons.add(len(triangles))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(triangles), 3, dtype=np.int32))
-    if bpy.app.version < (4, 0, 0):
-        mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, dtype=np.int32))
-    mesh.update(calc_edges=True)
+    mesh = package.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
+                                       np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
     result = synthetic_result(package, method, normals, real_counts)
     floats = package.attributes.write(mesh, normals, result)
     mesh["sd_bake"] = {"method": method, "lobe": "lambert", "exponent": 1.0, "light_order": 4,
@@ -232,7 +224,7 @@ def main():
         t_uniform = time_frames(draw_uniform, opts["frames"])
         print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
               % (len(positions), 1e3 * t_uniform))
-        print("%-34s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        print("%-44s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
         settings = scene.sd_lighting
         times = {}
         for method in package.utils.methods.METHODS:
@@ -245,14 +237,14 @@ def main():
                                 opts["frames"])
                 times[method.id, texture] = t
                 label = method.label + (", band-limited texture" if texture else "")
-                print("%-34s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
+                print("%-44s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
             settings.band_limited_texture = False
             remove_object(package, obj)
         del batch
         width, height = package.utils.shader_variant.band_limited_texture_size(4)
         print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
               "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
-        print("%-34s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
+        print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
         methods = package.utils.methods
         for method, texture in (("msd_visibility", False), ("msd_visibility", True),
                                 ("msd_lobe", False), ("msd_lobe", True),
@@ -263,7 +255,7 @@ def main():
             label = methods.get(method).label + (
                 (", band-limited texture" if texture else ", L~ SH sum")
                 if methods.get(method).band_limited_texture else "")
-            print("%-34s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
+            print("%-44s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
                                                   t / times["prt_gaunt", False]), flush=True)
     return 0
 

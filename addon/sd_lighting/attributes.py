@@ -84,6 +84,23 @@ def read_positions(mesh):
     return positions.reshape(-1, 3)
 
 
+def new_mesh(name, vertices, loop_vertices, loop_starts, loop_totals):
+    """A new mesh datablock from arrays: vertex positions [V, 3], each loop's vertex, each
+    polygon's first loop and loop count."""
+    import bpy
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set('co', np.asarray(vertices, dtype=np.float32).ravel())
+    mesh.loops.add(len(loop_vertices))
+    mesh.loops.foreach_set('vertex_index', np.asarray(loop_vertices, dtype=np.int32))
+    mesh.polygons.add(len(loop_starts))
+    mesh.polygons.foreach_set('loop_start', np.asarray(loop_starts, dtype=np.int32))
+    if bpy.app.version < (4, 0, 0):  # read-only (derived from loop_start) since 4.0
+        mesh.polygons.foreach_set('loop_total', np.asarray(loop_totals, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    return mesh
+
+
 def read_triangles(mesh):
     mesh.calc_loop_triangles()
     triangles = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)

@@ -24,7 +24,7 @@ import uuid
 import numpy as np
 
 from . import attributes, environment, materials, native
-from .utils import methods
+from .utils import methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH
 
 MESH_PREFIX = "SD "
@@ -69,18 +69,8 @@ class Geometry:
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry, vertices in the same order."""
-        import bpy
-        mesh = bpy.data.meshes.new(name)
-        mesh.vertices.add(len(self.vertices))
-        mesh.vertices.foreach_set('co', self.vertices.astype(np.float32).ravel())
-        mesh.loops.add(len(self.loop_vertices))
-        mesh.loops.foreach_set('vertex_index', self.loop_vertices)
-        mesh.polygons.add(len(self.loop_starts))
-        mesh.polygons.foreach_set('loop_start', self.loop_starts)
-        if bpy.app.version < (4, 0, 0):  # read-only (derived from loop_start) since 4.0
-            mesh.polygons.foreach_set('loop_total', self.loop_totals)
-        mesh.update(calc_edges=True)
-        return mesh
+        return attributes.new_mesh(name, self.vertices, self.loop_vertices, self.loop_starts,
+                                   self.loop_totals)
 
 
 def _evaluated_arrays(obj, depsgraph):
@@ -105,13 +95,11 @@ def world_triangles(obj, depsgraph, view_layer):
     try:
         if mesh is None or len(mesh.vertices) == 0:
             return None
-        vertices = attributes.read_positions(mesh).astype(np.float64)
         triangles = attributes.read_triangles(mesh)
         if len(triangles) == 0:
             return None
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
-        world = vertices @ matrix[:3, :3].T + matrix[:3, 3]
-        return world, triangles
+        return (transforms.transform_points(evaluated.matrix_world, attributes.read_positions(mesh)),
+                triangles)
     finally:
         evaluated.to_mesh_clear()
 
@@ -196,7 +184,7 @@ def prepare(context, objects):
         for name, (world, triangles) in world_occluders.items():
             if name == obj.name:
                 continue
-            verts.append(world @ to_local[:3, :3].T + to_local[:3, 3])
+            verts.append(transforms.transform_points(to_local, world))
             tris.append(triangles + base)
             base += len(world)
         occluders = (np.concatenate(verts), np.concatenate(tris).astype(np.int32)) if verts else (None, None)

@@ -16,7 +16,7 @@ import logging
 import numpy as np
 
 from . import attributes, baking, environment, gpu_shading, native
-from .utils import methods, rotations
+from .utils import methods, transforms
 from .utils.bake_data import BAKE
 
 log = logging.getLogger(__name__)
@@ -107,7 +107,7 @@ def local_light(scene, obj, order, source=None, rotation=None):
     """Coefficients of x -> L(g R x) for the object: [(s+1)^2, 3] float64; and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
-    gr = g @ rotations.rotation_part(np.array(obj.matrix_world))
+    gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
     light = environment.light_coefficients(source, order)
     return native.get().rotated_environment_sh(light, gr), gr
 
@@ -187,12 +187,11 @@ def cpu_reference(scene, obj, view):
     data = attributes.read(mesh)
     data["visibility_order"] = int(bake["visibility_order"])
     matrix = np.array(obj.matrix_world, dtype=np.float64)
-    positions = attributes.read_positions(mesh).astype(np.float64)
-    world = positions @ matrix[:3, :3].T + matrix[:3, 3]
+    world = transforms.transform_points(matrix, attributes.read_positions(mesh))
     source = environment.source(scene)
     light = environment.light_coefficients(source, int(bake["light_order"]))
     g = environment.rotation_matrix(scene)
-    r = rotations.rotation_part(matrix)
+    r = transforms.rotation_part(matrix)
     kwargs = {key: data[key] for key in method.shade_inputs}
     return native.get().shade(method.id, light, data["normals"],
                               views=view.view_directions(world, r.T), rotation=g @ r,

@@ -7,7 +7,7 @@ Source (the scene's settings, `environment_source`):
 - 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
 
 Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
-environment (utils/rotations.mapping_rotation; location and scale are ignored). Without a Mapping
+environment (utils/transforms.mapping_rotation; location and scale are ignored). Without a Mapping
 node (or for 'FILE'), g is the settings' own `environment_rotation`. The panel's rotation slider
 writes the Mapping node when there is one.
 
@@ -20,7 +20,7 @@ import os
 import numpy as np
 
 from . import native
-from .utils import rotations
+from .utils import transforms
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
@@ -86,9 +86,9 @@ def rotation_matrix(scene):
     """g as a float64 [3, 3] numpy array (eq. 1: the scene is lit by L(g x))."""
     mapping = mapping_node(scene)
     if mapping is not None:
-        return rotations.mapping_rotation(mapping.inputs["Rotation"].default_value,
+        return transforms.mapping_rotation(mapping.inputs["Rotation"].default_value,
                                           mapping.vector_type)
-    return rotations.euler_xyz(scene.sd_lighting.environment_rotation)
+    return transforms.euler_xyz(scene.sd_lighting.environment_rotation)
 
 
 # --------------------------------------------------------------------------------------------

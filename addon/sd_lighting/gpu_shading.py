@@ -22,7 +22,7 @@ import os
 import numpy as np
 
 from . import attributes, native
-from .utils import methods, rotations
+from .utils import methods, transforms
 from .utils.bake_data import BAKE
 from .utils.shader_variant import (BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
                                    TEXTURE_WIDTH, Variant, band_limited_texture_size)
@@ -270,7 +270,7 @@ class ObjectData:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
         for the band-limited texture (it holds the unrotated L~, looked up at g R x)."""
         values = {"model": model, "view_projection": view_projection,
-                  "world_to_local": rotations.rotation_part(model).T, "camera": camera,
+                  "world_to_local": transforms.rotation_part(model).T, "camera": camera,
                   "params": (exposure_scale, target[0], target[1], depth_bias),
                   "light": light, "lobe": self.lobe_factors}
         if self.variant.band_limited_texture:

@@ -23,7 +23,7 @@ def test_bl_info_and_registration_entry_points():
 
 def test_every_utils_module_imports_without_bpy():
     names = [m.name for m in pkgutil.iter_modules(sd_lighting.utils.__path__)]
-    assert {"bake_data", "methods", "lobes", "rotations", "limits", "shader_variant"} <= set(names)
+    assert {"bake_data", "methods", "lobes", "transforms", "limits", "shader_variant"} <= set(names)
     for name in names:
         importlib.import_module("sd_lighting.utils." + name)
     assert "bpy" not in sys.modules

@@ -1,6 +1,6 @@
-"""Rotations in float64 numpy: Blender's Euler angles, the world Mapping node's g, the rotation of
-an object's matrix. mathutils works in float32, not orthogonal enough for the SH rotation's 1e-9
-check.
+"""Rotations and affine transforms in float64 numpy: Blender's Euler angles, the world Mapping
+node's g, the rotation of an object's matrix, points through a matrix. mathutils works in float32,
+not orthogonal enough for the SH rotation's 1e-9 check.
 """
 
 import numpy as np
@@ -32,3 +32,9 @@ def rotation_part(matrix):
         u[:, -1] = -u[:, -1]
         r = u @ vt
     return r
+
+
+def transform_points(matrix, points):
+    """Points [N, 3] through a 4x4 affine matrix, float64."""
+    matrix = np.asarray(matrix, dtype=np.float64)
+    return np.asarray(points, dtype=np.float64) @ matrix[:3, :3].T + matrix[:3, 3]

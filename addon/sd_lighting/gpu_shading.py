@@ -56,26 +56,6 @@ def clear_cache():
     _band_limited_textures.clear()
 
 
-def _sh_recurrence_constants(order):
-    """Interim twin of sdnative.sh_recurrence_constants (spherical_harmonics.cpp)."""
-    import math
-    diagonal = [1.0]
-    for m in range(1, order + 1):
-        diagonal.append(math.sqrt(3.0) if m == 1 else diagonal[-1] * math.sqrt((2.0 * m + 1.0) / (2.0 * m)))
-    size = (order + 1) * (order + 2) // 2
-    a, b = [0.0] * size, [0.0] * size
-    for l in range(order + 1):
-        for m in range(l):
-            k = l * (l + 1) // 2 + m
-            if l == m + 1:
-                a[k] = math.sqrt(2.0 * m + 3.0)
-            else:
-                a[k] = math.sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * (l + m)))
-                b[k] = math.sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
-                                 ((l - m) * (l + m) * (2.0 * l - 3.0)))
-    return {"diagonal": diagonal, "a": a, "b": b}
-
-
 def shader_program(variant):
     """The compiled GPUShader of a variant (cached)."""
     return _compile(variant)[0]
@@ -87,7 +67,7 @@ def _compile(variant):
         return compiled
     import gpu
     info = gpu.types.GPUShaderCreateInfo()
-    for name, value in variant.defines(_sh_recurrence_constants).items():
+    for name, value in variant.defines(native.get().sh_recurrence_constants).items():
         info.define(name, value)
     info.typedef_source(variant.frame_struct())
     info.uniform_buf(0, "SdFrameData", "sd")

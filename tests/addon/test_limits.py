@@ -6,9 +6,6 @@ from sd_lighting.utils import limits
 
 
 def test_limits_of_the_built_module(sdnative):
-    if not hasattr(sdnative, "MAX_SHADING_ORDER"):
-        import pytest
-        pytest.skip("this sdnative has no MAX_SHADING_ORDER yet")
     got = limits.from_module(sdnative)
     assert got == limits.Limits(light_order=16, visibility_order=8, rays=1 << 24,
                                 phong_exponent=1e4)

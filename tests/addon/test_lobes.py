@@ -22,3 +22,8 @@ def test_smooth_or_metallic_is_phong():
     assert name == "phong" and sigma == pytest.approx(61.228395, rel=1e-6)
     assert why == "roughness 0.30 -> Phong sigma 61.2"
     assert lobes.lobe_from_principled(0.8, 0.5)[0] == ("phong", 1.0)
+
+
+def test_the_thresholds_are_half():
+    assert lobes.lobe_from_principled(0.49, 0.0)[0][0] == "phong"
+    assert lobes.lobe_from_principled(0.5, 0.5)[0][0] == "phong"

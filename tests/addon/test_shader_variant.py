@@ -21,10 +21,23 @@ def recurrence(order):
     for l in range(order + 1):
         for m in range(l):
             k = l * (l + 1) // 2 + m
-            a[k] = math.sqrt((2 * l - 1) * (2 * l + 1) / ((l - m) * (l + m))) if l > m + 1 else math.sqrt(2 * m + 3)
-            if l > m + 1:
-                b[k] = math.sqrt((2 * l + 1) * (l + m - 1) * (l - m - 1) / ((l - m) * (l + m) * (2 * l - 3)))
+            if l == m + 1:
+                a[k] = math.sqrt(2 * m + 3)
+            else:
+                a[k] = math.sqrt((2 * l - 1) * (2 * l + 1) / ((l - m) * (l + m)))
+                b[k] = math.sqrt((2 * l + 1) * (l + m - 1) * (l - m - 1) /
+                                 ((l - m) * (l + m) * (2 * l - 3)))
     return {"diagonal": diagonal, "a": a, "b": b}
+
+
+@pytest.mark.parametrize("order", [0, 1, 2, 5, 16])
+def test_sdnative_gives_the_recurrence_tables(order, sdnative):
+    """The shader's constants come from sdnative; they are the closed forms above, in float64."""
+    tables = sdnative.sh_recurrence_constants(order)
+    expected = recurrence(order)
+    for key in ("diagonal", "a", "b"):
+        assert np.asarray(tables[key]).dtype == np.float64
+        assert np.allclose(tables[key], expected[key], rtol=1e-15, atol=0), key
 
 
 def all_variants():
@@ -60,7 +73,8 @@ def test_band_limited_texture_variant():
                       band_limited_texture=shader_variant.band_limited_texture_size(8))
     defines = variant.defines(recurrence)
     assert "SD_BASIS_ORDER" not in defines           # L~ from the texture: no SH basis at all
-    assert (defines["SD_BAND_LIMITED_TEXTURE_WIDTH"], defines["SD_BAND_LIMITED_TEXTURE_HEIGHT"]) == ("576", "288")
+    assert defines["SD_BAND_LIMITED_TEXTURE_WIDTH"] == "576"
+    assert defines["SD_BAND_LIMITED_TEXTURE_HEIGHT"] == "288"
     assert variant.samplers() == [(0, "sd_data"), (2, "sd_band_limited_texture")]
     assert shader_variant.band_limited_texture_size(1) == (256, 128)
 

@@ -23,9 +23,9 @@ BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equire
 
 
 def band_limited_texture_size(order):
-    """Width and height of the band-limited environment texture for order s: bilinear
-    interpolation of L~_s between texel centres is then within about 5e-4 of max |L~| (measured:
-    4.3e-4 at s = 4, 4.8e-4 at s = 8, 4.6e-4 at s = 12 on forest.exr)."""
+    """Width and height of the band-limited texture of order s: bilinear interpolation of L~_s
+    between texel centres is then within about 5e-4 of max |L~| (measured: 4.3e-4 at s = 4,
+    4.8e-4 at s = 8, 4.6e-4 at s = 12 on forest.exr)."""
     width = max(256, 64 * (order + 1))
     return width, width // 2
 

@@ -1,7 +1,6 @@
 """Shader variants: defines, samplers and the uniform block (std140) against the GLSL."""
 
 import itertools
-import math
 import re
 
 import numpy as np
@@ -9,35 +8,6 @@ import pytest
 
 from sd_lighting.utils import methods, shader_variant
 from sd_lighting.utils.shader_variant import BlockField, Variant
-
-
-def recurrence(order):
-    """The SH recurrence tables in closed form (the GLSL header's formulas)."""
-    diagonal = [1.0] + [math.sqrt(3.0)] * (order >= 1)
-    for m in range(2, order + 1):
-        diagonal.append(diagonal[-1] * math.sqrt((2 * m + 1) / (2 * m)))
-    size = (order + 1) * (order + 2) // 2
-    a, b = [0.0] * size, [0.0] * size
-    for l in range(order + 1):
-        for m in range(l):
-            k = l * (l + 1) // 2 + m
-            if l == m + 1:
-                a[k] = math.sqrt(2 * m + 3)
-            else:
-                a[k] = math.sqrt((2 * l - 1) * (2 * l + 1) / ((l - m) * (l + m)))
-                b[k] = math.sqrt((2 * l + 1) * (l + m - 1) * (l - m - 1) /
-                                 ((l - m) * (l + m) * (2 * l - 3)))
-    return {"diagonal": diagonal, "a": a, "b": b}
-
-
-@pytest.mark.parametrize("order", [0, 1, 2, 5, 16])
-def test_sdnative_gives_the_recurrence_tables(order, sdnative):
-    """The shader's constants come from sdnative; they are the closed forms above, in float64."""
-    tables = sdnative.sh_recurrence_constants(order)
-    expected = recurrence(order)
-    for key in ("diagonal", "a", "b"):
-        assert np.asarray(tables[key]).dtype == np.float64
-        assert np.allclose(tables[key], expected[key], rtol=1e-15, atol=0), key
 
 
 def all_variants():
@@ -51,10 +21,10 @@ def all_variants():
                           shader_variant.band_limited_texture_size(4) if texture else ())
 
 
-def test_defines_of_a_known_variant():
+def test_defines_of_a_known_variant(sdnative):
     variant = Variant(methods.get("prt_gaunt"), True, 4, 2, data_stride=3, gaunt_count=77,
                       per_pixel=True)
-    defines = variant.defines(recurrence)
+    defines = variant.defines(sdnative.sh_recurrence_constants)
     assert defines.pop("SD_SH_DIAGONAL").split(", ")[:3] == [
         "1.000000000e+00", "1.732050808e+00", "1.936491673e+00"]
     a = defines.pop("SD_SH_A").split(", ")        # at l (l + 1) / 2 + m
@@ -68,10 +38,10 @@ def test_defines_of_a_known_variant():
     assert variant.samplers() == [(0, "sd_data"), (1, "sd_gaunt")]
 
 
-def test_band_limited_texture_variant():
+def test_band_limited_texture_variant(sdnative):
     variant = Variant(methods.get("msd_visibility"), False, 8, 2, data_stride=20,
                       band_limited_texture=shader_variant.band_limited_texture_size(8))
-    defines = variant.defines(recurrence)
+    defines = variant.defines(sdnative.sh_recurrence_constants)
     assert "SD_BASIS_ORDER" not in defines           # L~ from the texture: no SH basis at all
     assert defines["SD_BAND_LIMITED_TEXTURE_WIDTH"] == "576"
     assert defines["SD_BAND_LIMITED_TEXTURE_HEIGHT"] == "288"
@@ -79,11 +49,11 @@ def test_band_limited_texture_variant():
     assert shader_variant.band_limited_texture_size(1) == (256, 128)
 
 
-def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source):
+def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source, sdnative):
     source = glsl_source
     produced, fields, samplers = set(), set(), set()
     for variant in all_variants():
-        produced |= set(variant.defines(recurrence))
+        produced |= set(variant.defines(sdnative.sh_recurrence_constants))
         fields |= {f.name for f in variant.frame_fields()}
         samplers |= {name for _, name in variant.samplers()}
     defined_in_glsl = set(re.findall(r"#\s*define\s+(SD_[A-Z0-9_]+)", source))

@@ -122,7 +122,7 @@ sd::SphericalDesign compute_weighted_design(const DoubleArray& dirs, const Doubl
 // ---- the exposed functions ----
 
 py::array_t<double> py_sh_basis(int lmax, const DoubleArray& dirs) {
-  check_range("lmax", lmax, 0, kMaxShOrder);
+  check_order("lmax", lmax, sd::kMaxShOrder);
   const bool single = dirs.ndim() == 1;
   const std::vector<glm::dvec3> d = read_directions("dirs", dirs, true);
   const py::ssize_t k = sd::sh_count(lmax), n = static_cast<py::ssize_t>(d.size());
@@ -135,13 +135,26 @@ py::array_t<double> py_sh_basis(int lmax, const DoubleArray& dirs) {
   return out;
 }
 
+py::array_t<double> numpy_copy(const std::vector<double>& values) {
+  return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
+}
+
+py::dict py_sh_recurrence_constants(int order) {
+  const sd::ShRecurrence r = sd::sh_recurrence(order);
+  py::dict out;
+  out["diagonal"] = numpy_copy(r.diagonal);
+  out["a"] = numpy_copy(r.a);
+  out["b"] = numpy_copy(r.b);
+  return out;
+}
+
 py::array_t<double> py_rotate_sh(const DoubleArray& coeffs, const DoubleArray& rotation) {
   if (coeffs.ndim() != 1 && coeffs.ndim() != 2) {
     value_error("coeffs must have shape (K,) or (K, C), got " + shape_string(coeffs));
   }
   const py::ssize_t k = coeffs.shape(0);
   const py::ssize_t channels = coeffs.ndim() == 2 ? coeffs.shape(1) : 1;
-  const int order = sh_order_from_count("coeffs", k, kMaxShOrder);
+  const int order = sh_order_from_count("coeffs", k, sd::kMaxShOrder);
   if (channels > std::numeric_limits<int>::max()) value_error("coeffs has too many channels");
   check_finite("coeffs", coeffs.data(), static_cast<size_t>(k * channels));
   const glm::dmat3 r = read_rotation(rotation);
@@ -159,13 +172,12 @@ py::array_t<double> py_rotate_sh(const DoubleArray& coeffs, const DoubleArray& r
 }
 
 py::array_t<double> py_zonal_coefficients(const std::string& lobe, double exponent, int lmax) {
-  check_range("lmax", lmax, 0, kMaxLegendreOrder);
-  const std::vector<double> c = sd::ZonalLobe::from_name(lobe, exponent).coefficients(lmax);
-  return py::array_t<double>(static_cast<py::ssize_t>(c.size()), c.data());
+  check_order("lmax", lmax, sd::kMaxLegendreOrder);
+  return numpy_copy(sd::ZonalLobe::from_name(lobe, exponent).coefficients(lmax));
 }
 
 py::array_t<double> py_legendre(int lmax, const DoubleArray& t) {
-  check_range("lmax", lmax, 0, kMaxLegendreOrder);
+  check_order("lmax", lmax, sd::kMaxLegendreOrder);
   if (t.ndim() > 1) value_error("t must be a scalar or 1-D, got shape " + shape_string(t));
   const bool scalar = t.ndim() == 0;
   const py::ssize_t n = scalar ? 1 : t.shape(0), width = lmax + 1;
@@ -181,9 +193,9 @@ py::array_t<double> py_legendre(int lmax, const DoubleArray& t) {
 }
 
 py::tuple py_gaunt_coefficients(int order_a, int order_b, int order_c) {
-  check_range("order_a", order_a, 0, kMaxShOrder);
-  check_range("order_b", order_b, 0, kMaxShOrder);
-  check_range("order_c", order_c, 0, kMaxShOrder);
+  check_order("order_a", order_a, sd::kMaxShOrder);
+  check_order("order_b", order_b, sd::kMaxShOrder);
+  check_order("order_c", order_c, sd::kMaxShOrder);
   std::vector<sd::GauntEntry> entries;
   {
     py::gil_scoped_release release;
@@ -206,11 +218,7 @@ py::tuple py_gaunt_coefficients(int order_a, int order_b, int order_c) {
 }  // namespace
 
 void bind_core(py::module_& m) {
-
-  m.attr("MAX_DESIGN_DEGREE") = sd::kMaxDesignDegree;
   m.attr("DESIGN_TOLERANCE") = sd::kDesignTolerance;
-  m.attr("MAX_SH_ORDER") = kMaxShOrder;
-  m.attr("MAX_PHONG_EXPONENT") = sd::kMaxPhongExponent;
 
   m.def("sh_basis", &py_sh_basis, py::arg("lmax"), py::arg("dirs"),
         R"doc(Real SH y_lm (module convention) for all l <= lmax at the given directions.
@@ -220,6 +228,14 @@ dirs: float array of shape (N, 3), or a single direction of shape (3,). Directio
       normalised here; zero-length or non-finite ones raise ValueError.
 Returns an array of shape (N, (lmax+1)**2), or ((lmax+1)**2,) for a single direction; column
 l*l + l + m holds y_lm.)doc");
+
+  m.def("sh_recurrence_constants", &py_sh_recurrence_constants, py::arg("order"),
+        R"doc(The constants of the recurrences sh_basis evaluates with (the very numbers of the C++ code),
+for l <= order (0 .. MAX_SH_ORDER): Q_mm = diagonal[m]; for m < l,
+Q_lm(z) = a[k] z Q_{l-1,m}(z) - b[k] Q_{l-2,m}(z) with k = l (l + 1) / 2 + m, a_{m+1,m} = sqrt(2m+3),
+b_{m+1,m} = 0; entries with m == l are 0. Then y_l0 = Q_l0, y_l,+m = Q_lm Re (x + i y)^m,
+y_l,-m = Q_lm Im (x + i y)^m.
+Returns a dict of float64 arrays: "diagonal" (order+1,), "a" and "b" ((order+1)(order+2)/2,).)doc");
 
   m.def("rotate_sh", &py_rotate_sh, py::arg("coeffs"), py::arg("rotation"),
         R"doc(Rotates SH expansions: returns the coefficients of x -> f(R^T x) (f turned by R).
@@ -233,7 +249,7 @@ L(g x), has coefficients rotate_sh(L, g.T).)doc");
   m.def("zonal_coefficients", &py_zonal_coefficients, py::arg("lobe"), py::arg("exponent"), py::arg("lmax"),
         R"doc(Funk-Hecke factors w_l = 1/2 integral_{-1}^{1} w(t) P_l(t) dt, l = 0 .. lmax, of a lobe.
 
-lobe: "lambert" (exponent ignored) or "phong" (exponent sigma in [0, 1e4]).
+lobe: "lambert" (exponent ignored) or "phong" (exponent sigma in [0, MAX_PHONG_EXPONENT]).
 lmax: >= 0.
 Returns shape (lmax+1,); element 0 is 1 (the lobes are normalised), and
 integral f(x) w(a.x) dmu(x) = sum_lm w_l f_lm y_lm(a).)doc");
@@ -259,7 +275,7 @@ by (a, b, c); values float64 of shape (E,).)doc");
       py::arg("lobe"), py::arg("exponent"), py::arg("degree"), py::arg("method") = "auto",
       R"doc(A weighted spherical design of the given degree for a lobe's weight w(x . e3) (nodes around +z).
 
-lobe: "lambert" (exponent ignored) or "phong" (exponent in [0, 1e4]).
+lobe: "lambert" (exponent ignored) or "phong" (exponent in [0, MAX_PHONG_EXPONENT]).
 degree: in [0, MAX_DESIGN_DEGREE].
 method: "gauss" (Gauss product rule, or its Radau variant with the pole as a node), "gradient"
         (gradient projection, eq. 14), or "auto" (the smaller of both).

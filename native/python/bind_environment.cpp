@@ -8,6 +8,7 @@
 #include "array_checks.h"
 #include "bindings.h"
 #include "sdlighting/environment.h"
+#include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/zonal_lobe.h"
@@ -126,12 +127,7 @@ py::array_t<double> py_rotated_environment_sh(const DoubleArray& coeffs, const D
   }
   const py::ssize_t k = coeffs.shape(0);
   const py::ssize_t channels = coeffs.ndim() == 2 ? coeffs.shape(1) : 1;
-  const auto root = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(k))));
-  if (k < 1 || root * root != k) {
-    value_error("coeffs must hold (lmax+1)^2 coefficients along axis 0 (a perfect square), got " + std::to_string(k));
-  }
-  const int order = static_cast<int>(root) - 1;
-  check_range("lmax of coeffs", order, 0, kMaxShOrder);
+  const int order = sh_order_from_count("coeffs", k, sd::kMaxShOrder);
   if (channels < 1 || channels > 1024) value_error("coeffs must have between 1 and 1024 channels");
   check_finite("coeffs", coeffs.data(), static_cast<size_t>(k * channels));
   const glm::dmat3 rotation = read_rotation(g);
@@ -159,9 +155,9 @@ py::dict report_dict(const sd::BandLimitedReport& r) {
 
 py::object py_band_limited(const sd::Environment& env, int lmax, int width, int height, const std::string& window,
                            bool report) {
-  check_range("lmax", lmax, 0, sd::kMaxEnergyOrder);
-  check_range("width", width, 1, 16384);
-  check_range("height", height, 1, 16384);
+  check_order("lmax", lmax, sd::kMaxEnergyOrder);
+  check_range("width", width, 1, sd::kMaxTextureSide);
+  check_range("height", height, 1, sd::kMaxTextureSide);
   const sd::RingingWindow w = sd::ringing_window_from_name(window);
   sd::BandLimitedReport r;
   std::vector<float> rgb;
@@ -181,14 +177,9 @@ py::object py_band_limited_texture(const DoubleArray& coeffs, int width, int hei
     value_error("coeffs must have shape (K, 3), got " + shape_string(coeffs));
   }
   const py::ssize_t k = coeffs.shape(0);
-  const auto root = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(k))));
-  if (k < 1 || root * root != k) {
-    value_error("coeffs must hold (lmax+1)^2 coefficients along axis 0 (a perfect square), got " + std::to_string(k));
-  }
-  const int order = static_cast<int>(root) - 1;
-  check_range("lmax of coeffs", order, 0, sd::kMaxEnergyOrder);
-  check_range("width", width, 1, 16384);
-  check_range("height", height, 1, 16384);
+  const int order = sh_order_from_count("coeffs", k, sd::kMaxEnergyOrder);
+  check_range("width", width, 1, sd::kMaxTextureSide);
+  check_range("height", height, 1, sd::kMaxTextureSide);
   check_finite("coeffs", coeffs.data(), static_cast<size_t>(3 * k));
   const sd::RingingWindow w = sd::ringing_window_from_name(window);
   std::vector<double> c(coeffs.data(), coeffs.data() + 3 * k);
@@ -248,9 +239,6 @@ py::array_t<float> py_pixels(const sd::Environment& env) {
 }  // namespace
 
 void bind_environment(py::module_& m) {
-  m.attr("MAX_PROJECTION_ORDER") = sd::kMaxProjectionOrder;
-  m.attr("MAX_ENERGY_ORDER") = sd::kMaxEnergyOrder;
-
   py::class_<sd::Environment> env(m, "Environment", R"doc(A distant environment map L (immutable).
 
 Built by load_environment, load_cube_environment, environment_from_pixels or
@@ -294,7 +282,7 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
       .def(
           "sh",
           [](const sd::Environment& e, int lmax, int threads) {
-            check_range("lmax", lmax, 0, sd::kMaxProjectionOrder);
+            check_order("lmax", lmax, sd::kMaxProjectionOrder);
             check_range("threads", threads, 0, 1024);
             std::vector<double> c;
             {
@@ -305,7 +293,7 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
           },
           py::arg("lmax"), py::arg("threads") = 0,
           R"doc(SH coefficients L_lm = sum over texels of L y_lm(centre) * solid angle (midpoint rule of
-integral L y_lm dmu), for l <= lmax (0 .. MAX_PROJECTION_ORDER = 16).
+integral L y_lm dmu), for l <= lmax (0 .. MAX_PROJECTION_ORDER).
 
 threads: worker threads, 0 = all cores; the result does not depend on it (bit-identical).
 Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
@@ -315,7 +303,7 @@ Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
 width x height equirectangular image (same orientation, rows top-first), as float32 of shape
 (height, width, 3) — a float texture. Negative lobes are kept (not clamped).
 
-lmax: 0 .. MAX_ENERGY_ORDER (64); coefficients from sh(lmax) up to 16, above that from the cached
+lmax: 0 .. MAX_ENERGY_ORDER; coefficients from sh(lmax) up to MAX_PROJECTION_ORDER, above that from the cached
       high-order projection (see band_energies).
 window: 'none' (sigma_l = 1), 'hanning' ((1 + cos(pi l/(lmax+1)))/2) or 'lanczos'
         (sinc(l/(lmax+1))): windows against ringing.
@@ -326,7 +314,7 @@ report: if True, returns (image, report) where report is a dict with 'min' and '
       .def(
           "band_energies",
           [](const sd::Environment& e, int lmax) {
-            check_range("lmax", lmax, 0, sd::kMaxEnergyOrder);
+            check_order("lmax", lmax, sd::kMaxEnergyOrder);
             std::vector<double> energies;
             {
               py::gil_scoped_release release;
@@ -337,7 +325,7 @@ report: if True, returns (image, report) where report is a dict with 'min' and '
             return out;
           },
           py::arg("lmax"),
-          R"doc(Band energies E_l = sum_m L_lm**2 for l = 0 .. lmax (lmax <= MAX_ENERGY_ORDER = 64),
+          R"doc(Band energies E_l = sum_m L_lm**2 for l = 0 .. lmax (lmax <= MAX_ENERGY_ORDER),
 shape (lmax+1, 4): columns R, G, B, luminance. Rotation invariant. Computed once per map from an
 order-64 projection (of the map itself up to 4096 x 2048 texels or cube faces of 128; of an
 area-averaged copy above that: the box filter attenuates band l by about l(l+1)h^2/12 in
@@ -345,7 +333,7 @@ energy, h the texel's angular size). Releases the GIL.)doc")
       .def(
           "low_frequency_error",
           [](const sd::Environment& e, int s, const py::object& channel) {
-            check_range("s", s, 0, sd::kMaxEnergyOrder);
+            check_order("s", s, sd::kMaxEnergyOrder);
             const int c = parse_channel(channel);
             py::gil_scoped_release release;
             return e.low_frequency_error(s, c);
@@ -353,11 +341,11 @@ energy, h the texel's angular size). Releases the GIL.)doc")
           py::arg("s"), py::arg("channel") = "luminance",
           R"doc(The seed's epsilon(s) = ||L - L~_s|| / ||L|| in L2(dmu), exact via Parseval:
 ||L||^2 = sum L^2 * solid angle over the texels, ||L~_s||^2 = sum_{l<=s} E_l.
-channel: 0, 1, 2 or 'luminance'. s: 0 .. 64. Returns 0 for a black channel.)doc")
+channel: 0, 1, 2 or 'luminance'. s: 0 .. MAX_ENERGY_ORDER. Returns 0 for a black channel.)doc")
       .def(
           "lobe_filtered_error",
           [](const sd::Environment& e, const std::string& lobe, double exponent, int s) {
-            check_range("s", s, 0, sd::kMaxEnergyOrder);
+            check_order("s", s, sd::kMaxEnergyOrder);
             const sd::ZonalLobe z = sd::ZonalLobe::from_name(lobe, exponent);
             py::gil_scoped_release release;
             return e.lobe_filtered_error(z, s);
@@ -366,12 +354,12 @@ channel: 0, 1, 2 or 'luminance'. s: 0 .. 64. Returns 0 for a black channel.)doc"
           R"doc(The error that decides s: relative RMS over lobe axes a of the truncation error of the
 unshadowed B(a) = sum_lm w_l L_lm y_lm(a), on luminance:
 sqrt(sum_{s<l<=64} w_l^2 E_l / sum_{l<=64} w_l^2 E_l).
-lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, 1e4]); s: 0 .. 64.)doc")
+lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, MAX_PHONG_EXPONENT]); s: 0 .. MAX_ENERGY_ORDER.)doc")
       .def(
           "smallest_order",
           [](const sd::Environment& e, const std::string& lobe, double exponent, double target_error,
              int max_order) -> py::object {
-            check_range("max_order", max_order, 0, sd::kMaxEnergyOrder);
+            check_order("max_order", max_order, sd::kMaxEnergyOrder);
             if (!std::isfinite(target_error) || target_error < 0.0) {
               value_error("target_error must be finite and >= 0");
             }
@@ -386,7 +374,7 @@ lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, 1e4]); s: 0
           },
           py::arg("lobe"), py::arg("exponent"), py::arg("target_error"), py::arg("max_order") = 16,
           R"doc(The smallest s <= max_order whose lobe_filtered_error is <= target_error, or None if
-no such s exists up to max_order (<= 64).)doc")
+no such s exists up to max_order (<= MAX_ENERGY_ORDER).)doc")
       .def(
           "channel_design",
           [](const sd::Environment& e, const py::object& channel, int degree) {

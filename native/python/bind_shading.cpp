@@ -24,8 +24,6 @@
 namespace sdpy {
 namespace {
 
-constexpr int kMaxShadingOrder = 16;
-
 using IndexArray = py::array_t<int64_t, py::array::c_style | py::array::forcecast>;
 
 // Lobe designs depend only on (material, degree): built once per process.
@@ -71,7 +69,7 @@ const DoubleArray& require(const char* name, const std::optional<DoubleArray>& a
 // The order s' of per-vertex SH data whose last axis holds (s'+1)² coefficients.
 int trailing_order(const char* name, const std::optional<DoubleArray>& a) {
   if (!a || a->ndim() < 2) value_error(std::string("this method needs ") + name + " with SH coefficients on its last axis");
-  return sh_order_from_count(name, a->shape(a->ndim() - 1), kMaxShadingOrder);
+  return sh_order_from_count(name, a->shape(a->ndim() - 1), sd::kMaxShadingOrder);
 }
 
 py::array_t<double> shade(const std::string& method, const DoubleArray& light, const DoubleArray& normals,
@@ -82,7 +80,7 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
                           const std::optional<IndexArray>& design_offsets, const std::optional<DoubleArray>& design_nodes,
                           const std::optional<DoubleArray>& design_weights) {
   if (light.ndim() != 2 || light.shape(1) != 3) value_error("light must have shape (K, 3), got " + shape_string(light));
-  const int s = sh_order_from_count("light", light.shape(0), kMaxShadingOrder);
+  const int s = sh_order_from_count("light", light.shape(0), sd::kMaxShadingOrder);
   check_finite("light", light.data(), static_cast<size_t>(light.size()));
   if (normals.ndim() != 2) value_error("normals must have shape (N, 3), got " + shape_string(normals));
   const size_t n = static_cast<size_t>(normals.shape(0));
@@ -95,10 +93,9 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
     unit_views = unit_rows("views", *views, n);
   }
 
-  // Coefficients of x ↦ L(g x) = D(gᵀ) L.
-  std::vector<double> rotated(static_cast<size_t>(light.size()));
   const glm::dmat3 g = rotation ? read_rotation(*rotation) : glm::dmat3(1.0);
-  sd::ShRotation(glm::transpose(g), s).apply(light.data(), rotated.data(), 3);
+  const std::vector<double> rotated =
+      sd::rotated_sh(std::vector<double>(light.data(), light.data() + light.size()), s, g);
 
   sd::ShadingInputs in;
   in.light_order = s;
@@ -138,7 +135,7 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
     }
   } else if (method == "msd_visibility") {
     if (!visibility_order) value_error("msd_visibility needs visibility_order (s', the order of the truncated lobe)");
-    check_range("visibility_order", *visibility_order, 0, kMaxShadingOrder);
+    check_order("visibility_order", *visibility_order, sd::kMaxShadingOrder);
     if (!design_offsets || design_offsets->ndim() != 1 || design_offsets->shape(0) != rows + 1) {
       value_error("msd_visibility needs design_offsets of shape (N+1,)");
     }
@@ -229,11 +226,11 @@ method: which formula (equation numbers of the seed):
   "prt_gaunt"          eq. (10) with visibility Ṽ and real Gaunt coefficients
   "msd_lobe"           eq. (12), Theorem 2.1: a lobe design of degree s+s' (built once and cached)
   "msd_visibility"     eq. (13), Theorem 2.2: per-vertex designs of V, lobe truncated at visibility_order
-light: environment SH coefficients, shape ((s+1)**2, 3), s <= 16, *not* rotated.
+light: environment SH coefficients, shape ((s+1)**2, 3), s <= MAX_SHADING_ORDER, *not* rotated.
 normals: (N, 3); views: (N, 3) unit vectors from the vertex to the eye (needed for phong).
 rotation: g (3, 3), the environment rotation of eq. (1) (default identity); L is rotated to
           L(g x) internally.
-lobe, exponent: "lambert", or "phong" with σ in [0, 1e4].
+lobe, exponent: "lambert", or "phong" with σ in [0, MAX_PHONG_EXPONENT].
 ambient_occlusion (N,), transfer (N, (s+1)**2), visibility (N, (s'+1)**2),
 product_matrices (N, (s+1)**2, (s'+1)**2), design_offsets int64 (N+1,), design_nodes (total, 3),
 design_weights (total,): per-vertex data as returned by bake_transfer.

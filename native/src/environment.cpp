@@ -29,7 +29,6 @@ constexpr double kPi = 3.14159265358979323846;
 // Guards against absurd allocations (and int overflow of texel indices in the bindings).
 constexpr int kMaxImageSide = 65536;
 constexpr int64_t kMaxTexels = int64_t(1) << 28;
-constexpr int kMaxOutputSide = 16384;
 
 // The reference copy for the high-order projection (band_energies): see environment.h.
 constexpr int64_t kReferenceEquirectTexels = int64_t(4096) * 2048;
@@ -361,18 +360,9 @@ std::vector<double> project(EnvironmentLayout layout, const std::vector<float>& 
                                                 : project_cube(rgb.data(), width, order, threads);
 }
 
-void check_order(const char* what, int order, int max_order) {
-  if (order < 0 || order > max_order) {
-    throw std::invalid_argument(std::string(what) + ": order must be in [0, " + std::to_string(max_order) +
-                                "], got " + std::to_string(order));
-  }
-}
-
 void check_output_size(const char* what, int width, int height) {
-  if (width < 1 || height < 1 || width > kMaxOutputSide || height > kMaxOutputSide) {
-    throw std::invalid_argument(std::string(what) + ": width and height must be in [1, 16384], got " +
-                                std::to_string(width) + " x " + std::to_string(height));
-  }
+  check_range(std::string(what) + ": width", width, 1, kMaxTextureSide);
+  check_range(std::string(what) + ": height", height, 1, kMaxTextureSide);
 }
 
 void check_channel(const char* what, int channel) {
@@ -643,7 +633,7 @@ Environment Environment::area_averaged(int width, int height) const {
 // Environment: spherical harmonics
 
 std::vector<double> Environment::sh(int order, int threads) const {
-  check_order("Environment::sh", order, kMaxProjectionOrder);
+  check_order("Environment::sh: order", order, kMaxProjectionOrder);
   return project(layout_, rgb_, width_, height_, order, threads);
 }
 
@@ -682,7 +672,7 @@ const Environment::EnergyCache& Environment::energy_cache() const {
 
 std::vector<float> Environment::band_limited(int order, int width, int height, RingingWindow window,
                                              BandLimitedReport* report) const {
-  check_order("Environment::band_limited", order, kMaxEnergyOrder);
+  check_order("Environment::band_limited: order", order, kMaxEnergyOrder);
   check_output_size("Environment::band_limited", width, height);
   std::vector<double> coefficients;
   if (order <= kMaxProjectionOrder) {
@@ -695,13 +685,13 @@ std::vector<float> Environment::band_limited(int order, int width, int height, R
 }
 
 std::vector<double> Environment::band_energies(int lmax) const {
-  check_order("Environment::band_energies", lmax, kMaxEnergyOrder);
+  check_order("Environment::band_energies: lmax", lmax, kMaxEnergyOrder);
   const auto& energies = energy_cache().energies;
   return std::vector<double>(energies.begin(), energies.begin() + 4 * (lmax + 1));
 }
 
 double Environment::low_frequency_error(int order, int channel) const {
-  check_order("Environment::low_frequency_error", order, kMaxEnergyOrder);
+  check_order("Environment::low_frequency_error: order", order, kMaxEnergyOrder);
   check_channel("Environment::low_frequency_error", channel);
   const EnergyCache& cache = energy_cache();
   const double norm2 = cache.norm_squared[channel];
@@ -712,7 +702,7 @@ double Environment::low_frequency_error(int order, int channel) const {
 }
 
 double Environment::lobe_filtered_error(const ZonalLobe& lobe, int order) const {
-  check_order("Environment::lobe_filtered_error", order, kMaxEnergyOrder);
+  check_order("Environment::lobe_filtered_error: order", order, kMaxEnergyOrder);
   const std::vector<double> w = lobe.coefficients(kMaxEnergyOrder);
   const auto& energies = energy_cache().energies;
   double missed = 0.0, total = 0.0;  // summed separately: no cancellation
@@ -726,7 +716,7 @@ double Environment::lobe_filtered_error(const ZonalLobe& lobe, int order) const 
 }
 
 int Environment::smallest_order(const ZonalLobe& lobe, double target_error, int max_order) const {
-  check_order("Environment::smallest_order", max_order, kMaxEnergyOrder);
+  check_order("Environment::smallest_order: max_order", max_order, kMaxEnergyOrder);
   if (!(target_error >= 0.0) || !std::isfinite(target_error)) {
     throw std::invalid_argument("Environment::smallest_order: target_error must be finite and >= 0");
   }
@@ -738,10 +728,7 @@ int Environment::smallest_order(const ZonalLobe& lobe, double target_error, int 
 
 SphericalDesign Environment::channel_design(int channel, int degree) const {
   check_channel("Environment::channel_design", channel);
-  if (degree < 0 || degree > kMaxDesignDegree) {
-    throw std::invalid_argument("Environment::channel_design: degree must be in [0, " +
-                                std::to_string(kMaxDesignDegree) + "], got " + std::to_string(degree));
-  }
+  check_order("Environment::channel_design: degree", degree, kMaxDesignDegree);
   if (!(mass_[channel] > 0.0)) {
     throw std::invalid_argument("Environment::channel_design: channel " + std::to_string(channel) +
                                 " is black everywhere: its measure L dμ is empty");
@@ -772,7 +759,7 @@ SphericalDesign Environment::channel_design(int channel, int degree) const {
 
 std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficients, int order, int width, int height,
                                         RingingWindow window, BandLimitedReport* report) {
-  check_order("band_limited_texture", order, kMaxEnergyOrder);
+  check_order("band_limited_texture: order", order, kMaxEnergyOrder);
   check_output_size("band_limited_texture", width, height);
   const int k = sh_count(order), mc = order + 1;
   if (sh_coefficients.size() != static_cast<size_t>(3 * k)) {
@@ -851,21 +838,6 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
     *report = r;
   }
   return rgb;
-}
-
-std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels) {
-  if (order < 0 || order > 64) throw std::invalid_argument("rotated_sh: order must be in [0, 64]");
-  if (channels < 1) throw std::invalid_argument("rotated_sh: channels must be >= 1");
-  const size_t expected = static_cast<size_t>(sh_count(order)) * channels;
-  if (coeffs.size() != expected) {
-    throw std::invalid_argument("rotated_sh: expected " + std::to_string(expected) + " coefficients, got " +
-                                std::to_string(coeffs.size()));
-  }
-  // L(g x) = L_{gᵀ}(x): its coefficients are D(gᵀ) L (sh_rotation.h).
-  const ShRotation rotation(glm::transpose(g), order);
-  std::vector<double> out(expected);
-  rotation.apply(coeffs.data(), out.data(), channels);
-  return out;
 }
 
 glm::dvec3 evaluate_sh_rgb(const std::vector<double>& coeffs, int order, const glm::dvec3& dir) {

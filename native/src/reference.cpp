@@ -33,6 +33,8 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   scene.add(occluders.vertices, occluders.triangles);
   scene.commit();
   const EnvironmentSampler sampler(environment);
+  // The integrand reads L at g x (rotated_sh, sh_rotation.h, states the convention); a direction y
+  // drawn from the map is therefore the object-frame direction x = gᵀ y.
   const glm::dmat3 g_inverse = glm::transpose(rotation);
 
   ReferenceResult result;

@@ -4,7 +4,10 @@
 // band l-1 only, in O(l²), and stays orthogonal to rounding far beyond the orders used here.
 #include "sdlighting/sh_rotation.h"
 
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_harmonics.h"
+
+#include <glm/matrix.hpp>
 
 #include <cmath>
 #include <cstdlib>
@@ -14,7 +17,6 @@
 namespace sd {
 namespace {
 
-constexpr int kMaxOrder = 64;
 constexpr double kRotationTolerance = 1e-9;
 
 // Ivanic & Ruedenberg index band matrices by m, n ∈ [-l, l]; storing them row-major with offset l
@@ -153,10 +155,7 @@ void apply_bands(const std::vector<std::vector<double>>& bands, int order, const
 }  // namespace
 
 ShRotation::ShRotation(const glm::dmat3& rotation, int order) : order_(order) {
-  if (order < 0 || order > kMaxOrder) {
-    throw std::invalid_argument("ShRotation: order must be in [0, " + std::to_string(kMaxOrder) +
-                                "], got " + std::to_string(order));
-  }
+  check_order("ShRotation: order", order, kMaxShOrder);
   validate_rotation(rotation);
 
   bands_.reserve(order + 1);
@@ -185,6 +184,20 @@ void ShRotation::apply(const double* in, double* out, int channels) const {
     case 4: return apply_bands<4>(bands_, order_, in, out, 4);
     default: return apply_bands<0>(bands_, order_, in, out, channels);
   }
+}
+
+std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels) {
+  check_order("rotated_sh: order", order, kMaxShOrder);
+  if (channels < 1) throw std::invalid_argument("rotated_sh: channels must be >= 1");
+  const size_t expected = static_cast<size_t>(sh_count(order)) * channels;
+  if (coeffs.size() != expected) {
+    throw std::invalid_argument("rotated_sh: expected " + std::to_string(expected) + " coefficients, got " +
+                                std::to_string(coeffs.size()));
+  }
+  const ShRotation rotation(glm::transpose(g), order);
+  std::vector<double> out(expected);
+  rotation.apply(coeffs.data(), out.data(), channels);
+  return out;
 }
 
 }  // namespace sd

@@ -31,13 +31,8 @@ void lobe_axis(const Material& material, const double* normal, const double* vie
 
 namespace {
 
-// Largest order the evaluators accept for L and for V (the product formulas grow as s⁴).
-constexpr int kMaxShadingOrder = 16;
-
 void check_inputs(const ShadingInputs& in) {
-  if (in.light_order < 0 || in.light_order > kMaxShadingOrder) {
-    throw std::invalid_argument("light order must be in [0, 16], got " + std::to_string(in.light_order));
-  }
+  check_order("light order", in.light_order, kMaxShadingOrder);
   if (!in.light || (in.vertex_count > 0 && !in.normals)) throw std::invalid_argument("missing light or normals");
   if (in.material.glossy && in.vertex_count > 0 && !in.view_dirs) {
     throw std::invalid_argument("a glossy material needs view directions");
@@ -45,11 +40,7 @@ void check_inputs(const ShadingInputs& in) {
   ZonalLobe::phong(in.material.exponent);  // validates the exponent
 }
 
-void check_visibility_order(int order) {
-  if (order < 0 || order > kMaxShadingOrder) {
-    throw std::invalid_argument("visibility order must be in [0, 16], got " + std::to_string(order));
-  }
-}
+void check_visibility_order(int order) { check_order("visibility order", order, kMaxShadingOrder); }
 
 // Runs shade(p, axis, rgb) for every vertex on both cores; rgb is the vertex's output triple.
 template <typename Shade>

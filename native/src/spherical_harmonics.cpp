@@ -1,5 +1,7 @@
 #include "sdlighting/spherical_harmonics.h"
 
+#include "sdlighting/limits.h"
+
 #include <glm/geometric.hpp>
 
 #include <cmath>
@@ -7,55 +9,40 @@
 namespace sd {
 namespace {
 
-// Q_lm(z) (see the header) and its derivative for one fixed m, all l in [m, order].
-// Recurrences of the fully normalised associated Legendre functions divided by sin^m θ:
-//   Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}   (Q_00 = 1, Q_11 = √3)
-//   Q_{m+1,m} = sqrt(2m+3) z Q_mm
-//   Q_lm = a_lm z Q_{l-1,m} - b_lm Q_{l-2,m}
-// Orders up to this use precomputed recurrence coefficients (the square roots dominate otherwise).
+// Orders up to this use the tabulated recurrence constants (the square roots dominate otherwise).
 constexpr int kTabulatedOrder = 64;
 
-inline double coefficient_a_exact(int l, int m) {
+// The recurrence constants of the header, one entry at a time: the only place they are written.
+// Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}, Q_00 = 1, Q_11 = √3.
+double diagonal_step(int m, double previous) {
+  return m == 1 ? std::sqrt(3.0) : previous * std::sqrt((2.0 * m + 1.0) / (2.0 * m));
+}
+
+// a_lm for m < l; a_{m+1,m} = sqrt(2m+3) starts the column from Q_mm.
+double coefficient_a(int l, int m) {
+  if (l == m + 1) return std::sqrt(2.0 * m + 3.0);
   return std::sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * double(l + m)));
 }
 
-inline double coefficient_b_exact(int l, int m) {
-  return std::sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
-                   ((l - m) * double(l + m) * (2.0 * l - 3.0)));
+// b_lm for m < l; b_{m+1,m} = 0 (there is no Q_{m-1,m}).
+double coefficient_b(int l, int m) {
+  if (l == m + 1) return 0.0;
+  return std::sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) / ((l - m) * double(l + m) * (2.0 * l - 3.0)));
 }
 
-// a_lm, b_lm for m + 2 <= l <= kTabulatedOrder, and the diagonal Q_mm, indexed [l][m].
-struct RecurrenceTables {
-  std::vector<double> a, b, diagonal;
-  RecurrenceTables() : a(size(), 0.0), b(size(), 0.0), diagonal(kTabulatedOrder + 1, 1.0) {
-    for (int l = 2; l <= kTabulatedOrder; ++l)
-      for (int m = 0; m + 2 <= l; ++m) {
-        a[at(l, m)] = coefficient_a_exact(l, m);
-        b[at(l, m)] = coefficient_b_exact(l, m);
-      }
-    for (int m = 1; m <= kTabulatedOrder; ++m) diagonal[m] = diagonal_step(m, diagonal[m - 1]);
-  }
-  static size_t size() { return size_t(kTabulatedOrder + 1) * (kTabulatedOrder + 1); }
-  static size_t at(int l, int m) { return size_t(l) * (kTabulatedOrder + 1) + m; }
-  // Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}, Q_00 = 1, Q_11 = √3.
-  static double diagonal_step(int m, double previous) {
-    return m == 1 ? std::sqrt(3.0) : previous * std::sqrt((2.0 * m + 1.0) / (2.0 * m));
-  }
-};
-
-const RecurrenceTables& tables() {
-  static const RecurrenceTables instance;
-  return instance;
+const ShRecurrence& tabulated() {
+  static const ShRecurrence table = sh_recurrence(kTabulatedOrder);
+  return table;
 }
 
 template <bool kWithGradient>
 void evaluate(int order, const glm::dvec3& d, double* values, double* gradients) {
-  const RecurrenceTables& table = tables();
+  const ShRecurrence& table = tabulated();
   double q_mm = 1.0;
   // (x + i y)^m and (x + i y)^(m-1), as real and imaginary parts.
   double re = 1.0, im = 0.0, re_prev = 0.0, im_prev = 0.0;
   for (int m = 0; m <= order; ++m) {
-    q_mm = m <= kTabulatedOrder ? table.diagonal[m] : RecurrenceTables::diagonal_step(m, q_mm);
+    q_mm = m <= kTabulatedOrder ? table.diagonal[m] : diagonal_step(m, q_mm);
     if (m > 0) {
       re_prev = re;
       im_prev = im;
@@ -69,14 +56,10 @@ void evaluate(int order, const glm::dvec3& d, double* values, double* gradients)
       if (l == m) {
         q = q_mm;
         dq = 0.0;
-      } else if (l == m + 1) {
-        const double c = std::sqrt(2.0 * m + 3.0);
-        q = c * d.z * q_prev;
-        dq = c * q_prev;
       } else {
-        const bool tabulated = l <= kTabulatedOrder;
-        const double a = tabulated ? table.a[RecurrenceTables::at(l, m)] : coefficient_a_exact(l, m);
-        const double b = tabulated ? table.b[RecurrenceTables::at(l, m)] : coefficient_b_exact(l, m);
+        const bool in_table = l <= kTabulatedOrder;
+        const double a = in_table ? table.a[sh_triangle_index(l, m)] : coefficient_a(l, m);
+        const double b = in_table ? table.b[sh_triangle_index(l, m)] : coefficient_b(l, m);
         q = a * d.z * q_prev - b * q_prev2;
         dq = a * (q_prev + d.z * dq_prev) - b * dq_prev2;
       }
@@ -104,6 +87,22 @@ void evaluate(int order, const glm::dvec3& d, double* values, double* gradients)
 }
 
 }  // namespace
+
+ShRecurrence sh_recurrence(int order) {
+  check_order("sh_recurrence: order", order, kMaxShOrder);
+  ShRecurrence r;
+  r.diagonal.assign(order + 1, 1.0);
+  for (int m = 1; m <= order; ++m) r.diagonal[m] = diagonal_step(m, r.diagonal[m - 1]);
+  r.a.assign(sh_triangle_index(order + 1, 0), 0.0);
+  r.b.assign(r.a.size(), 0.0);
+  for (int l = 1; l <= order; ++l) {
+    for (int m = 0; m < l; ++m) {
+      r.a[sh_triangle_index(l, m)] = coefficient_a(l, m);
+      r.b[sh_triangle_index(l, m)] = coefficient_b(l, m);
+    }
+  }
+  return r;
+}
 
 void sh_basis(int order, const glm::dvec3& dir, double* out) {
   evaluate<false>(order, dir, out, nullptr);

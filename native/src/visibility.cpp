@@ -51,11 +51,9 @@ struct SplitMix64 {
 
 // ---- validation ----
 
-void check_order(const char* name, int order, int max_order) {
-  if (order < -1 || order > max_order) {
-    throw std::invalid_argument(std::string(name) + " must be in [0, " + std::to_string(max_order) +
-                                "] (or -1: not requested), got " + std::to_string(order));
-  }
+// An order of the bake's options: in [0, max_order], or -1 (not requested).
+void check_requested_order(const char* name, int order, int max_order) {
+  if (order != -1) check_order(std::string(name) + " (-1: not requested)", order, max_order);
 }
 
 // Both orders of a pair requested, or neither.
@@ -255,22 +253,18 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
     throw std::invalid_argument("normals must match vertices: " + std::to_string(normals.size()) + " normals for " +
                                 std::to_string(vertices.size()) + " vertices");
   }
-  if (options.rays < 1 || options.rays > kMaxRaysPerVertex) {
-    throw std::invalid_argument("rays must be in [1, " + std::to_string(kMaxRaysPerVertex) + "], got " +
-                                std::to_string(options.rays));
-  }
+  check_range("rays", options.rays, 1, kMaxRaysPerVertex);
   if (options.threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all), got " + std::to_string(options.threads));
-  check_order("visibility_order s'", options.visibility_order, kMaxVisibilityOrder);
-  check_order("product_order s", options.product_order, kMaxTransferOrder);
-  check_order("product_visibility_order s'", options.product_visibility_order, kMaxVisibilityOrder);
+  check_requested_order("visibility_order s'", options.visibility_order, kMaxVisibilityOrder);
+  check_requested_order("product_order s", options.product_order, kMaxTransferOrder);
+  check_requested_order("product_visibility_order s'", options.product_visibility_order, kMaxVisibilityOrder);
   check_pair("the product matrix", options.product_order, options.product_visibility_order);
-  check_order("transfer_order s", options.transfer_order, kMaxTransferOrder);
-  check_order("design_order s", options.design_order, kMaxTransferOrder);
-  check_order("design_visibility_order s'", options.design_visibility_order, kMaxVisibilityOrder);
+  check_requested_order("transfer_order s", options.transfer_order, kMaxTransferOrder);
+  check_requested_order("design_order s", options.design_order, kMaxTransferOrder);
+  check_requested_order("design_visibility_order s'", options.design_visibility_order, kMaxVisibilityOrder);
   check_pair("the design", options.design_order, options.design_visibility_order);
-  if (options.design_order >= 0 && options.design_order + options.design_visibility_order > kMaxDesignDegree) {
-    throw std::invalid_argument("design degree s + s' must be at most " + std::to_string(kMaxDesignDegree) + ", got " +
-                                std::to_string(options.design_order + options.design_visibility_order));
+  if (options.design_order >= 0) {
+    check_order("design degree s + s'", options.design_order + options.design_visibility_order, kMaxDesignDegree);
   }
   check_points("vertices", vertices);
   const std::vector<glm::dvec3> units = unit_normals(normals);
@@ -433,10 +427,7 @@ std::vector<double> bake_visibility(const std::vector<glm::dvec3>& vertices, con
                                     const std::vector<Triangle>& triangles, int order, int rays, std::uint64_t seed,
                                     const OccluderMesh& occluders,
                                     std::function<bool(std::size_t, std::size_t)> progress) {
-  if (order < 0 || order > kMaxVisibilityOrder) {
-    throw std::invalid_argument("visibility order must be in [0, " + std::to_string(kMaxVisibilityOrder) +
-                                "], got " + std::to_string(order));
-  }
+  check_order("visibility order", order, kMaxVisibilityOrder);
   TransferOptions options;
   options.rays = rays;
   options.seed = seed;

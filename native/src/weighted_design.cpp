@@ -25,10 +25,7 @@ struct CleanMeasure {
 };
 
 CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights, int degree) {
-  if (degree < 0 || degree > kMaxDesignDegree) {
-    throw std::invalid_argument("design degree must be in [0, " + std::to_string(kMaxDesignDegree) +
-                                "], got " + std::to_string(degree));
-  }
+  check_order("design degree", degree, kMaxDesignDegree);
   if (dirs.size() != weights.size()) throw std::invalid_argument("dirs and weights differ in length");
   CleanMeasure measure;
   for (size_t i = 0; i < dirs.size(); ++i) {

@@ -18,13 +18,6 @@ namespace {
 // radial measures of order m carry (s(2−s))^m, so a degree-k basis needs degree 2k.
 constexpr int kBaseNodes = kMaxDesignDegree + 4;
 
-void check_degree(int degree) {
-  if (degree < 0 || degree > kMaxDesignDegree) {
-    throw std::invalid_argument("design degree must be in [0, " + std::to_string(kMaxDesignDegree) +
-                                "], got " + std::to_string(degree));
-  }
-}
-
 // 1 − z for a unit vector, without the cancellation near the pole where narrow lobes live.
 double one_minus_z(const glm::dvec3& d) {
   return d.z > 0.0 ? (d.x * d.x + d.y * d.y) / (1.0 + d.z) : 1.0 - d.z;
@@ -315,7 +308,7 @@ Recurrence ZonalWeight::radial_recurrence(int m, int n) const {
 }
 
 SphericalDesign zonal_design(const ZonalWeight& weight, int degree, DesignMethod method) {
-  check_degree(degree);
+  check_order("design degree", degree, kMaxDesignDegree);
   ZonalDesignBuilder builder(weight, degree);
   if (method == DesignMethod::Gauss) return builder.gauss();
   const SphericalDesign gauss = builder.gauss();

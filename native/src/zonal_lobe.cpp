@@ -7,7 +7,9 @@ namespace sd {
 
 ZonalLobe ZonalLobe::phong(double exponent) {
   if (!(exponent >= 0.0 && exponent <= kMaxPhongExponent)) {
-    throw std::invalid_argument("Phong exponent must be in [0, 1e4], got " + std::to_string(exponent));
+    throw std::invalid_argument("Phong exponent must be in [0, " +
+                                std::to_string(static_cast<long long>(kMaxPhongExponent)) + "], got " +
+                                std::to_string(exponent));
   }
   return ZonalLobe{exponent};
 }

@@ -63,9 +63,9 @@ TEST(Reference, UnoccludedSmoothSkyMatchesFunkHecke) {
   ReferenceOptions options;
   options.samples = 20000;
   const ReferenceResult r = shade_reference(sky, g, vertices, normals, {}, {}, Material::lambert(), options);
-  // Σ ŵ_l (D(gᵀ)L)_lm y_lm(n): exact for a band-limited sky, up to the map's pixelisation.
-  std::vector<double> rotated(coefficients.size());
-  ShRotation(glm::transpose(g), 2).apply(coefficients.data(), rotated.data(), 3);
+  // Σ ŵ_l L_lm(g) y_lm(n): exact for a band-limited sky, up to the map's pixelisation; the reference
+  // turns directions, rotated_sh turns coefficients, and both must mean the same L(g x).
+  const std::vector<double> rotated = rotated_sh(coefficients, 2, g);
   const auto w = ZonalLobe::lambert().coefficients(2);
   std::vector<double> y(sh_count(2));
   for (size_t p = 0; p < normals.size(); ++p) {

@@ -156,3 +156,59 @@ def test_rotate_sh_order_64(sd, rng):
     x = random_directions(rng, 5)
     direct = sd.sh_basis(order, x @ R) @ c
     np.testing.assert_allclose(sd.sh_basis(order, x) @ rotated, direct, rtol=0, atol=1e-9 * np.linalg.norm(c))
+
+
+def addon_recurrence_formula(order):
+    """The recurrence constants as gpu_shading.sh_recurrence_defines computed them in Python before
+    sdnative exported them: diagonal Q_mm, then a_lm, b_lm at l (l + 1) / 2 + m for m < l."""
+    diagonal = [1.0]
+    for m in range(1, order + 1):
+        diagonal.append(math.sqrt(3.0) if m == 1 else diagonal[-1] * math.sqrt((2.0 * m + 1.0) / (2.0 * m)))
+    size = (order + 1) * (order + 2) // 2
+    a, b = [0.0] * size, [0.0] * size
+    for l in range(order + 1):
+        for m in range(l):
+            k = l * (l + 1) // 2 + m
+            if l == m + 1:
+                a[k] = math.sqrt(2.0 * m + 3.0)
+            else:
+                a[k] = math.sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * (l + m)))
+                b[k] = math.sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
+                                 ((l - m) * (l + m) * (2.0 * l - 3.0)))
+    return diagonal, a, b
+
+
+def test_sh_recurrence_constants_are_the_addon_formula(sd):
+    for order in (0, 1, 5, 24):
+        constants = sd.sh_recurrence_constants(order)
+        assert sorted(constants) == ["a", "b", "diagonal"]
+        size = (order + 1) * (order + 2) // 2
+        for key, length in (("diagonal", order + 1), ("a", size), ("b", size)):
+            assert constants[key].dtype == np.float64 and constants[key].shape == (length,), key
+        for key, expected in zip(("diagonal", "a", "b"), addon_recurrence_formula(order)):
+            np.testing.assert_allclose(constants[key], expected, rtol=1e-15, atol=0, err_msg=key)
+    for order in (-1, 65):
+        with pytest.raises(ValueError, match="order"):
+            sd.sh_recurrence_constants(order)
+
+
+def test_sh_recurrence_constants_reproduce_sh_basis(sd, rng):
+    order = 20
+    constants = sd.sh_recurrence_constants(order)
+    a, b, diagonal = constants["a"], constants["b"], constants["diagonal"]
+    d = random_directions(rng, 40)
+    x, y, z = d.T
+    evaluated = np.zeros((len(d), sh_count(order)))
+    re, im = np.ones_like(x), np.zeros_like(x)  # (x + i y)^m
+    for m in range(order + 1):
+        if m > 0:
+            re, im = re * x - im * y, re * y + im * x
+        q_before, q = np.zeros_like(z), np.full_like(z, diagonal[m])
+        for l in range(m, order + 1):
+            if l > m:
+                k = l * (l + 1) // 2 + m
+                q_before, q = q, a[k] * z * q - b[k] * q_before
+            evaluated[:, sh_index(l, m)] = q * re
+            if m > 0:
+                evaluated[:, sh_index(l, -m)] = q * im
+    np.testing.assert_allclose(evaluated, sd.sh_basis(order, d), rtol=0, atol=EXACT)

@@ -32,6 +32,7 @@
 // as ShRotation::apply(in, out, 3) and the shading evaluators (shading.h) expect.
 #pragma once
 
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/zonal_lobe.h"
 
@@ -45,15 +46,6 @@
 #include <vector>
 
 namespace sd {
-
-/// Highest order of Environment::sh (the full-resolution projection used for shading).
-constexpr int kMaxProjectionOrder = 16;
-
-/// Highest order of the band energies, the error measures and band_limited: the "high order" to
-/// which lobe-filtered errors are summed. The neglected tail Σ_{l>64} ŵ_l² E_l has factors
-/// ŵ_l² < 1e-19 for Phong σ <= 100 (< 2e-13 for σ = 150, < 3e-9 for Lambert); for much
-/// narrower lobes the lobe-filtered error is underestimated (it is then close to 1 anyway).
-constexpr int kMaxEnergyOrder = 64;
 
 /// Channel index meaning the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 / linear sRGB
 /// primaries, as Blender's default scene-linear space) in the functions that take a channel.
@@ -206,6 +198,9 @@ class Environment {
   /// B(a) = Σ_lm ŵ_l L_lm y_lm(a) (Funk–Hecke) cut at l <= s, on luminance:
   ///     sqrt( Σ_{order<l<=64} ŵ_l² E_l / Σ_{l<=64} ŵ_l² E_l ),
   /// since ∫ (B − B̃_s)² dμ(a) = Σ_{l>s} ŵ_l² E_l. order in 0..kMaxEnergyOrder. 0 for a black map.
+  /// The neglected tail Σ_{l>64} ŵ_l² E_l has factors ŵ_l² < 1e-19 for Phong σ <= 100 (< 2e-13 for
+  /// σ = 150, < 3e-9 for Lambert); for much narrower lobes the error is underestimated (it is then
+  /// close to 1 anyway).
   double lobe_filtered_error(const ZonalLobe& lobe, int order) const;
 
   /// The smallest s in [0, max_order] with lobe_filtered_error(lobe, s) <= target_error, or −1
@@ -240,13 +235,6 @@ class Environment {
   std::array<double, 4> norm_squared_{};
   std::shared_ptr<EnergyCache> cache_;
 };
-
-/// Coefficients of x ↦ L(g x), the environment seen through the rotation g of eq. (1) (L_lm(g)
-/// in the seed): D(gᵀ) L with ShRotation(gᵀ, order) (sh_rotation.h). `coeffs` holds
-/// sh_count(order) × channels doubles, coefficient-major (coeffs[channels i + c]); g must be a
-/// proper rotation (ShRotation's checks). Throws std::invalid_argument for a wrong size, an order
-/// outside [0, 64], channels < 1 or a bad g.
-std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels = 3);
 
 /// The texture of Environment::band_limited from given RGB coefficients (layout as sh(), e.g.
 /// already rotated by rotated_sh): L̃(d) = Σ_{l<=order} σ_l c_lm y_lm(d) at the texel centres of

@@ -25,6 +25,8 @@
 // rounding of coordinates far from the origin). See ray_epsilon().
 #pragma once
 
+#include "sdlighting/limits.h"
+
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
@@ -44,12 +46,6 @@ class BakeCancelled : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Highest order s' of the visibility expansion Ṽ (and the column order of M, the design's s').
-constexpr int kMaxVisibilityOrder = 8;
-/// Highest order s of the transfer vector T and the row order of M (the design's s).
-constexpr int kMaxTransferOrder = 16;
-/// Most rays per vertex a bake accepts (a guard against absurd allocations).
-constexpr int kMaxRaysPerVertex = 1 << 24;
 /// ε = kRayEpsilonScale × bounding-box diagonal of the object (see ray_epsilon()).
 constexpr double kRayEpsilonScale = 1e-4;
 /// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.

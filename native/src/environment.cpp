@@ -282,7 +282,7 @@ std::vector<double> project_equirect(const float* rgb, int width, int height, in
           }
         }
       },
-      threads);
+      ParallelOptions(threads));
 
   // y_l,±m(θ, φ) = P̄_lm(θ) {cos, sin}(mφ) with P̄_lm = y_l,+m at φ = 0 (spherical_harmonics.h),
   // so one sh_basis call per row gives the associated-Legendre part.
@@ -342,7 +342,7 @@ std::vector<double> project_cube(const float* rgb, int n, int order, int threads
           }
         }
       },
-      threads);
+      ParallelOptions(threads));
   std::vector<double> out(static_cast<size_t>(k) * 3, 0.0);
   for (int block = 0; block < blocks; ++block) {
     const double* a = partial.data() + static_cast<size_t>(block) * 3 * k;
@@ -355,7 +355,6 @@ std::vector<double> project_cube(const float* rgb, int n, int order, int threads
 
 std::vector<double> project(EnvironmentLayout layout, const std::vector<float>& rgb, int width, int height, int order,
                             int threads) {
-  if (threads <= 0) threads = default_thread_count();
   return layout == EnvironmentLayout::Equirect ? project_equirect(rgb.data(), width, height, order, threads)
                                                 : project_cube(rgb.data(), width, order, threads);
 }

@@ -42,7 +42,6 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   result.epsilon = ray_epsilon(vertices, occluders);
   result.radiance.assign(3 * vertices.size(), 0.0);
   result.standard_error.assign(3 * vertices.size(), 0.0);
-  const int threads = options.threads > 0 ? options.threads : default_thread_count();
   parallel_for(vertices.size(), 4, [&](size_t begin, size_t end) {
     for (size_t p = begin; p < end; ++p) {
       std::mt19937_64 rng(options.seed * 0x9e3779b97f4a7c15ULL + p);
@@ -83,7 +82,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
         result.standard_error[3 * p + c] = std::sqrt(variance[c]);
       }
     }
-  }, threads);
+  }, ParallelOptions(options.threads));
   return result;
 }
 

@@ -16,24 +16,20 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <exception>
 #include <limits>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <utility>
 
 namespace sd {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-// Vertices a worker takes per grab of the shared counter.
+// Most vertices a worker takes per grab of the shared counter, and the rays a chunk aims at.
 constexpr std::size_t kChunk = 8;
+constexpr std::size_t kChunkRays = 8 * 1024;
 // Rays per rtcOccluded1M call (bounds the scratch memory for huge ray counts).
 constexpr int kStreamBlock = 1024;
-// Interval between progress reports from the calling thread.
-constexpr auto kProgressInterval = std::chrono::milliseconds(50);
 
 // ---- random rotations ----
 
@@ -167,16 +163,6 @@ void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& p, const gl
     }
   }
 }
-
-// Joins every thread it holds when it goes out of scope (also while an exception unwinds).
-struct ThreadGroup {
-  std::vector<std::thread> threads;
-  ~ThreadGroup() {
-    for (auto& t : threads) {
-      if (t.joinable()) t.join();
-    }
-  }
-};
 
 }  // namespace
 
@@ -319,88 +305,22 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   scene.add(occluders.vertices, occluders.triangles);
   scene.commit();
 
-  // ---- the workers; the calling thread reports progress ----
-  const int threads = options.threads > 0 ? options.threads : default_thread_count();
-  std::atomic<std::size_t> next{0}, done{0};
-  std::atomic<bool> stop{false}, cancel_seen{false};
-  std::exception_ptr worker_error;
-  std::mutex mutex;
-  std::condition_variable finished;
-  int running = 0;
-  const std::atomic<bool>* cancel = options.cancel;
-
-  auto cancelled_by_flag = [&] { return cancel != nullptr && cancel->load(std::memory_order_relaxed); };
-  auto report = [&](std::size_t count) { return !options.progress || options.progress(count, n); };
-  auto cancelled_error = [&] {
-    return BakeCancelled("bake cancelled after " + std::to_string(done.load()) + " of " + std::to_string(n) +
-                         " vertices");
-  };
-
-  if (cancelled_by_flag() || !report(0)) throw cancelled_error();
-
-  auto work = [&] {
-    try {
-      Scratch scratch;
-      while (!stop.load(std::memory_order_relaxed)) {
-        const std::size_t begin = next.fetch_add(kChunk);
-        if (begin >= n) break;
-        const std::size_t end = std::min(n, begin + kChunk);
-        for (std::size_t v = begin; v < end; ++v) {
-          if (stop.load(std::memory_order_relaxed)) break;
-          if (cancelled_by_flag()) {
-            cancel_seen = true;
-            stop = true;
-            break;
-          }
-          bake_vertex(scene.scene(), plan, vertices[v], units[v], v, scratch, outputs);
-          done.fetch_add(1, std::memory_order_relaxed);
-        }
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!worker_error) worker_error = std::current_exception();
-      stop = true;
-    }
-    std::lock_guard<std::mutex> lock(mutex);
-    if (--running == 0) finished.notify_all();
-  };
-
-  bool cancelled = false;
-  {
-    ThreadGroup group;
-    const int workers = static_cast<int>(std::min<std::size_t>(threads, (n + kChunk - 1) / kChunk));
-    try {
-      for (int i = 0; i < workers; ++i) {
-        {
-          std::lock_guard<std::mutex> lock(mutex);
-          ++running;
-        }
-        try {
-          group.threads.emplace_back(work);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(mutex);
-          --running;
-          throw;
-        }
-      }
-      for (;;) {
-        {
-          std::unique_lock<std::mutex> lock(mutex);
-          if (finished.wait_for(lock, kProgressInterval, [&] { return running == 0; })) break;
-        }
-        if (cancelled_by_flag() || !report(done.load())) {
-          cancelled = true;
-          stop = true;
-          break;
-        }
-      }
-    } catch (...) {
-      stop = true;  // the group joins the workers before the exception leaves this scope
-      throw;
-    }
-  }  // joins every worker
-  if (worker_error) std::rethrow_exception(worker_error);
-  if (cancelled || cancel_seen || done.load() != n || cancelled_by_flag() || !report(n)) throw cancelled_error();
+  // ---- the workers; with a progress callback the calling thread only reports ----
+  ParallelOptions parallel(options.threads);
+  parallel.progress = options.progress;
+  parallel.cancel = options.cancel;
+  // Chunks of about kChunkRays rays (at most kChunk vertices) keep a cancel prompt for any ray count.
+  const std::size_t chunk = std::clamp<std::size_t>(kChunkRays / options.rays, 1, kChunk);
+  const ParallelOutcome outcome = parallel_for(
+      n, chunk,
+      [&, scratch = Scratch()](std::size_t begin, std::size_t end) mutable {
+        for (std::size_t v = begin; v < end; ++v) bake_vertex(scene.scene(), plan, vertices[v], units[v], v, scratch, outputs);
+      },
+      parallel);
+  if (!outcome.completed) {
+    throw BakeCancelled("bake cancelled after " + std::to_string(outcome.done) + " of " + std::to_string(n) +
+                        " vertices");
+  }
 
   // ---- flatten the designs ----
   if (plan.design_degree >= 0) {

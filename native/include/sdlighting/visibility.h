@@ -26,11 +26,11 @@
 #pragma once
 
 #include "sdlighting/limits.h"
+#include "sdlighting/mesh.h"
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
-#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -50,15 +50,6 @@ class BakeCancelled : public std::runtime_error {
 constexpr double kRayEpsilonScale = 1e-4;
 /// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.
 constexpr double kRayEpsilonFloat = 1e-5;
-
-/// A triangle as three vertex indices (each must be in [0, vertex count)).
-using Triangle = std::array<std::int64_t, 3>;
-
-/// Triangles that block rays without being baked (a ground plane, other objects).
-struct OccluderMesh {
-  std::vector<glm::dvec3> vertices;
-  std::vector<Triangle> triangles;
-};
 
 /// What to bake. An order of -1 (the default) means "not requested"; AO is always computed.
 struct TransferOptions {

@@ -158,35 +158,31 @@ def test_rotate_sh_order_64(sd, rng):
     np.testing.assert_allclose(sd.sh_basis(order, x) @ rotated, direct, rtol=0, atol=1e-9 * np.linalg.norm(c))
 
 
-def addon_recurrence_formula(order):
-    """The recurrence constants as gpu_shading.sh_recurrence_defines computed them in Python before
-    sdnative exported them: diagonal Q_mm, then a_lm, b_lm at l (l + 1) / 2 + m for m < l."""
-    diagonal = [1.0]
-    for m in range(1, order + 1):
-        diagonal.append(math.sqrt(3.0) if m == 1 else diagonal[-1] * math.sqrt((2.0 * m + 1.0) / (2.0 * m)))
-    size = (order + 1) * (order + 2) // 2
-    a, b = [0.0] * size, [0.0] * size
-    for l in range(order + 1):
-        for m in range(l):
-            k = l * (l + 1) // 2 + m
-            if l == m + 1:
-                a[k] = math.sqrt(2.0 * m + 3.0)
-            else:
-                a[k] = math.sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * (l + m)))
-                b[k] = math.sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
-                                 ((l - m) * (l + m) * (2.0 * l - 3.0)))
+def recurrence_formula(order):
+    """The recurrence constants by their closed forms (the formula gpu_shading.sh_recurrence_defines
+    evaluated in Python before sdnative exported them): Q_mm = (2m-1)!! sqrt(2 (2m+1) / (2m)!) for
+    m > 0, Q_00 = 1; for m < l, a_lm = sqrt((2l-1)(2l+1) / ((l-m)(l+m))) (sqrt(2m+3) at l = m+1) and
+    b_lm = sqrt((2l+1)(l+m-1)(l-m-1) / ((l-m)(l+m)(2l-3))) (0 at l = m+1), at l (l+1) / 2 + m."""
+    diagonal = np.array([1.0] + [math.prod(range(1, 2 * m, 2)) * math.sqrt(2.0 * (2 * m + 1) / math.factorial(2 * m))
+                                 for m in range(1, order + 1)])
+    l, m = np.array([(l, m) for l in range(order + 1) for m in range(l + 1)], dtype=float).T
+    below = m < l
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(below, np.sqrt((2 * l - 1) * (2 * l + 1) / ((l - m) * (l + m))), 0.0)
+        b = np.where(below & (l > m + 1),
+                     np.sqrt((2 * l + 1) * (l + m - 1) * (l - m - 1) / ((l - m) * (l + m) * (2 * l - 3))), 0.0)
     return diagonal, a, b
 
 
-def test_sh_recurrence_constants_are_the_addon_formula(sd):
+def test_sh_recurrence_constants_are_the_closed_forms(sd):
     for order in (0, 1, 5, 24):
         constants = sd.sh_recurrence_constants(order)
         assert sorted(constants) == ["a", "b", "diagonal"]
         size = (order + 1) * (order + 2) // 2
         for key, length in (("diagonal", order + 1), ("a", size), ("b", size)):
             assert constants[key].dtype == np.float64 and constants[key].shape == (length,), key
-        for key, expected in zip(("diagonal", "a", "b"), addon_recurrence_formula(order)):
-            np.testing.assert_allclose(constants[key], expected, rtol=1e-15, atol=0, err_msg=key)
+        for key, expected in zip(("diagonal", "a", "b"), recurrence_formula(order)):
+            np.testing.assert_allclose(constants[key], expected, rtol=1e-14, atol=0, err_msg=key)
     for order in (-1, 65):
         with pytest.raises(ValueError, match="order"):
             sd.sh_recurrence_constants(order)

@@ -1,6 +1,7 @@
 #include "sdlighting/zonal_design.h"
 
 #include "quadrature/design_fit.h"
+#include "sh/azimuthal_power.h"
 #include "sdlighting/spherical_harmonics.h"
 
 #include <glm/geometric.hpp>
@@ -51,7 +52,7 @@ MomentSystem orthonormal_zonal_system(const ZonalWeight& weight, int degree) {
     thread_local std::vector<double> q, dq;
     q.resize(degree + 1);
     dq.resize(degree + 1);
-    double re = 1.0, im = 0.0, re_prev = 0.0, im_prev = 0.0;
+    AzimuthalPower power;
     int index = 0;
     auto emit = [&](double value, double gx, double gy, double gz) {
       values[index] = value;
@@ -63,13 +64,8 @@ MomentSystem orthonormal_zonal_system(const ZonalWeight& weight, int degree) {
       ++index;
     };
     for (int m = 0; m <= degree; ++m) {
-      if (m > 0) {
-        re_prev = re;
-        im_prev = im;
-        const double r = re * d.x - im * d.y;
-        im = re * d.y + im * d.x;
-        re = r;
-      }
+      if (m > 0) power.next(d.x, d.y);
+      const double re = power.re, im = power.im, re_prev = power.re_prev, im_prev = power.im_prev;
       const int count = degree - m + 1;
       orthonormal_polynomials(radial[m], count, s, q.data(), gradients ? dq.data() : nullptr);
       const double c = m == 0 ? 1.0 : std::sqrt(2.0);

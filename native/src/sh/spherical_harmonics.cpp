@@ -1,6 +1,7 @@
 #include "sdlighting/spherical_harmonics.h"
 
 #include "sdlighting/limits.h"
+#include "sh/azimuthal_power.h"
 
 #include <glm/geometric.hpp>
 
@@ -39,17 +40,11 @@ template <bool kWithGradient>
 void evaluate(int order, const glm::dvec3& d, double* values, double* gradients) {
   const ShRecurrence& table = tabulated();
   double q_mm = 1.0;
-  // (x + i y)^m and (x + i y)^(m-1), as real and imaginary parts.
-  double re = 1.0, im = 0.0, re_prev = 0.0, im_prev = 0.0;
+  AzimuthalPower power;
   for (int m = 0; m <= order; ++m) {
     q_mm = m <= kTabulatedOrder ? table.diagonal[m] : diagonal_step(m, q_mm);
-    if (m > 0) {
-      re_prev = re;
-      im_prev = im;
-      const double r = re * d.x - im * d.y;
-      im = re * d.y + im * d.x;
-      re = r;
-    }
+    if (m > 0) power.next(d.x, d.y);
+    const double re = power.re, im = power.im, re_prev = power.re_prev, im_prev = power.im_prev;
     double q_prev2 = 0.0, q_prev = 0.0, dq_prev2 = 0.0, dq_prev = 0.0;
     for (int l = m; l <= order; ++l) {
       double q, dq;

@@ -44,6 +44,19 @@ TransferOptions recorded_rays(int rays, std::uint64_t seed) {
   return options;
 }
 
+// `options` with the outputs requested: Ṽ of order `visibility`, M of orders `product` = (s, s'), T of
+// order `transfer` and the design of `design` = (s, s'); -1 leaves an output out.
+TransferOptions requesting(TransferOptions options, int visibility, std::pair<int, int> product, int transfer,
+                           std::pair<int, int> design) {
+  options.visibility_order = visibility;
+  options.product_order = product.first;
+  options.product_visibility_order = product.second;
+  options.transfer_order = transfer;
+  options.design_order = design.first;
+  options.design_visibility_order = design.second;
+  return options;
+}
+
 // The directions of vertex v's escaping rays (V_r = 1), in ray order, of a bake made with
 // `options` (record_rays on).
 std::vector<glm::dvec3> escaping_rays(const TransferBake& b, const TransferOptions& options, std::size_t v) {
@@ -192,12 +205,7 @@ TEST(VisibilityBox, PointsInsideAClosedCubeSeeNothing) {
   inner.triangles = {{0, 1, 2}};
   TransferOptions options;
   options.rays = 1024;
-  options.visibility_order = 4;
-  options.product_order = 3;
-  options.product_visibility_order = 2;
-  options.transfer_order = 3;
-  options.design_order = 2;
-  options.design_visibility_order = 2;
+  options = requesting(options, 4, {3, 2}, 3, {2, 2});
   const TransferBake b = bake(inner, options, test::box(1.0));
   for (double x : b.ambient_occlusion) EXPECT_EQ(x, 0.0);
   for (double x : b.visibility) EXPECT_EQ(x, 0.0);
@@ -253,11 +261,7 @@ TEST(VisibilityConvex, IcosphereHasNoSelfOcclusionAboveTheTangentPlane) {
 
 TEST(VisibilityExact, OutputsEqualTheDirectSumsOverTheRays) {
   const Mesh m = bumpy_sphere(2);
-  TransferOptions options = recorded_rays(512, 5);
-  options.visibility_order = 3;
-  options.product_order = 4;
-  options.product_visibility_order = 2;
-  options.transfer_order = 5;
+  const TransferOptions options = requesting(recorded_rays(512, 5), 3, {4, 2}, 5, {-1, -1});
   const TransferBake b = bake(m, options);
   const int kv = sh_count(3), ks = sh_count(4), ksp = sh_count(2), kt = sh_count(5);
   std::vector<double> y(kt);
@@ -287,9 +291,7 @@ TEST(VisibilityExact, ProductMatrixColumnZeroIsTheVisibility) {
   const Mesh m = bumpy_sphere(1);
   TransferOptions options;
   options.rays = 300;
-  options.visibility_order = 4;
-  options.product_order = 3;  // s <= s': every row l <= s has its Ṽ_lm
-  options.product_visibility_order = 4;
+  options = requesting(options, 4, {3, 4}, -1, {-1, -1});  // s <= s': every row l <= s has its Ṽ_lm
   const TransferBake b = bake(m, options);
   const int kv = sh_count(4), ks = sh_count(3);
   for (std::size_t v = 0; v < m.vertices.size(); ++v) {
@@ -319,13 +321,7 @@ void expect_same(const TransferBake& a, const TransferBake& b) {
 
 TEST(VisibilityDeterminism, SameSeedSameResultForAnyThreadCount) {
   const Mesh m = bumpy_sphere(2);
-  TransferOptions options = recorded_rays(256, 1234);
-  options.visibility_order = 2;
-  options.product_order = 2;
-  options.product_visibility_order = 2;
-  options.transfer_order = 2;
-  options.design_order = 2;
-  options.design_visibility_order = 2;
+  TransferOptions options = requesting(recorded_rays(256, 1234), 2, {2, 2}, 2, {2, 2});
   options.threads = 1;
   const TransferBake one = bake(m, options);
   options.threads = 2;
@@ -409,8 +405,7 @@ TEST(VisibilityCancel, ProgressIsMonotoneAndEndsAtTheTotal) {
   const Mesh m = bumpy_sphere(3);
   TransferOptions options;
   options.rays = 256;
-  options.design_order = 2;
-  options.design_visibility_order = 2;
+  options = requesting(options, -1, {-1, -1}, -1, {2, 2});
   std::vector<std::pair<std::size_t, std::size_t>> reports;
   options.progress = [&](std::size_t done, std::size_t total) {
     reports.emplace_back(done, total);
@@ -431,8 +426,7 @@ TEST(VisibilityCancel, CancelFlagAndThrowingProgressStopTheBake) {
   const Mesh m = bumpy_sphere(3);
   TransferOptions options;
   options.rays = 256;
-  options.design_order = 4;
-  options.design_visibility_order = 2;
+  options = requesting(options, -1, {-1, -1}, -1, {4, 2});
   std::atomic<bool> cancel{true};
   options.cancel = &cancel;
   EXPECT_THROW(bake(m, options), BakeCancelled);

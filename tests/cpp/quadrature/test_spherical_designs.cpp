@@ -1,3 +1,4 @@
+#include "sdlighting/gauss_quadrature.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/weighted_design.h"
 #include "sdlighting/zonal_design.h"
@@ -37,7 +38,8 @@ void expect_lobe_design(const SphericalDesign& design, const ZonalLobe& lobe, in
 }
 
 TEST(ZonalDesign, EveryMethodCertifiesForLambertAndPhong) {
-  for (double sigma : {1.0, 8.0, 1000.0, 1e4}) {
+  // σ = 0 is the uniform hemisphere, σ = 2.5 a Jacobi weight of non-integer exponent.
+  for (double sigma : {0.0, 1.0, 2.5, 8.0, 1000.0, 1e4}) {
     const ZonalLobe lobe = ZonalLobe::phong(sigma);
     const ZonalWeight weight = ZonalWeight::from_lobe(lobe);
     for (int degree = 0; degree <= 8; ++degree) {
@@ -99,6 +101,39 @@ TEST(ZonalDesign, TabulatedWeightAwayFromThePole) {
   EXPECT_EQ(zonal_design(band, 4, DesignMethod::Gauss).method, "gauss");
 }
 
+TEST(ZonalDesign, TabulatedWeightHasTheMomentsOfItsPiecewiseLinearWeight) {
+  // A ragged band: the SH moments of the interpolated weight by a product rule on each segment
+  // (Gauss–Legendre in z, exact for the linear weight times y_l0; equally spaced φ for m ≠ 0).
+  const std::vector<double> t = {-0.5, 0.0, 0.3, 0.9}, w = {0.0, 2.0, 0.5, 3.0};
+  const ZonalWeight band = ZonalWeight::tabulated(t, w);
+  constexpr int kDegree = 6, kNodes = 8;
+  const Rule1D unit = gauss_rule(jacobi_recurrence_unit_interval(0.0, kNodes), kNodes);
+  std::vector<glm::dvec3> dirs;
+  std::vector<double> weights;
+  for (size_t segment = 0; segment + 1 < t.size(); ++segment) {
+    const double a = t[segment], b = t[segment + 1];
+    std::vector<double> z(kNodes), dz(kNodes);
+    for (int i = 0; i < kNodes; ++i) {
+      z[i] = a + (b - a) * unit.nodes[i];
+      dz[i] = 0.5 * (b - a) * unit.weights[i];  // dμ = dz dφ / 4π
+    }
+    const test::SphereRule rule = test::product_rule(z, dz, kDegree + 1, 0.25);
+    for (size_t q = 0; q < rule.dirs.size(); ++q) {
+      const double s = (rule.dirs[q].z - a) / (b - a);
+      dirs.push_back(rule.dirs[q]);
+      weights.push_back(rule.weights[q] * ((1.0 - s) * w[segment] + s * w[segment + 1]));
+    }
+  }
+  const double mass = std::accumulate(weights.begin(), weights.end(), 0.0);
+  EXPECT_NEAR(band.mass(), mass, 1e-14);
+  for (DesignMethod method : {DesignMethod::Auto, DesignMethod::Gauss}) {
+    const SphericalDesign design = zonal_design(band, kDegree, method);
+    const auto expected = design_moments(dirs, weights, kDegree);
+    const auto got = design_moments(design.nodes, design.weights, kDegree);
+    for (size_t j = 0; j < got.size(); ++j) EXPECT_NEAR(got[j], expected[j], kDesignTolerance * mass) << j;
+  }
+}
+
 TEST(ZonalDesign, RejectsBadInput) {
   const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::lambert());
   EXPECT_THROW(zonal_design(weight, -1), std::invalid_argument);
@@ -149,6 +184,14 @@ TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {
   const SphericalDesign design = weighted_design(dirs, {0.5, 0.25, 0.25}, 6);
   EXPECT_LE(design.size(), 3);
   EXPECT_LE(design.residual, kDesignTolerance);
+}
+
+TEST(WeightedDesign, APointMassGivesOneNode) {
+  // All the mass on one direction, given twice and unnormalised, beside a zero weight.
+  const SphericalDesign design = weighted_design({{0, 0, 2}, {0, 0, 5}, {1, 0, 0}}, {1.5, 0.5, 0.0}, 6);
+  ASSERT_EQ(design.size(), 1);
+  EXPECT_NEAR(glm::length(design.nodes[0] - glm::dvec3(0, 0, 1)), 0.0, 1e-12);
+  EXPECT_NEAR(design.weights[0], 2.0, 1e-12);
 }
 
 TEST(WeightedDesign, RejectsBadInput) {

@@ -1,3 +1,4 @@
+#include "sdlighting/limits.h"
 #include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdtesting/sphere.h"
@@ -65,10 +66,22 @@ TEST(ShRotation, BandsAreOrthogonalUpToOrder16) {
   }
 }
 
-TEST(ShRotation, StaysOrthogonalAtMaximumOrder) {
+TEST(ShRotation, StaysOrthogonalAndExactAtMaximumOrder) {
   std::mt19937_64 rng(5);
-  const ShRotation d(random_rotation(rng), 64);
+  const glm::dmat3 r = random_rotation(rng);
+  const ShRotation d(r, kMaxShOrder);
   for (int l : {32, 48, 64}) EXPECT_LT(band_orthogonality_defect(d, l), 1e-10) << "l=" << l;
+  // The rotated coefficients still evaluate to the turned function.
+  const std::vector<double> c = random_coefficients(kMaxShOrder, rng);
+  std::vector<double> rotated(c.size());
+  d.apply(c.data(), rotated.data());
+  double norm = 0.0;
+  for (double v : c) norm += v * v;
+  norm = std::sqrt(norm);
+  for (int point = 0; point < 5; ++point) {
+    const glm::dvec3 x = random_direction(rng);
+    EXPECT_NEAR(evaluate(kMaxShOrder, rotated, x), evaluate(kMaxShOrder, c, glm::transpose(r) * x), 1e-9 * norm);
+  }
 }
 
 // The defining property: D(R) c are the coefficients of x ↦ f(Rᵀ x).

@@ -21,6 +21,7 @@ inline double cos_difference(double a, double b) { return 2.0 * std::sin(0.5 * (
 
 // ---- equirect geometry (environment.h: θ = π (j+0.5)/H, φ = π − 2π (i+0.5)/W) ----
 
+// θ of the centres of row j (from the top).
 inline double equirect_theta(int j, int height) { return kPi * (j + 0.5) / height; }
 
 // π (W − 2i − 1)/W: an integer numerator, so the centre column of an odd width is exactly φ = 0.
@@ -31,11 +32,13 @@ inline double equirect_row_solid_angle(int j, int width, int height) {
   return cos_difference(kPi * j / height, kPi * (j + 1.0) / height) / (2.0 * width);
 }
 
+// The unit vector of polar angle θ (from +Z) and azimuth φ (from +X towards +Y).
 inline glm::dvec3 spherical_direction(double theta, double phi) {
   const double st = std::sin(theta);
   return {st * std::cos(phi), st * std::sin(phi), std::cos(theta)};
 }
 
+// Throws std::invalid_argument for a zero or non-finite direction (lookups take any length).
 inline void check_direction(const glm::dvec3& d) {
   if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) {
     throw std::invalid_argument("direction contains NaN or infinity");
@@ -74,6 +77,7 @@ struct FaceCoordinates {
   double a, b;  // sc/|ma|, tc/|ma| in [−1, 1]
 };
 
+// The face whose major axis d points along, and d's face coordinates on it.
 inline FaceCoordinates cube_face_coordinates(const glm::dvec3& d) {
   const double ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
   if (ax >= ay && ax >= az) {
@@ -95,11 +99,13 @@ inline double cube_rectangle_solid_angle(double a0, double a1, double b0, double
   return f(a1, b1) - f(a0, b1) - f(a1, b0) + f(a0, b0);
 }
 
+// Δμ of texel (i, j) of an n × n face (the same on every face).
 inline double cube_texel_solid_angle(int i, int j, int n) {
   return cube_rectangle_solid_angle(cube_edge(i, n), cube_edge(i + 1, n), cube_edge(j, n), cube_edge(j + 1, n)) /
          (4.0 * kPi);
 }
 
+// The unit centre direction of texel (i, j) of face f.
 inline glm::dvec3 cube_texel_direction(int face, int i, int j, int n) {
   return glm::normalize(cube_face_direction(face, (2.0 * i + 1.0) / n - 1.0, (2.0 * j + 1.0) / n - 1.0));
 }

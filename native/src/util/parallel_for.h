@@ -51,7 +51,8 @@ struct ParallelOutcome {
 /// exception thrown by a body or by the progress callback is rethrown once every worker has
 /// stopped; the remaining chunks are skipped.
 template <typename Body>
-ParallelOutcome parallel_for(std::size_t count, std::size_t chunk, Body&& body, const ParallelOptions& options = ParallelOptions()) {
+ParallelOutcome parallel_for(std::size_t count, std::size_t chunk, Body&& body,
+                             const ParallelOptions& options = ParallelOptions()) {
   const auto flagged = [&] { return options.cancel != nullptr && options.cancel->load(std::memory_order_relaxed); };
   const auto report = [&](std::size_t done) { return !options.progress || options.progress(done, count); };
   if (flagged() || !report(0)) return {false, 0};

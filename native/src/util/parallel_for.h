@@ -43,7 +43,7 @@ struct ParallelOutcome {
   std::size_t done = 0;
 };
 
-/// Calls body(begin, end) on disjoint chunks [begin, end) of [0, count), at most `chunk` items
+/// Calls body(begin, end) on disjoint chunks [begin, end) of [0, count), at most `chunk` >= 1 items
 /// each, handed out dynamically. Each worker calls its own copy of `body` (made when the worker
 /// starts), so a mutable body may keep per-worker scratch buffers. Results written per item do not
 /// depend on the thread count. When cancelled (options.cancel, or progress returning false) the

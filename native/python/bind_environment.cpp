@@ -7,8 +7,8 @@
 // raises RuntimeError. Heavy work runs without the GIL.
 #include "array_checks.h"
 #include "bindings.h"
+#include "design_arrays.h"
 #include "sdlighting/environment.h"
-#include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/zonal_lobe.h"
@@ -121,26 +121,11 @@ int parse_channel(const py::object& channel) {
   value_error("channel must be an int (0, 1, 2) or 'luminance'");
 }
 
-py::array_t<double> py_rotated_environment_sh(const DoubleArray& coeffs, const DoubleArray& g) {
-  if (coeffs.ndim() != 1 && coeffs.ndim() != 2) {
-    value_error("coeffs must have shape (K, 3) (or (K,) / (K, C)), got " + shape_string(coeffs));
-  }
-  const py::ssize_t k = coeffs.shape(0);
-  const py::ssize_t channels = coeffs.ndim() == 2 ? coeffs.shape(1) : 1;
-  const int order = sh_order_from_count("coeffs", k, sd::kMaxShOrder);
-  if (channels < 1 || channels > 1024) value_error("coeffs must have between 1 and 1024 channels");
-  check_finite("coeffs", coeffs.data(), static_cast<size_t>(k * channels));
-  const glm::dmat3 rotation = read_rotation(g);
-  std::vector<double> in(coeffs.data(), coeffs.data() + k * channels);
-  std::vector<double> out;
-  {
-    py::gil_scoped_release release;
-    out = sd::rotated_sh(in, order, rotation, static_cast<int>(channels));  // bad g: ValueError
-  }
-  std::vector<py::ssize_t> shape(coeffs.shape(), coeffs.shape() + coeffs.ndim());
-  py::array_t<double> result(shape);
-  std::copy(out.begin(), out.end(), result.mutable_data());
-  return result;
+// A per-channel measure of the map for R, G, B and the luminance, shape (4,).
+py::array_t<double> per_channel(const sd::Environment& e, double (sd::Environment::*measure)(int) const) {
+  py::array_t<double> out(4);
+  for (int c = 0; c < 4; ++c) out.mutable_data()[c] = (e.*measure)(c);
+  return out;
 }
 
 py::dict report_dict(const sd::BandLimitedReport& r) {
@@ -263,21 +248,11 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
       .def_property_readonly("clamped_negative_pixels", &sd::Environment::clamped_negative_pixels,
                              "Pixels that had a negative channel; they were clamped to 0 on load.")
       .def_property_readonly(
-          "mass",
-          [](const sd::Environment& e) {
-            py::array_t<double> out(4);
-            for (int c = 0; c < 4; ++c) out.mutable_data()[c] = e.mass(c);
-            return out;
-          },
+          "mass", [](const sd::Environment& e) { return per_channel(e, &sd::Environment::mass); },
           "integral L dmu (the average radiance) of R, G, B and the luminance Y = 0.2126 R + 0.7152 G + "
           "0.0722 B, shape (4,).")
       .def_property_readonly(
-          "norm_squared",
-          [](const sd::Environment& e) {
-            py::array_t<double> out(4);
-            for (int c = 0; c < 4; ++c) out.mutable_data()[c] = e.norm_squared(c);
-            return out;
-          },
+          "norm_squared", [](const sd::Environment& e) { return per_channel(e, &sd::Environment::norm_squared); },
           "integral L**2 dmu of R, G, B and the luminance, shape (4,).")
       .def(
           "sh",
@@ -385,15 +360,7 @@ no such s exists up to max_order (<= MAX_ENERGY_ORDER).)doc")
               py::gil_scoped_release release;
               design = e.channel_design(c, degree);
             }
-            const auto n = static_cast<py::ssize_t>(design.size());
-            py::array_t<double> nodes({n, py::ssize_t(3)}), weights(n);
-            for (py::ssize_t i = 0; i < n; ++i) {
-              nodes.mutable_data()[3 * i] = design.nodes[i].x;
-              nodes.mutable_data()[3 * i + 1] = design.nodes[i].y;
-              nodes.mutable_data()[3 * i + 2] = design.nodes[i].z;
-              weights.mutable_data()[i] = design.weights[i];
-            }
-            return py::make_tuple(std::move(nodes), std::move(weights));
+            return design_tuple(design);
           },
           py::arg("channel"), py::arg("degree"),
           R"doc(A weighted spherical design of the given degree (0 .. MAX_DESIGN_DEGREE) for the measure
@@ -467,13 +434,6 @@ empty image; negative values are clamped to 0 and counted.)doc");
         R"doc(A cube-map environment from linear RGB of shape (6, N, N, 3) (or (6, N, N, 4)): faces +X, -X,
 +Y, -Y, +Z, -Z, rows top-first (see load_cube_environment for the orientation).)doc");
 
-  m.def("rotated_environment_sh", &py_rotated_environment_sh, py::arg("coeffs"), py::arg("g"),
-        R"doc(Coefficients of x -> L(g x), the environment seen through the rotation g of eq. (1):
-D(g^T) L (the same as rotate_sh(coeffs, g.T)).
-
-coeffs: shape (K, 3) (or (K,), (K, C)) with K = (lmax+1)**2, lmax <= MAX_SH_ORDER.
-g: proper rotation of shape (3, 3), numpy row-major. Returns the shape of coeffs.)doc");
-
   m.def("band_limited_texture", &py_band_limited_texture, py::arg("coeffs"), py::arg("width"), py::arg("height"),
         py::arg("window") = "none", py::arg("report") = false,
         R"doc(The band-limited texture of given RGB coefficients (e.g. rotated_environment_sh of
@@ -482,48 +442,6 @@ equirectangular image (Blender's orientation, rows top-first), float32 of shape 
 
 coeffs: shape ((lmax+1)**2, 3), lmax <= MAX_ENERGY_ORDER. window and report as for
 Environment.band_limited. Releases the GIL.)doc");
-
-  py::class_<sd::EnvironmentSampler>(m, "EnvironmentSampler", R"doc(Importance sampling of an Environment for
-Monte Carlo reference integrals: a texel is chosen with probability 0.99 Y dmu / sum(Y dmu) +
-0.01 dmu (luminance times solid angle with a 1 % uniform floor, so every direction has a positive
-density), then a point uniformly inside it (uniform in phi and cos(theta) in an equirect texel,
-uniform in face coordinates in a cube texel). Densities are with respect to dmu = dx/(4 pi):
-mean(f(x) / pdf(x)) estimates integral f dmu.)doc")
-      .def(py::init([](const sd::Environment& e) {
-             py::gil_scoped_release release;
-             return sd::EnvironmentSampler(e);
-           }),
-           py::arg("environment"))
-      .def(
-          "sample",
-          [](const sd::EnvironmentSampler& s, const DoubleArray& u) {
-            if (u.ndim() != 2 || u.shape(1) != 2) value_error("u must have shape (N, 2), got " + shape_string(u));
-            const py::ssize_t n = u.shape(0);
-            check_finite("u", u.data(), static_cast<size_t>(2 * n));
-            py::array_t<double> dirs({n, py::ssize_t(3)}), pdf(n);
-            const double* in = u.data();
-            double* d = dirs.mutable_data();
-            double* p = pdf.mutable_data();
-            {
-              py::gil_scoped_release release;
-              for (py::ssize_t i = 0; i < n; ++i) {
-                const glm::dvec3 dir = s.sample(in[2 * i], in[2 * i + 1], p + i);
-                d[3 * i] = dir.x, d[3 * i + 1] = dir.y, d[3 * i + 2] = dir.z;
-              }
-            }
-            return py::make_tuple(std::move(dirs), std::move(pdf));
-          },
-          py::arg("u"),
-          "Maps uniform numbers u of shape (N, 2) in [0, 1) to (dirs (N, 3), pdf (N,)), pdf w.r.t. dmu.")
-      .def(
-          "pdf",
-          [](const sd::EnvironmentSampler& s, const DoubleArray& dirs) {
-            const std::vector<glm::dvec3> d = read_directions("dirs", dirs, false);
-            py::array_t<double> out(static_cast<py::ssize_t>(d.size()));
-            for (size_t i = 0; i < d.size(); ++i) out.mutable_data()[i] = s.pdf(d[i]);
-            return out;
-          },
-          py::arg("dirs"), "The density w.r.t. dmu of sample() at directions of shape (N, 3); returns (N,).");
 }
 
 }  // namespace sdpy

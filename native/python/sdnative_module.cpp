@@ -76,8 +76,11 @@ PYBIND11_MODULE(sdnative, m) {
   m.attr("MAX_TRANSFER_ORDER") = sd::kMaxTransferOrder;
   m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
   m.attr("MAX_SHADING_ORDER") = sd::kMaxShadingOrder;
-  sdpy::bind_core(m);
+  sdpy::bind_sh(m);
+  sdpy::bind_designs(m);
   sdpy::bind_environment(m);
+  sdpy::bind_environment_sampler(m);
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);
+  sdpy::bind_reference(m);
 }

@@ -26,11 +26,11 @@
 #pragma once
 
 #include "sdlighting/limits.h"
+#include "sdlighting/mesh.h"
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
-#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -51,15 +51,6 @@ constexpr double kRayEpsilonScale = 1e-4;
 /// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.
 constexpr double kRayEpsilonFloat = 1e-5;
 
-/// A triangle as three vertex indices (each must be in [0, vertex count)).
-using Triangle = std::array<std::int64_t, 3>;
-
-/// Triangles that block rays without being baked (a ground plane, other objects).
-struct OccluderMesh {
-  std::vector<glm::dvec3> vertices;
-  std::vector<Triangle> triangles;
-};
-
 /// What to bake. An order of -1 (the default) means "not requested"; AO is always computed.
 struct TransferOptions {
   int rays = 1024;          ///< R >= 1 rays per vertex
@@ -72,11 +63,13 @@ struct TransferOptions {
   int design_visibility_order = -1;  ///< s' of the design, in [0, kMaxVisibilityOrder]
   int threads = 0;            ///< worker threads; 0 = every hardware thread
   bool record_rays = false;   ///< test hook: keep every V_r in TransferBake::ray_visibility
-  /// Called from the calling thread only, about every 50 ms and once more after the last vertex,
-  /// with (vertices done, vertex count); returning false cancels the bake (BakeCancelled). An
-  /// exception it throws cancels the bake and propagates once the workers have stopped.
+  /// Called from the calling thread only (which then bakes no vertex itself), once before the
+  /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
+  /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws
+  /// cancels the bake and propagates once the workers have stopped.
   std::function<bool(std::size_t done, std::size_t total)> progress;
-  /// Polled by the workers and the calling thread; true cancels the bake (BakeCancelled).
+  /// Polled by the workers before every few vertices and by the calling thread; true cancels the
+  /// bake (BakeCancelled).
   const std::atomic<bool>* cancel = nullptr;
 };
 
@@ -118,8 +111,8 @@ struct TransferBake {
 /// Throws std::invalid_argument on bad input (NaN/inf, zero normal, index out of range, orders out
 /// of range, rays < 1, no vertices), BakeCancelled when cancelled, std::runtime_error naming the
 /// vertex when its design cannot be certified or Embree fails. Runs options.threads workers over
-/// chunks of vertices; the calling thread only reports progress. Results are returned only on
-/// success.
+/// chunks of vertices (parallel_for); with a progress callback the calling thread only reports.
+/// Results are returned only on success.
 TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
                            const std::vector<Triangle>& triangles, const TransferOptions& options,
                            const OccluderMesh& occluders = {});

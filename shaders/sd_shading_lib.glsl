@@ -1,6 +1,6 @@
 /* sd-lighting: the shading formulas of the method of spherical designs (MSD) and of PRT, in GLSL.
  *
- * This file is the GPU twin of native/src/shading.cpp (sdnative.shade): every function below
+ * This file is the GPU twin of native/src/shading/shading.cpp (sdnative.shade): every function below
  * follows the CPU evaluator step by step, so that the viewport agrees with it to float32 rounding.
  * Equation numbers are the seed's (msd-notes.md).
  *

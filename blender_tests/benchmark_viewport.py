@@ -15,7 +15,7 @@ Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender
 A second table compares every method per vertex at --methods-size vertices (100k), with
 synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs); the MSD
 methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the band-limited
-environment texture (the light-texture option). It ends with MSD (13) and (12), SH and texture,
+texture (the band-limited texture option). It ends with MSD (13) and (12), SH and texture,
 as ratios to PRT (8) and PRT (10).
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
@@ -84,38 +84,25 @@ def synthetic_designs(normals, real_counts, seed=0):
     return offsets, directions, weights
 
 
-def synthetic_result(method, normals, real_counts, s=4, sv=2, seed=0):
+def synthetic_result(package, method, normals, real_counts, s=4, sv=2, seed=0):
     """Per-vertex data of a method's real shapes (values random: the frame time does not depend
     on them)."""
     rng = np.random.default_rng(seed)
     n = len(normals)
-    k, kv = (s + 1) ** 2, (sv + 1) ** 2
     result = {"ambient_occlusion": np.full(n, 0.5)}
-    if method in ("msd_lobe", "prt_gaunt"):
-        result["visibility"] = rng.normal(scale=0.1, size=(n, kv))
-    elif method == "prt_matrix":
-        result["product_matrices"] = rng.normal(scale=0.1, size=(n, k, kv))
-    elif method == "prt_diffuse":
-        result["transfer"] = rng.normal(scale=0.1, size=(n, k))
-    elif method == "msd_visibility":
-        offsets, design_nodes, weights = synthetic_designs(normals, real_counts)
-        result.update(design_offsets=offsets, design_nodes=design_nodes, design_weights=weights)
+    data = package.utils.methods.get(method).data
+    if data is not None and data.packing == "design":
+        result.update(zip(data.keys, synthetic_designs(normals, real_counts)))
+    elif data is not None and data.packing == "coefficients":
+        result[data.keys[0]] = rng.normal(scale=0.1, size=(n,) + data.shape(s, sv))
     return result
 
 
 def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility"):
     """A mesh object carrying a (synthetic) bake of the method, as the bake operator stores it."""
-    mesh = bpy.data.meshes.new("Benchmark")
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", positions.astype(np.float32).ravel())
-    mesh.loops.add(3 * len(triangles))
-    mesh.loops.foreach_set("vertex_index", triangles.ravel())
-    mesh.polygons.add(len(triangles))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(triangles), 3, dtype=np.int32))
-    if bpy.app.version < (4, 0, 0):
-        mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, dtype=np.int32))
-    mesh.update(calc_edges=True)
-    result = synthetic_result(method, normals, real_counts)
+    mesh = package.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
+                                       np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
+    result = synthetic_result(package, method, normals, real_counts)
     floats = package.attributes.write(mesh, normals, result)
     mesh["sd_bake"] = {"method": method, "lobe": "lambert", "exponent": 1.0, "light_order": 4,
                        "visibility_order": 2, "rays": 0, "seed": 0, "floats_per_vertex": floats,
@@ -199,7 +186,7 @@ def main():
     real_counts = design_node_counts_of_a_real_bake(package, scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     view = package.drawing.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
-    uniform = gpu.shader.from_builtin('3D_UNIFORM_COLOR' if bpy.app.version < (3, 5, 0) else 'UNIFORM_COLOR')
+    uniform = package.preview.uniform_color_shader()
     from mathutils import Matrix
     projection = Matrix(view.view_projection.tolist())
 
@@ -237,37 +224,38 @@ def main():
         t_uniform = time_frames(draw_uniform, opts["frames"])
         print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
               % (len(positions), 1e3 * t_uniform))
-        print("%-34s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        print("%-44s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
         settings = scene.sd_lighting
         times = {}
-        for method in package.methods.METHODS:
+        for method in package.utils.methods.METHODS:
             obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
             floats = obj["sd_bake"]["floats_per_vertex"]
-            textures = (False, True) if method.id in package.gpu_shading.LIGHT_TEXTURE_METHODS else (False,)
+            textures = (False, True) if method.band_limited_texture else (False,)
             for texture in textures:
-                settings.light_texture = texture
+                settings.band_limited_texture = texture
                 t = time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
                                 opts["frames"])
                 times[method.id, texture] = t
-                label = method.label + (", L~ texture" if texture else "")
-                print("%-34s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
-            settings.light_texture = False
+                label = method.label + (", band-limited texture" if texture else "")
+                print("%-44s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
+            settings.band_limited_texture = False
             remove_object(package, obj)
         del batch
-        width, height = package.gpu_shading.light_texture_size(4)
+        width, height = package.utils.shader_variant.band_limited_texture_size(4)
         print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
-              "L~ texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
-        print("%-34s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
-        labels = {m.id: m.label for m in package.methods.METHODS}
+              "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
+        print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
+        methods = package.utils.methods
         for method, texture in (("msd_visibility", False), ("msd_visibility", True),
                                 ("msd_lobe", False), ("msd_lobe", True),
                                 ("prt_matrix", False), ("prt_gaunt", False)):
             if (method, texture) not in times:
                 continue
             t = times[method, texture]
-            label = labels[method] + ((", L~ texture" if texture else ", L~ SH sum")
-                                      if method in package.gpu_shading.LIGHT_TEXTURE_METHODS else "")
-            print("%-34s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
+            label = methods.get(method).label + (
+                (", band-limited texture" if texture else ", L~ SH sum")
+                if methods.get(method).band_limited_texture else "")
+            print("%-44s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
                                                   t / times["prt_gaunt", False]), flush=True)
     return 0
 

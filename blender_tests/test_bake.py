@@ -60,7 +60,7 @@ def main():
     names = sorted(a.name for a in baked.attributes if a.name.startswith("sd_"))
     design_names = [n for n in names if n.startswith("sd_design_")]
     checks.check("sd_normal" in names and "sd_ambient_occlusion" in names and design_names and
-                 not any(n.startswith(("sd_visibility", "sd_matrix", "sd_transfer")) for n in names),
+                 not any(n.startswith(("sd_visibility", "sd_product_matrix", "sd_transfer")) for n in names),
                  "MSD 2.2 stores normal, AO and designs only", ", ".join(names[:6]) + "...")
     for name in ("sd_normal", "sd_ambient_occlusion", "sd_design_000"):
         attribute = baked.attributes[name]

@@ -6,9 +6,9 @@ with sdnative.shade on the same stored (float32) data, the same view, environmen
 g R (a rotated world Mapping node and a rotated, scaled object). Passes when
 max |gpu - cpu| / max |cpu| <= 1e-3 for every method (float32 on the GPU vs float64 on the CPU).
 
-The MSD methods (12), (13) are also checked with the light-texture option (L~ looked up in the
-band-limited equirect texture, bilinear, instead of its SH sum) against the same exact
-sdnative.shade, with TEXTURE_TOLERANCE: the texture's own interpolation error, measured pointwise
+The methods that can read it (MSD 12, 13) are also checked with the band-limited texture option
+(L~ looked up in the band-limited equirect texture, bilinear, instead of its SH sum) against the
+same exact sdnative.shade, with TEXTURE_TOLERANCE: the texture's own interpolation error, measured pointwise
 as max |bilinear - L~| / max |L~| over 2e5 directions at the chosen size (64 (s+1) x 32 (s+1),
 at least 256 x 128), is 4.3e-4 at s = 4, 4.7e-4 at s = 6, 4.8e-4 at s = 8 (forest.exr); B is a
 weighted average of L~ at the nodes; measured on B here: 1.3e-4 .. 2.3e-4 at s = 4, 6 and
@@ -83,9 +83,9 @@ def main():
                                        "" if material == "LAMBERT" else " %g" % sigma, s, sv)
         if not checks.check(result == {'FINISHED'}, "bake " + name):
             continue
-        textures = (False, True) if method in package.gpu_shading.LIGHT_TEXTURE_METHODS else (False,)
+        textures = (False, True) if package.utils.methods.get(method).band_limited_texture else (False,)
         for texture in textures:
-            settings.light_texture = texture
+            settings.band_limited_texture = texture
             worst = 0.0
             for obj in (ball, ground):
                 cpu = drawing.cpu_reference(scene, obj, view)
@@ -99,9 +99,9 @@ def main():
                                  "GPU = CPU: " + label,
                                  "max rel %.2e (per-vertex rel %.2e), |B| max %.3g" % (
                                      relative, per_vertex, abs(cpu).max()))
-            table.append((name + (" texture %dx%d" % package.gpu_shading.light_texture_size(s)
+            table.append((name + (" texture %dx%d" % package.utils.shader_variant.band_limited_texture_size(s)
                                   if texture else ""), worst))
-        settings.light_texture = False
+        settings.band_limited_texture = False
     print("\nGPU vs CPU, max |gpu - cpu| / max |cpu| over both objects and both paths:")
     for name, worst in table:
         print("  %-56s %.2e" % (name, worst))

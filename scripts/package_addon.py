@@ -8,7 +8,7 @@ the native module sdnative.
 Layout (one zip for both install paths: Preferences > Add-ons > Install on Blender 3.4 - 4.x via
 bl_info, and Get Extensions > Install from Disk on 4.2+ via blender_manifest.toml):
 
-    sd_lighting/__init__.py, *.py, blender_manifest.toml
+    sd_lighting/__init__.py, *.py, utils/*.py, blender_manifest.toml
     sd_lighting/shaders/sd_shading_lib.glsl, sd_shading_vert.glsl, sd_shading_frag.glsl
     sd_lighting/sdnative.cpython-311-x86_64-linux-gnu.so
 """
@@ -33,10 +33,12 @@ def main():
         sys.exit("package_addon: native module not found: %s" % args.native)
 
     entries = []
-    for name in sorted(os.listdir(package)):
-        path = os.path.join(package, name)
-        if os.path.isfile(path) and (name.endswith(".py") or name == "blender_manifest.toml"):
-            entries.append((path, "sd_lighting/" + name))
+    for directory, subdirectories, names in os.walk(package):
+        subdirectories[:] = sorted(d for d in subdirectories if d != "__pycache__")
+        for name in sorted(names):
+            if name.endswith(".py") or name == "blender_manifest.toml":
+                path = os.path.join(directory, name)
+                entries.append((path, "sd_lighting/" + os.path.relpath(path, package).replace(os.sep, "/")))
     for name in sorted(os.listdir(shaders)):
         if name.endswith(".glsl"):
             entries.append((os.path.join(shaders, name), "sd_lighting/shaders/" + name))

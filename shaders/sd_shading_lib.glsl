@@ -1,6 +1,6 @@
 /* sd-lighting: the shading formulas of the method of spherical designs (MSD) and of PRT, in GLSL.
  *
- * This file is the GPU twin of native/src/shading.cpp (sdnative.shade): every function below
+ * This file is the GPU twin of native/src/shading/shading.cpp (sdnative.shade): every function below
  * follows the CPU evaluator step by step, so that the viewport agrees with it to float32 rounding.
  * Equation numbers are the seed's (msd-notes.md).
  *
@@ -9,8 +9,8 @@
  * x -> L(g R x), with g the environment rotation and R the rotation part of the object's matrix
  * (rotated on the CPU once per frame and per object).
  *
- * The shader is specialised with defines (see addon/sd_lighting/gpu_shading.py); exactly one
- * SD_METHOD_* is defined:
+ * The shader is specialised with defines (addon/sd_lighting/utils/shader_variant.py, from the
+ * method table utils/methods.py); exactly one SD_METHOD_* is defined:
  *   SD_METHOD_UNSHADOWED         sum_l w_l sum_m L_lm y_lm(a)                 (V = 1)
  *   SD_METHOD_AMBIENT_OCCLUSION  AO x unshadowed
  *   SD_METHOD_PRT_DIFFUSE        eq. (2): sum_i L_i T_i
@@ -27,18 +27,19 @@
  *   SD_SH_DIAGONAL, SD_SH_A, SD_SH_B, SD_SH_TABLE_SIZE   its recurrence constants (see below)
  *   SD_LOBE_VEC4S        vec4s holding the Funk-Hecke factors w_l (four per vec4)
  *   SD_LOBE_DESIGN_SIZE  nodes of the lobe design (eq. 12)
- *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none)
+ *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none); for eq. (13) the nodes
+ *                        of the vertex's design of V
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
- *   SD_DESIGN_TEXELS     texels (nodes) of a vertex's V design (eq. 13)
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
- *   SD_LIGHT_TEXTURE     (MSD 12, 13 only) L~ is looked up in the band-limited equirect texture
- *                        sd_light_texture (SD_LIGHT_TEXTURE_WIDTH x _HEIGHT, unrotated L~) at
- *                        g R x (sd.light_rotation) instead of summed from sd.light[]
+ *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
+ *                        texture sd_band_limited_texture (SD_BAND_LIMITED_TEXTURE_WIDTH x _HEIGHT,
+ *                        unrotated L~) at g R x (sd.local_to_environment) instead of summed from
+ *                        sd.light[]
  *
  * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
- * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture (2^SD_TEXTURE_WIDTH_LOG2
- * texels wide); they are the bake's
- * FLOAT_COLOR attributes in order (see addon/sd_lighting/attributes.py).
+ * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture
+ * (2^SD_TEXTURE_WIDTH_LOG2 texels wide); they are the method's stored array, the bake's
+ * FLOAT_COLOR attributes in order (addon/sd_lighting/utils/bake_data.py).
  *
  * Metal-safe: explicit float literals, no implicit int/float conversions.
  */
@@ -53,8 +54,8 @@
  *     a_lm = sqrt((2l-1)(2l+1) / ((l-m)(l+m))),
  *     b_lm = sqrt((2l+1)(l+m-1)(l-m-1) / ((l-m)(l+m)(2l-3)))
  *   y_l,+m = Q_lm Re (x + i y)^m,  y_l,-m = Q_lm Im (x + i y)^m.
- * The constants come as defines (comma-separated, computed in float64 by gpu_shading.py); the
- * a/b tables are indexed l (l + 1) / 2 + m.
+ * The constants come as defines (comma-separated, the float64 values of
+ * sdnative.sh_recurrence_constants); the a/b tables are indexed l (l + 1) / 2 + m.
  * ------------------------------------------------------------------------------------------- */
 #ifdef SD_BASIS_ORDER
 const float sd_sh_diagonal[SD_BASIS_ORDER + 1] = float[SD_BASIS_ORDER + 1](SD_SH_DIAGONAL);
@@ -65,7 +66,7 @@ const float sd_sh_b[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_B);
  * recurrences below compute L~(d) = sum_i L_i y_i(d) (order SD_BASIS_ORDER = s), summed while the
  * basis is generated, without a basis array (faster where arrays spill). Otherwise they fill the
  * basis y_i(d). */
-#  if defined(SD_METHOD_MSD_VISIBILITY) && !defined(SD_LIGHT_TEXTURE)
+#  if defined(SD_METHOD_MSD_VISIBILITY) && !defined(SD_BAND_LIMITED_TEXTURE)
 #    define SD_SH_SUM
 vec3 sd_light_at(vec3 d)
 #  else
@@ -113,24 +114,24 @@ void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
 }
 #endif
 
-#ifdef SD_LIGHT_TEXTURE
-/* Texel (i, j) of the band-limited environment texture (rows bottom-first: j = 0 at the south
+#ifdef SD_BAND_LIMITED_TEXTURE
+/* Texel (i, j) of the band-limited texture (rows bottom-first: j = 0 at the south
  * pole), wrapped in u (the seam) and continued across the poles: the virtual row past a pole is
  * the edge row half a turn round (colatitude -h/2 at phi is +h/2 at phi + pi). */
-vec3 sd_light_texel(int i, int j)
+vec3 sd_band_limited_texel(int i, int j)
 {
-  if (j < 0 || j >= SD_LIGHT_TEXTURE_HEIGHT) {
-    j = (j < 0) ? 0 : SD_LIGHT_TEXTURE_HEIGHT - 1;
-    i += SD_LIGHT_TEXTURE_WIDTH / 2;
+  if (j < 0 || j >= SD_BAND_LIMITED_TEXTURE_HEIGHT) {
+    j = (j < 0) ? 0 : SD_BAND_LIMITED_TEXTURE_HEIGHT - 1;
+    i += SD_BAND_LIMITED_TEXTURE_WIDTH / 2;
   }
   /* i is in [-1, 3 W / 2] here; no % (undefined for negative operands) */
   if (i < 0) {
-    i += SD_LIGHT_TEXTURE_WIDTH;
+    i += SD_BAND_LIMITED_TEXTURE_WIDTH;
   }
-  else if (i >= SD_LIGHT_TEXTURE_WIDTH) {
-    i -= SD_LIGHT_TEXTURE_WIDTH;
+  else if (i >= SD_BAND_LIMITED_TEXTURE_WIDTH) {
+    i -= SD_BAND_LIMITED_TEXTURE_WIDTH;
   }
-  return texelFetch(sd_light_texture, ivec2(i, j), 0).rgb;
+  return texelFetch(sd_band_limited_texture, ivec2(i, j), 0).rgb;
 }
 
 /* L~(g R d) from the texture of the unrotated L~ (Blender's equirect orientation: u = 0.5 -
@@ -139,19 +140,19 @@ vec3 sd_light_texel(int i, int j)
  * the poles whatever the sampler state). */
 vec3 sd_light_at(vec3 d)
 {
-  vec3 e = normalize(mat3(sd.light_rotation) * d);
+  vec3 e = normalize(mat3(sd.local_to_environment) * d);
   float u = 0.5 - atan(e.y, e.x) * 0.15915494309189535;
   float v = 1.0 - acos(clamp(e.z, -1.0, 1.0)) * 0.3183098861837907;
-  float x = u * float(SD_LIGHT_TEXTURE_WIDTH) - 0.5;
-  float y = v * float(SD_LIGHT_TEXTURE_HEIGHT) - 0.5;
+  float x = u * float(SD_BAND_LIMITED_TEXTURE_WIDTH) - 0.5;
+  float y = v * float(SD_BAND_LIMITED_TEXTURE_HEIGHT) - 0.5;
   float x0 = floor(x);
   float y0 = floor(y);
   float fx = x - x0;
   float fy = y - y0;
   int i = int(x0);
   int j = int(y0);
-  vec3 bottom = mix(sd_light_texel(i, j), sd_light_texel(i + 1, j), fx);
-  vec3 top = mix(sd_light_texel(i, j + 1), sd_light_texel(i + 1, j + 1), fx);
+  vec3 bottom = mix(sd_band_limited_texel(i, j), sd_band_limited_texel(i + 1, j), fx);
+  vec3 top = mix(sd_band_limited_texel(i, j + 1), sd_band_limited_texel(i + 1, j + 1), fx);
   return mix(bottom, top, fy);
 }
 
@@ -163,7 +164,7 @@ float sd_lobe_factor(int l)
   return sd.lobe[l / 4][l % 4];
 }
 
-#if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT) && !defined(SD_LIGHT_TEXTURE)
+#if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT) && !defined(SD_BAND_LIMITED_TEXTURE)
 /* L~(x) = sum_i L_i y_i(x) for the rotated environment, given the basis at x. */
 vec3 sd_light_sum(float y[SD_BASIS_COUNT])
 {
@@ -326,7 +327,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
     for (int j = 0; j < SD_VIS_COUNT; j++) {
       v_tilde += v[j] * y[j];
     }
-#  ifdef SD_LIGHT_TEXTURE
+#  ifdef SD_BAND_LIMITED_TEXTURE
     rgb += (node.w * v_tilde) * sd_light_at(x);
 #  else
     rgb += (node.w * v_tilde) * sd_light_sum(y);
@@ -335,7 +336,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 
 #elif defined(SD_METHOD_MSD_VISIBILITY)
   /* Eq. (13), Theorem 2.2: the vertex's design of V, L~ and the truncated lobe at its nodes. */
-  for (int nu = 0; nu < SD_DESIGN_TEXELS; nu++) {
+  for (int nu = 0; nu < SD_DATA_STRIDE; nu++) {
     vec4 node = sd_vertex_texel(p, nu); /* x, y, z, lambda; lambda = 0 pads after the last node */
     if (node.w <= 0.0) {
       break;

@@ -11,27 +11,22 @@ A bake runs in three steps:
 3. `BakeJob.apply` (main thread, only after every object baked): for each object a new mesh
    datablock "SD <object>", a copy of the evaluated geometry carrying the results as `sd_`
    attributes (attributes.py), with a fake user so it persists; the object links it in the custom
-   property `sd_baked_mesh` and records the settings in `sd_bake`. A previous baked mesh is removed
-   only then. The object's own mesh is never modified: a cancelled or failed bake leaves the
-   file as it was.
-
-Custom property `sd_bake` (on the object and on its baked mesh):
-  method, lobe, exponent, light_order (s), visibility_order (s'), rays, seed, seconds,
-  vertices, floats_per_vertex, bytes_per_vertex, design_nodes_max, design_nodes_mean,
-  environment (the source used to choose s; the live shading uses the scene's current
-  environment), bake_id.
+   property `sd_baked_mesh` and records the settings in `sd_bake` (README.md, "Where the results
+   live", lists its keys). A previous baked mesh is removed only then. The object's own mesh is
+   never modified: a cancelled or failed bake leaves the file as it was.
 """
 
+import os
 import threading
 import time
 import uuid
 
 import numpy as np
 
-from . import attributes, environment, materials, methods, native
+from . import attributes, environment, materials, native
+from .utils import methods, transforms
+from .utils.bake_data import BAKE, BAKED_MESH
 
-BAKED_MESH = "sd_baked_mesh"
-BAKE = "sd_bake"
 MESH_PREFIX = "SD "
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
 
@@ -74,18 +69,8 @@ class Geometry:
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry, vertices in the same order."""
-        import bpy
-        mesh = bpy.data.meshes.new(name)
-        mesh.vertices.add(len(self.vertices))
-        mesh.vertices.foreach_set('co', self.vertices.astype(np.float32).ravel())
-        mesh.loops.add(len(self.loop_vertices))
-        mesh.loops.foreach_set('vertex_index', self.loop_vertices)
-        mesh.polygons.add(len(self.loop_starts))
-        mesh.polygons.foreach_set('loop_start', self.loop_starts)
-        if bpy.app.version < (4, 0, 0):  # read-only (derived from loop_start) since 4.0
-            mesh.polygons.foreach_set('loop_total', self.loop_totals)
-        mesh.update(calc_edges=True)
-        return mesh
+        return attributes.new_mesh(name, self.vertices, self.loop_vertices, self.loop_starts,
+                                   self.loop_totals)
 
 
 def _evaluated_arrays(obj, depsgraph):
@@ -100,22 +85,21 @@ def _evaluated_arrays(obj, depsgraph):
         evaluated.to_mesh_clear()
 
 
-def _occluder_triangles(obj, depsgraph, view_layer, skip):
-    """World-space triangles of a visible object: (vertices [V, 3], triangles [T, 3]) or None."""
-    if obj.type not in GEOMETRY_TYPES or obj.name in skip or not obj.visible_get(view_layer=view_layer):
+def world_triangles(obj, depsgraph, view_layer):
+    """World-space triangles of a visible object with geometry: (vertices float64 [V, 3],
+    triangles [T, 3]) or None."""
+    if obj.type not in GEOMETRY_TYPES or not obj.visible_get(view_layer=view_layer):
         return None
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
         if mesh is None or len(mesh.vertices) == 0:
             return None
-        vertices = attributes.read_positions(mesh).astype(np.float64)
         triangles = attributes.read_triangles(mesh)
         if len(triangles) == 0:
             return None
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
-        world = vertices @ matrix[:3, :3].T + matrix[:3, 3]
-        return world, triangles
+        return (transforms.transform_points(evaluated.matrix_world, attributes.read_positions(mesh)),
+                triangles)
     finally:
         evaluated.to_mesh_clear()
 
@@ -137,15 +121,7 @@ class BakeTask:
         s = self.settings
         method = methods.get(s["method"])
         kwargs = {"rays": int(s["rays"]), "seed": int(s["seed"])}
-        order, v_order = int(s["light_order"]), int(s["visibility_order"])
-        if method.needs == "visibility":
-            kwargs["visibility_order"] = v_order
-        elif method.needs == "transfer":
-            kwargs["transfer_order"] = order
-        elif method.needs == "matrix":
-            kwargs["product_orders"] = (order, v_order)
-        elif method.needs == "design":
-            kwargs["design_orders"] = (order, v_order)
+        kwargs.update(method.bake_arguments(int(s["light_order"]), int(s["visibility_order"])))
         if self.occluder_vertices is not None:
             kwargs["occluder_vertices"] = self.occluder_vertices
             kwargs["occluder_triangles"] = self.occluder_triangles
@@ -168,7 +144,7 @@ def bake_settings(scene, obj, env_source):
             raise BakeError("cannot choose s automatically: %s" % exc) from exc
     else:
         order = settings.light_order
-    v_order = settings.visibility_order if method.needs in ("visibility", "matrix", "design") else 0
+    v_order = settings.visibility_order if method.uses_visibility_order else 0
     return {
         "method": method.id, "lobe": lobe, "exponent": float(exponent),
         "light_order": int(order), "visibility_order": int(v_order),
@@ -182,21 +158,19 @@ def prepare(context, objects):
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
-    if not native.has("bake_transfer"):
-        raise BakeError("this build of sdnative has no bake_transfer: " + (native.error_message() or
-                        "rebuild the add-on"))
+    if not native.available():
+        raise BakeError(native.error_message())
     objects = [o for o in objects if o.type == 'MESH']
     if not objects:
         raise BakeError("select one or more mesh objects to bake")
     env_source = environment.source(scene)
     if env_source.kind == "file":
-        import os
         if not os.path.isfile(env_source.path):
             raise BakeError("environment file not found: %s" % env_source.path)
 
     world_occluders = {}
     for other in scene.objects:
-        tris = _occluder_triangles(other, depsgraph, view_layer, ())
+        tris = world_triangles(other, depsgraph, view_layer)
         if tris is not None:
             world_occluders[other.name] = tris
 
@@ -210,7 +184,7 @@ def prepare(context, objects):
         for name, (world, triangles) in world_occluders.items():
             if name == obj.name:
                 continue
-            verts.append(world @ to_local[:3, :3].T + to_local[:3, 3])
+            verts.append(transforms.transform_points(to_local, world))
             tris.append(triangles + base)
             base += len(world)
         occluders = (np.concatenate(verts), np.concatenate(tris).astype(np.int32)) if verts else (None, None)

@@ -11,9 +11,15 @@ management exposure); the viewport shows what a POST_VIEW handler draws with the
 only, i.e. the Standard view transform, whatever the scene's view transform is.
 """
 
+import logging
+
 import numpy as np
 
-from . import baking, environment, gpu_shading, native
+from . import attributes, baking, environment, gpu_shading, native
+from .utils import methods, transforms
+from .utils.bake_data import BAKE
+
+log = logging.getLogger(__name__)
 
 DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins over Blender's own draw
 
@@ -68,18 +74,18 @@ def clear_cache():
     _objects.clear()
 
 
-def object_data(obj, per_pixel=False, vertex_target=False, light_texture=False):
+def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False):
     """The GPU data of the object's bake (cached until the bake or the mode changes), or None."""
     mesh = baking.baked_mesh(obj)
     if mesh is None:
         return None
-    key = (mesh.name, mesh["sd_bake"].get("bake_id", ""), per_pixel, vertex_target, light_texture)
+    key = (mesh.name, mesh[BAKE].get("bake_id", ""), per_pixel, vertex_target, band_limited_texture)
     cache_key = (obj.name, vertex_target)
     cached = _objects.get(cache_key)
     if cached is not None and cached[0] == key:
         return cached[1]
     data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target,
-                                  light_texture=light_texture)
+                                  band_limited_texture=band_limited_texture)
     _objects[cache_key] = (key, data)
     return data
 
@@ -101,25 +107,26 @@ def local_light(scene, obj, order, source=None, rotation=None):
     """Coefficients of x -> L(g R x) for the object: [(s+1)^2, 3] float64; and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
-    gr = g @ gpu_shading.rotation_part(np.array(obj.matrix_world))
+    gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
     light = environment.light_coefficients(source, order)
-    return native.get().rotate_sh(light, gr.T), gr
+    return native.get().rotated_environment_sh(light, gr), gr
 
 
-def use_light_texture(scene):
-    """The scene's option: MSD (12), (13) look L~ up in a band-limited texture."""
+def use_band_limited_texture(scene):
+    """The scene's option: methods that can look L~ up in the band-limited texture do."""
     settings = getattr(scene, "sd_lighting", None)
-    return bool(settings is not None and settings.light_texture)
+    return bool(settings is not None and settings.band_limited_texture)
 
 
 def _frame(scene, obj, data, view, scale, source=None, rotation=None, **kwargs):
-    """(uniform block, environment texture or None) of one draw of the object's data."""
+    """(uniform block, band-limited texture or None) of one draw of the object's data."""
     light, gr = local_light(scene, obj, data.light_order, source, rotation)
     block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
-                             light, scale, light_rotation=gr, **kwargs)
+                             light, gr, scale, **kwargs)
     texture = None
-    if data.uses_light_texture:
-        texture = gpu_shading.environment_texture(source or environment.source(scene), data.light_order)
+    if data.uses_band_limited_texture:
+        texture = gpu_shading.band_limited_texture(source or environment.source(scene),
+                                                   data.light_order)
     return block, texture
 
 
@@ -131,9 +138,9 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
     """Draws the baked objects into the bound framebuffer with the current GPU state."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
-    light_texture = use_light_texture(scene)
+    band_limited_texture = use_band_limited_texture(scene)
     for obj in objects:
-        data = object_data(obj, per_pixel=per_pixel, light_texture=light_texture)
+        data = object_data(obj, per_pixel=per_pixel, band_limited_texture=band_limited_texture)
         if data is None:
             continue
         block, texture = _frame(scene, obj, data, view, scale, source, g, depth_bias=depth_bias)
@@ -164,7 +171,7 @@ def _draw_handler():
     except Exception as exc:  # never raise into Blender's draw loop; the panel shows it
         message = "%s: %s" % (type(exc).__name__, exc)
         if message != last_error:
-            print("sd_lighting: live shading failed:", message)
+            log.error("live shading failed: %s", message)
         last_error = message
 
 
@@ -174,29 +181,21 @@ def _draw_handler():
 def cpu_reference(scene, obj, view):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
     environment and rotation the live shading uses; exposure not applied. [N, 3]."""
-    from . import attributes
     mesh = baking.baked_mesh(obj)
-    bake = dict(mesh["sd_bake"])
+    bake = dict(mesh[BAKE])
+    method = methods.get(bake["method"])
     data = attributes.read(mesh)
+    data["visibility_order"] = int(bake["visibility_order"])
     matrix = np.array(obj.matrix_world, dtype=np.float64)
-    positions = attributes.read_positions(mesh).astype(np.float64)
-    world = positions @ matrix[:3, :3].T + matrix[:3, 3]
+    world = transforms.transform_points(matrix, attributes.read_positions(mesh))
     source = environment.source(scene)
     light = environment.light_coefficients(source, int(bake["light_order"]))
     g = environment.rotation_matrix(scene)
-    r = gpu_shading.rotation_part(matrix)
-    kwargs = dict(views=view.view_directions(world, r.T), rotation=g @ r, lobe=bake["lobe"],
-                  exponent=float(bake["exponent"]))
-    method = bake["method"]
-    for key in ("ambient_occlusion", "transfer", "visibility", "product_matrices",
-                "design_offsets", "design_nodes", "design_weights"):
-        if key in data:
-            kwargs[key] = data[key]
-    if method == "msd_visibility":
-        kwargs["visibility_order"] = int(bake["visibility_order"])
-    if method in ("unshadowed", "prt_diffuse", "prt_matrix", "msd_visibility"):
-        kwargs.pop("visibility", None)
-    return native.get().shade(method, light, data["normals"], **kwargs)
+    r = transforms.rotation_part(matrix)
+    kwargs = {key: data[key] for key in method.shade_inputs}
+    return native.get().shade(method.id, light, data["normals"],
+                              views=view.view_directions(world, r.T), rotation=g @ r,
+                              lobe=bake["lobe"], exponent=float(bake["exponent"]), **kwargs)
 
 
 def gpu_vertex_values(scene, obj, view, per_pixel=False):
@@ -204,7 +203,7 @@ def gpu_vertex_values(scene, obj, view, per_pixel=False):
     as one pixel of an RGBA32F target and read back. Needs a GPU context. [N, 3] float32."""
     import gpu
     data = object_data(obj, per_pixel=per_pixel, vertex_target=True,
-                       light_texture=use_light_texture(scene))
+                       band_limited_texture=use_band_limited_texture(scene))
     n = data.vertex_count
     width = min(n, 1024)
     height = (n + width - 1) // width

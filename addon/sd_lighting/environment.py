@@ -7,10 +7,9 @@ Source (the scene's settings, `environment_source`):
 - 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
 
 Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
-environment: for vector types Point, Vector and Normal the texture is looked up at R d, so the
-world is L(R d) and g = R; for type Texture g = R^T (R: the node's Euler rotation, XYZ order;
-location and scale are ignored). Without a Mapping node (or for 'FILE'), g is the settings'
-own `environment_rotation`. The panel's rotation slider writes the Mapping node when there is one.
+environment (utils/transforms.mapping_rotation; location and scale are ignored). Without a Mapping
+node (or for 'FILE'), g is the settings' own `environment_rotation`. The panel's rotation slider
+writes the Mapping node when there is one.
 
 SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
 draw handler asks for them every frame.
@@ -21,6 +20,7 @@ import os
 import numpy as np
 
 from . import native
+from .utils import transforms
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
@@ -82,26 +82,13 @@ def mapping_node(scene):
     return world_nodes(scene.world)[2]
 
 
-def euler_xyz(angles):
-    """The rotation matrix of Blender's XYZ Euler angles, Rz Ry Rx, in float64 (mathutils works
-    in float32, not orthogonal enough for the SH rotation's 1e-9 check)."""
-    x, y, z = (float(a) for a in angles)
-    cx, sx, cy, sy, cz, sz = np.cos(x), np.sin(x), np.cos(y), np.sin(y), np.cos(z), np.sin(z)
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ ry @ rx
-
-
 def rotation_matrix(scene):
     """g as a float64 [3, 3] numpy array (eq. 1: the scene is lit by L(g x))."""
     mapping = mapping_node(scene)
     if mapping is not None:
-        g = euler_xyz(mapping.inputs["Rotation"].default_value)
-        if mapping.vector_type == 'TEXTURE':
-            g = g.T
-        return g
-    return euler_xyz(scene.sd_lighting.environment_rotation)
+        return transforms.mapping_rotation(mapping.inputs["Rotation"].default_value,
+                                          mapping.vector_type)
+    return transforms.euler_xyz(scene.sd_lighting.environment_rotation)
 
 
 # --------------------------------------------------------------------------------------------

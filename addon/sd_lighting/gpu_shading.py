@@ -1,8 +1,5 @@
-"""The GPU side of the live shading: shader variants, and the per-object data they read.
-
-One GLSL program (shaders/sd_shading_lib.glsl, _vert.glsl, _frag.glsl) is specialised with
-defines to what an object's bake uses (method, lobe, orders, per-vertex data layout), so an object
-pays only for the effects it has. Variants are compiled on first use and cached.
+"""The GPU side of the live shading: compiled shader variants (utils/shader_variant.py), and the
+per-object data they read.
 
 What a draw reads:
 - vertex attributes `pos` and `nrm` (the baked mesh's positions and the `sd_normal` it was baked
@@ -11,41 +8,32 @@ What a draw reads:
   barycentric coordinates);
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
-  gl_VertexID (the index of an indexed batch) - the bake's FLOAT_COLOR attributes in order;
-- the uniform block `sd` (struct SdFrameData, std140): matrices, eye, exposure, the rotated
-  environment coefficients L(g R x) as vec4s, the lobe's Funk-Hecke factors and, for eq. (12),
-  the lobe design (x, y, z, lambda) - rebuilt every frame;
+  gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);
+- the uniform block `sd` (Variant.frame_fields), rebuilt every frame;
 - for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
-- with the light-texture option (MSD 12 and 13 only), the band-limited environment L~ (unrotated)
-  as an equirect RGBA32F texture `sd_light_texture`, looked up at g R x (`light_rotation` in the
-  block) instead of summing (s+1)^2 SH terms per direction.
+- with the band-limited texture option (methods that can read it), the band-limited environment
+  L~ (unrotated) as an equirect RGBA32F texture `sd_band_limited_texture`, looked up at g R x
+  instead of summing (s+1)^2 SH terms per direction.
+Variants are compiled on first use and cached.
 """
 
 import os
-from dataclasses import dataclass
 
 import numpy as np
 
-from . import attributes, methods, native
+from . import attributes, native
+from .utils import methods, transforms
+from .utils.bake_data import BAKE
+from .utils.shader_variant import (BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
+                                   TEXTURE_WIDTH, Variant, band_limited_texture_size)
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.glsl")
-TEXTURE_WIDTH_LOG2 = 12
-TEXTURE_WIDTH = 1 << TEXTURE_WIDTH_LOG2   # every data texture has this width (rows: as needed)
 
-_shaders = {}        # Variant -> GPUShader
-_gaunt_textures = {}  # (s, s') -> (GPUTexture, count)
-_lobe_designs = {}   # (lobe, exponent, degree) -> float32 [D, 4]
-_light_textures = {}  # (source key, strength, s, width, height) -> GPUTexture
-LIGHT_TEXTURE_METHODS = ("msd_lobe", "msd_visibility")   # the methods that evaluate L~ at directions
-
-
-def light_texture_size(order):
-    """Width and height of the band-limited environment texture for order s: bilinear
-    interpolation of L~_s between texel centres is then within about 5e-4 of max |L~| (measured:
-    4.3e-4 at s = 4, 4.8e-4 at s = 8, 4.6e-4 at s = 12 on forest.exr)."""
-    width = max(256, 64 * (order + 1))
-    return width, width // 2
+_shaders = {}                 # Variant -> (GPUShader, interface, create-info)
+_gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
+_lobe_designs = {}            # (lobe, exponent, degree) -> float32 [D, 4]
+_band_limited_textures = {}   # (source key, strength, s, width, height) -> GPUTexture
 
 
 def shader_directory():
@@ -65,114 +53,7 @@ def clear_cache():
     _shaders.clear()
     _gaunt_textures.clear()
     _lobe_designs.clear()
-    _light_textures.clear()
-
-
-def _glsl_floats(values):
-    return ", ".join("%.9e" % v for v in values)
-
-
-def sh_recurrence_defines(order):
-    """The constants of the SH recurrences (spherical_harmonics.cpp) up to `order`, computed in
-    float64, as GLSL float lists: SD_SH_DIAGONAL (Q_mm), SD_SH_A and SD_SH_B (a_lm, b_lm at
-    l (l + 1) / 2 + m; a_{m+1,m} = sqrt(2m+3), b_{m+1,m} = 0)."""
-    import math
-    diagonal = [1.0]
-    for m in range(1, order + 1):
-        diagonal.append(math.sqrt(3.0) if m == 1 else diagonal[-1] * math.sqrt((2.0 * m + 1.0) / (2.0 * m)))
-    size = (order + 1) * (order + 2) // 2
-    a, b = [0.0] * size, [0.0] * size
-    for l in range(order + 1):
-        for m in range(l):
-            k = l * (l + 1) // 2 + m
-            if l == m + 1:
-                a[k] = math.sqrt(2.0 * m + 3.0)
-            else:
-                a[k] = math.sqrt((2.0 * l - 1.0) * (2.0 * l + 1.0) / ((l - m) * (l + m)))
-                b[k] = math.sqrt((2.0 * l + 1.0) * (l + m - 1.0) * (l - m - 1.0) /
-                                 ((l - m) * (l + m) * (2.0 * l - 3.0)))
-    return {"SD_SH_DIAGONAL": _glsl_floats(diagonal), "SD_SH_A": _glsl_floats(a),
-            "SD_SH_B": _glsl_floats(b), "SD_SH_TABLE_SIZE": str(size)}
-
-
-@dataclass(frozen=True)
-class Variant:
-    """Everything the shader is specialised on."""
-    method: str
-    glossy: bool
-    light_order: int
-    visibility_order: int
-    data_stride: int = 0
-    lobe_design_size: int = 0
-    gaunt_count: int = 0
-    per_pixel: bool = False
-    vertex_target: bool = False
-    light_texture: tuple = ()   # (width, height) of the environment texture (MSD 12, 13), or ()
-
-    @property
-    def basis_order(self):
-        s, sv = self.light_order, self.visibility_order
-        return {"unshadowed": s, "ambient_occlusion": s, "prt_diffuse": -1, "prt_matrix": sv,
-                "prt_gaunt": s + sv, "msd_lobe": sv if self.light_texture else max(s, sv),
-                "msd_visibility": -1 if self.light_texture else s}[self.method]
-
-    @property
-    def lobe_order(self):
-        """Highest l whose Funk-Hecke factor the shader reads."""
-        s, sv = self.light_order, self.visibility_order
-        return {"unshadowed": s, "ambient_occlusion": s, "prt_diffuse": 0, "prt_matrix": sv,
-                "prt_gaunt": s + sv, "msd_lobe": 0, "msd_visibility": sv}[self.method]
-
-    @property
-    def lobe_vec4s(self):
-        return self.lobe_order // 4 + 1
-
-    def defines(self):
-        s, sv = self.light_order, self.visibility_order
-        d = {"SD_METHOD_" + self.method.upper(): "1",
-             "SD_LIGHT_COUNT": str((s + 1) ** 2),
-             "SD_VIS_ORDER": str(sv),
-             "SD_VIS_COUNT": str((sv + 1) ** 2),
-             "SD_LOBE_VEC4S": str(self.lobe_vec4s),
-             "SD_DATA_STRIDE": str(self.data_stride),
-             "SD_TEXTURE_WIDTH_LOG2": str(TEXTURE_WIDTH_LOG2)}
-        if self.basis_order >= 0:
-            d["SD_BASIS_ORDER"] = str(self.basis_order)
-            d["SD_BASIS_COUNT"] = str((self.basis_order + 1) ** 2)
-            d.update(sh_recurrence_defines(self.basis_order))
-        if self.glossy:
-            d["SD_GLOSSY"] = "1"
-        if self.method == "msd_lobe":
-            d["SD_LOBE_DESIGN_SIZE"] = str(self.lobe_design_size)
-        if self.method == "msd_visibility":
-            d["SD_DESIGN_TEXELS"] = str(self.data_stride)
-        if self.method == "prt_gaunt":
-            d["SD_GAUNT_COUNT"] = str(self.gaunt_count)
-        if self.per_pixel:
-            d["SD_PER_PIXEL"] = "1"
-        if self.vertex_target:
-            d["SD_VERTEX_TARGET"] = "1"
-        if self.light_texture:
-            d["SD_LIGHT_TEXTURE"] = "1"
-            d["SD_LIGHT_TEXTURE_WIDTH"] = str(self.light_texture[0])
-            d["SD_LIGHT_TEXTURE_HEIGHT"] = str(self.light_texture[1])
-        return d
-
-    def frame_struct(self):
-        lines = ["struct SdFrameData {",
-                 "  mat4 model;",
-                 "  mat4 view_projection;",
-                 "  mat4 world_to_local;",
-                 "  vec4 camera;",
-                 "  vec4 params;",
-                 "  vec4 light[%d];" % ((self.light_order + 1) ** 2),
-                 "  vec4 lobe[%d];" % self.lobe_vec4s]
-        if self.light_texture:
-            lines.append("  mat4 light_rotation;")
-        if self.method == "msd_lobe":
-            lines.append("  vec4 design[%d];" % self.lobe_design_size)
-        lines.append("};")
-        return "\n".join(lines) + "\n"
+    _band_limited_textures.clear()
 
 
 def shader_program(variant):
@@ -186,16 +67,12 @@ def _compile(variant):
         return compiled
     import gpu
     info = gpu.types.GPUShaderCreateInfo()
-    for name, value in variant.defines().items():
+    for name, value in variant.defines(native.get().sh_recurrence_constants).items():
         info.define(name, value)
     info.typedef_source(variant.frame_struct())
     info.uniform_buf(0, "SdFrameData", "sd")
-    if variant.data_stride > 0:
-        info.sampler(0, 'FLOAT_2D', "sd_data")
-    if variant.method == "prt_gaunt":
-        info.sampler(1, 'FLOAT_2D', "sd_gaunt")
-    if variant.light_texture:
-        info.sampler(2, 'FLOAT_2D', "sd_light_texture")
+    for slot, name in variant.samplers():
+        info.sampler(slot, 'FLOAT_2D', name)
     info.vertex_in(0, 'VEC3', "pos")
     info.vertex_in(1, 'VEC3', "nrm")
     interface = gpu.types.GPUStageInterfaceInfo("sd_interface")
@@ -218,6 +95,13 @@ def _compile(variant):
     return _shaders[variant]
 
 
+def _rgba32f(width, height, texels):
+    import gpu
+    texels = np.ascontiguousarray(texels, dtype=np.float32).ravel()
+    buffer = gpu.types.Buffer('FLOAT', texels.size, texels)
+    return gpu.types.GPUTexture((width, height), format='RGBA32F', data=buffer)
+
+
 def float_texture(texels):
     """An RGBA32F texture holding float32 [M, 4] texels row-major, TEXTURE_WIDTH wide."""
     import gpu
@@ -230,29 +114,26 @@ def float_texture(texels):
         raise ValueError("per-vertex data too large for one texture (%d texels)" % count)
     padded = np.zeros((width * height, 4), dtype=np.float32)
     padded[:len(texels)] = texels
-    buffer = gpu.types.Buffer('FLOAT', padded.size, padded.ravel())
-    return gpu.types.GPUTexture((width, height), format='RGBA32F', data=buffer)
+    return _rgba32f(width, height, padded)
 
 
-def environment_texture(source, order):
+def band_limited_texture(source, order):
     """The band-limited environment L~ of order s (unrotated, strength applied) as an RGBA32F
-    equirect texture of light_texture_size(s), Blender's orientation, rows bottom-first as GPU
-    textures hold them (v = 0 at the south pole) (cached per source and order)."""
+    equirect texture of band_limited_texture_size(s), Blender's orientation, rows bottom-first as
+    GPU textures hold them (v = 0 at the south pole) (cached per source and order)."""
     from . import environment
-    width, height = light_texture_size(order)
+    width, height = band_limited_texture_size(order)
     key = (source.key, float(source.strength), int(order), width, height)
-    texture = _light_textures.get(key)
+    texture = _band_limited_textures.get(key)
     if texture is None:
-        import gpu
         coefficients = environment.light_coefficients(source, order)
         image = np.asarray(native.get().band_limited_texture(coefficients, width, height),
                            dtype=np.float32).reshape(height, width, 3)
         texels = np.zeros((height, width, 4), dtype=np.float32)
         texels[..., :3] = image[::-1]     # sdnative's rows are top-first
         texels[..., 3] = 1.0
-        buffer = gpu.types.Buffer('FLOAT', texels.size, texels.ravel())
-        texture = gpu.types.GPUTexture((width, height), format='RGBA32F', data=buffer)
-        _light_textures[key] = texture
+        texture = _rgba32f(width, height, texels)
+        _band_limited_textures[key] = texture
     return texture
 
 
@@ -306,8 +187,8 @@ def make_batch(primitive, content, indices=None):
 class ObjectData:
     """GPU data of one baked mesh: batch, per-vertex texture, shader variant, lobe constants."""
 
-    def __init__(self, mesh, per_pixel=False, vertex_target=False, light_texture=False):
-        bake = dict(mesh["sd_bake"])
+    def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False):
+        bake = dict(mesh[BAKE])
         self.bake = bake
         self.method = methods.get(bake["method"])
         self.lobe = bake["lobe"]
@@ -317,22 +198,22 @@ class ObjectData:
         self.vertex_count = len(mesh.vertices)
         s, sv = self.light_order, self.visibility_order
 
-        texels = None
-        if self.method.id != "unshadowed":
-            texels = attributes.gpu_texels(mesh, self.method.needs)
-        stride = texels.shape[1] if texels is not None else 0
-        self.data_texture = float_texture(texels.reshape(-1, 4)) if stride else None
+        self.data_texture, stride = None, 0
+        if self.method.data is not None:
+            texels = attributes.read_texels(mesh, self.method.data)
+            stride = texels.shape[1]
+            self.data_texture = float_texture(texels.reshape(-1, 4))
         self.gaunt_texture, gaunt_count = (None, 0)
-        if self.method.id == "prt_gaunt":
+        if self.method.gaunt_table:
             self.gaunt_texture, gaunt_count = gaunt_texture(s, sv)
         self.design = None
-        if self.method.id == "msd_lobe":
+        if self.method.lobe_design:
             self.design = lobe_design(self.lobe, self.exponent, s + sv)
-        self.uses_light_texture = bool(light_texture) and self.method.id in LIGHT_TEXTURE_METHODS
-        self.variant = Variant(self.method.id, self.lobe == "phong", s, sv, stride,
+        self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
+        self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride,
                                len(self.design) if self.design is not None else 0, gaunt_count,
                                per_pixel, vertex_target,
-                               light_texture_size(s) if self.uses_light_texture else ())
+                               band_limited_texture_size(s) if self.uses_band_limited_texture else ())
         self.shader = shader_program(self.variant)
         factors = native.get().zonal_coefficients(self.lobe, self.exponent, self.variant.lobe_order)
         self.lobe_factors = np.zeros(4 * self.variant.lobe_vec4s, dtype=np.float32)
@@ -360,38 +241,25 @@ class ObjectData:
                 self.batch = make_batch('TRIS', {"pos": positions, "nrm": normals}, indices=triangles)
         self.ubo = None
 
-    def frame_block(self, model, view_projection, camera, light, exposure_scale, target=(1, 1),
-                    depth_bias=0.0, light_rotation=None):
+    def frame_block(self, model, view_projection, camera, light, local_to_environment,
+                    exposure_scale, target=(1, 1), depth_bias=0.0):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
-        [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); light_rotation: g R, for
-        the light-texture variants (the texture holds the unrotated L~, looked up at g R x)."""
-        model = np.asarray(model, dtype=np.float64)
-        rotation = rotation_part(model)
-        world_to_local = np.eye(4)
-        world_to_local[:3, :3] = rotation.T
-        parts = [
-            model.T.ravel(),
-            np.asarray(view_projection, dtype=np.float64).T.ravel(),
-            world_to_local.T.ravel(),
-            np.asarray(camera, dtype=np.float64),
-            np.array([exposure_scale, target[0], target[1], depth_bias]),
-        ]
-        light4 = np.zeros((len(light), 4))
-        light4[:, :3] = light
-        parts += [light4.ravel(), self.lobe_factors]
-        if self.variant.light_texture:
-            rotation4 = np.eye(4)
-            if light_rotation is not None:
-                rotation4[:3, :3] = light_rotation
-            parts.append(rotation4.T.ravel())
+        [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
+        for the band-limited texture (it holds the unrotated L~, looked up at g R x)."""
+        values = {"model": model, "view_projection": view_projection,
+                  "world_to_local": transforms.rotation_part(model).T, "camera": camera,
+                  "params": (exposure_scale, target[0], target[1], depth_bias),
+                  "light": light, "lobe": self.lobe_factors}
+        if self.variant.band_limited_texture:
+            values["local_to_environment"] = local_to_environment
         if self.design is not None:
-            parts.append(self.design.ravel())
-        return np.concatenate(parts).astype(np.float32)
+            values["design"] = self.design
+        return self.variant.frame_block(values)
 
-    def draw(self, block, light_texture=None):
+    def draw(self, block, band_limited_texture=None):
         import gpu
         buffer = gpu.types.Buffer('FLOAT', block.size, block)
         if self.ubo is None:
@@ -400,21 +268,8 @@ class ObjectData:
             self.ubo.update(buffer)
         self.shader.bind()
         self.shader.uniform_block("sd", self.ubo)
-        if self.data_texture is not None:
-            self.shader.uniform_sampler("sd_data", self.data_texture)
-        if self.gaunt_texture is not None:
-            self.shader.uniform_sampler("sd_gaunt", self.gaunt_texture)
-        if self.variant.light_texture:
-            self.shader.uniform_sampler("sd_light_texture", light_texture)
+        textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
+                    BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture}
+        for _, name in self.variant.samplers():
+            self.shader.uniform_sampler(name, textures[name])
         self.batch.draw(self.shader)
-
-
-def rotation_part(matrix):
-    """The rotation of a 4x4 affine matrix (polar decomposition of its 3x3 part)."""
-    u, _, vt = np.linalg.svd(np.asarray(matrix, dtype=np.float64)[:3, :3])
-    r = u @ vt
-    if np.linalg.det(r) < 0:
-        u[:, -1] = -u[:, -1]
-        r = u @ vt
-    return r
-

@@ -1,23 +1,8 @@
-"""The BRDF lobe of an object: Lambert, or Phong with exponent sigma (msd-notes, "The problem").
-
-By default the lobe is read from the object's first material with a Principled BSDF:
-- a rough dielectric (roughness >= 0.5 and metallic < 0.5) is Lambert;
-- otherwise it is Phong with sigma = 1 / (2 alpha^2) - 1/2, alpha = roughness^2 (Blender's
-  GGX alpha). That is the Beckmann-equivalent Blinn-Phong exponent 2/alpha^2 - 2 divided by 4, the
-  usual factor between a half-vector lobe and a lobe around the mirrored view; clamped to
-  [1, 1000] (roughness 0.5 -> 7.5, 0.3 -> 61, 0.2 -> 312).
-An object without such a material is Lambert.
+"""The BRDF lobe of an object: read from its first material with a Principled BSDF (the rule is
+utils/lobes.py), or forced by the panel's settings. An object without such a material is Lambert.
 """
 
-MIN_EXPONENT = 1.0
-MAX_EXPONENT = 1000.0
-
-
-def exponent_from_roughness(roughness):
-    """Phong sigma for a Principled roughness."""
-    alpha = max(float(roughness), 1e-3) ** 2
-    sigma = 1.0 / (2.0 * alpha * alpha) - 0.5
-    return min(max(sigma, MIN_EXPONENT), MAX_EXPONENT)
+from .utils import lobes
 
 
 def _principled(material):
@@ -42,13 +27,9 @@ def lobe_from_material(obj):
         node = _principled(slot.material)
         if node is None:
             continue
-        roughness = _input_value(node, "Roughness", 0.5)
-        metallic = _input_value(node, "Metallic", 0.0)
-        if roughness >= 0.5 and metallic < 0.5:
-            return ("lambert", 1.0), "%s: rough dielectric -> Lambert" % slot.material.name
-        sigma = exponent_from_roughness(roughness)
-        return ("phong", sigma), "%s: roughness %.2f -> Phong sigma %.1f" % (
-            slot.material.name, roughness, sigma)
+        lobe, why = lobes.lobe_from_principled(_input_value(node, "Roughness", 0.5),
+                                               _input_value(node, "Metallic", 0.0))
+        return lobe, "%s: %s" % (slot.material.name, why)
     return ("lambert", 1.0), "no Principled BSDF -> Lambert"
 
 

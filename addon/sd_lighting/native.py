@@ -71,11 +71,3 @@ def error_message():
         return ""
     except ImportError as exc:
         return str(exc)
-
-
-def has(name):
-    """True when sdnative provides the function `name` (parts of it are still being written)."""
-    try:
-        return hasattr(get(), name)
-    except ImportError:
-        return False

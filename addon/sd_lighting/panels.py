@@ -2,7 +2,8 @@
 
 import bpy
 
-from . import baking, drawing, environment, materials, methods, native, operators
+from . import baking, drawing, environment, materials, native, operators
+from .utils import methods
 
 
 class SD_PT_lighting(bpy.types.Panel):
@@ -80,7 +81,7 @@ class SD_PT_lighting(bpy.types.Panel):
         row = box.row()
         row.prop(settings, "live_shading")
         row.prop(settings, "per_pixel")
-        box.prop(settings, "light_texture")
+        box.prop(settings, "band_limited_texture")
         if drawing.last_error:
             box.label(text=drawing.last_error[:80], icon='ERROR')
         box.operator("sd_lighting.render_preview", icon='IMAGE_DATA')

@@ -15,41 +15,33 @@ import zlib
 
 import numpy as np
 
-from . import attributes, drawing, gpu_context
+from . import baking, drawing, gpu_context
 
 OTHER_MESH_GREY = 0.18
 
 
-def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
-    """(shader, batch, model matrix) of the other visible meshes, for a grey depth-tested draw."""
+def uniform_color_shader():
+    """Blender's built-in uniform-colour shader (renamed in 3.5)."""
+    import bpy
     import gpu
+    return gpu.shader.from_builtin('3D_UNIFORM_COLOR' if bpy.app.version < (3, 5, 0)
+                                   else 'UNIFORM_COLOR')
+
+
+def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
+    """(shader, batch) of the other visible meshes, for a grey depth-tested draw."""
     from gpu_extras.batch import batch_for_shader
-    name = '3D_UNIFORM_COLOR' if _blender_version() < (3, 5, 0) else 'UNIFORM_COLOR'
-    shader = gpu.shader.from_builtin(name)
+    shader = uniform_color_shader()
     out = []
     for obj in scene.objects:
-        if obj.name in exclude or obj.type not in {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}:
+        if obj.name in exclude:
             continue
-        if not obj.visible_get(view_layer=view_layer):
-            continue
-        evaluated = obj.evaluated_get(depsgraph)
-        mesh = evaluated.to_mesh()
-        try:
-            if mesh is None or len(mesh.vertices) == 0:
-                continue
-            positions = attributes.read_positions(mesh)
-            triangles = attributes.read_triangles(mesh)
-            matrix = np.array(evaluated.matrix_world, dtype=np.float64)
-            world = (positions @ matrix[:3, :3].T + matrix[:3, 3]).astype(np.float32)
-            out.append((shader, batch_for_shader(shader, 'TRIS', {"pos": world}, indices=triangles)))
-        finally:
-            evaluated.to_mesh_clear()
+        triangles = baking.world_triangles(obj, depsgraph, view_layer)
+        if triangles is not None:
+            world, indices = triangles
+            out.append((shader, batch_for_shader(shader, 'TRIS', {"pos": world.astype(np.float32)},
+                                                 indices=indices)))
     return out
-
-
-def _blender_version():
-    import bpy
-    return tuple(bpy.app.version)
 
 
 def render(scene, depsgraph, view_layer, width, height, camera=None):

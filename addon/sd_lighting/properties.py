@@ -1,13 +1,29 @@
 """The add-on's settings, per scene (`scene.sd_lighting`): what the next bake uses and how the
 live shading draws. What a bake actually used is stored per object (custom property `sd_bake`).
+Upper limits come from sdnative (utils/limits.py), read when the add-on registers.
 """
 
+import logging
 
 import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        IntProperty, PointerProperty, StringProperty)
 
-from . import environment, methods
+from . import environment, native
+from .utils import limits, methods
+
+log = logging.getLogger(__name__)
+
+
+def _limits():
+    try:
+        return limits.from_module(native.get())
+    except (ImportError, AttributeError) as exc:   # AttributeError: an sdnative of another version
+        log.warning("settings without upper limits: %s", exc)
+        return limits.Limits()
+
+
+LIMITS = _limits()
 
 
 def _redraw(self, context):
@@ -53,11 +69,14 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Target error", default=0.05, min=0.001, max=1.0, subtype='FACTOR',
         description="Relative RMS error of the lobe-filtered environment that automatic s aims for")
     max_automatic_order: IntProperty(
-        name="Max s", default=8, min=1, max=16, description="Largest order automatic s may choose")
+        name="Max s", default=8, min=1, **limits.maximum(LIMITS.light_order),
+        description="Largest order automatic s may choose")
     light_order: IntProperty(
-        name="s", default=4, min=0, max=16, description="SH order of the environment L~")
+        name="s", default=4, min=0, **limits.maximum(LIMITS.light_order),
+        description="SH order of the environment L~")
     visibility_order: IntProperty(
-        name="s'", default=2, min=0, max=8, description="SH order of the visibility V~")
+        name="s'", default=2, min=0, **limits.maximum(LIMITS.visibility_order),
+        description="SH order of the visibility V~")
 
     material_source: EnumProperty(
         name="Material",
@@ -67,11 +86,12 @@ class SceneSettings(bpy.types.PropertyGroup):
                ('PHONG', "Phong", "Glossy lobe around the mirrored view, exponent sigma")],
         default='MATERIAL')
     phong_exponent: FloatProperty(
-        name="Sigma", default=8.0, min=0.0, max=10000.0, soft_max=200.0,
+        name="Sigma", default=8.0, min=0.0, soft_max=200.0, **limits.maximum(LIMITS.phong_exponent),
         description="Phong exponent sigma")
 
     method: EnumProperty(name="Method", items=methods.enum_items(), default='msd_visibility')
-    rays: IntProperty(name="Rays", default=256, min=16, max=65536,
+    rays: IntProperty(name="Rays", default=256, min=16, soft_max=65536,
+                      **limits.maximum(LIMITS.rays),
                       description="Rays traced per vertex for the visibility")
     seed: IntProperty(name="Seed", default=0, min=0, description="Seed of the ray directions")
 
@@ -82,11 +102,11 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Per Pixel", default=False, update=_redraw,
         description="Evaluate the formula per pixel (the pixel's normal and view, the triangle's "
                     "per-vertex data blended) instead of per vertex (the seed's way)")
-    light_texture: BoolProperty(
-        name="Environment Texture", default=False, update=_redraw,
-        description="MSD (12), (13): look the environment L~ up in a band-limited equirect float "
-                    "texture (bilinear, about 5e-4 relative) instead of summing its (s+1)^2 SH "
-                    "terms at every design node (exact)")
+    band_limited_texture: BoolProperty(
+        name="Band-Limited Texture", default=False, update=_redraw,
+        description=", ".join(m.label for m in methods.METHODS if m.band_limited_texture) +
+        ": look the environment L~ up in a band-limited equirect float texture (bilinear, about "
+        "5e-4 relative) instead of summing its (s+1)^2 SH terms at every node (exact)")
 
 
 CLASSES = (SceneSettings,)
@@ -102,5 +122,3 @@ def unregister():
     del bpy.types.Scene.sd_lighting
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)
-
-

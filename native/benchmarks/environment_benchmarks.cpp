@@ -5,6 +5,7 @@
 // the sampler's tables. After the Google Benchmark table, prints the 1 → 2 thread speedup of the
 // projection (median of 7 runs each).
 #include "sdlighting/environment.h"
+#include "sdlighting/environment_sampler.h"
 
 #include <benchmark/benchmark.h>
 

@@ -8,6 +8,7 @@
 // Usage: visibility_benchmarks [icosphere levels = 4] [rays = 1024] [repeats = 3] [design = 1]
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/visibility.h"
+#include "sdtesting/meshes.h"
 
 #include <embree3/rtcore.h>
 
@@ -19,7 +20,6 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -29,51 +29,7 @@
 namespace {
 
 using sd::Triangle;
-
-struct Mesh {
-  std::vector<glm::dvec3> vertices, normals;
-  std::vector<Triangle> triangles;
-};
-
-Mesh bumpy_sphere(int levels) {
-  const double t = 0.5 * (1.0 + std::sqrt(5.0));
-  Mesh m;
-  for (const auto& v : {glm::dvec3(-1, t, 0), glm::dvec3(1, t, 0), glm::dvec3(-1, -t, 0), glm::dvec3(1, -t, 0),
-                        glm::dvec3(0, -1, t), glm::dvec3(0, 1, t), glm::dvec3(0, -1, -t), glm::dvec3(0, 1, -t),
-                        glm::dvec3(t, 0, -1), glm::dvec3(t, 0, 1), glm::dvec3(-t, 0, -1), glm::dvec3(-t, 0, 1)}) {
-    m.vertices.push_back(glm::normalize(v));
-  }
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (int level = 0; level < levels; ++level) {
-    std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> cache;
-    auto mid = [&](std::int64_t a, std::int64_t b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      const auto found = cache.find(key);
-      if (found != cache.end()) return found->second;
-      m.vertices.push_back(glm::normalize(m.vertices[a] + m.vertices[b]));
-      return cache[key] = static_cast<std::int64_t>(m.vertices.size() - 1);
-    };
-    std::vector<Triangle> finer;
-    for (const auto& f : m.triangles) {
-      const auto a = mid(f[0], f[1]), b = mid(f[1], f[2]), c = mid(f[2], f[0]);
-      finer.push_back({f[0], a, c});
-      finer.push_back({f[1], b, a});
-      finer.push_back({f[2], c, b});
-      finer.push_back({a, b, c});
-    }
-    m.triangles = std::move(finer);
-  }
-  for (auto& v : m.vertices) v *= 1.0 + 0.25 * std::sin(5.0 * v.x) * std::sin(4.0 * v.y + 1.0) * std::sin(3.0 * v.z);
-  m.normals.assign(m.vertices.size(), glm::dvec3(0.0));
-  for (const auto& f : m.triangles) {
-    const glm::dvec3 n = glm::cross(m.vertices[f[1]] - m.vertices[f[0]], m.vertices[f[2]] - m.vertices[f[0]]);
-    for (int k = 0; k < 3; ++k) m.normals[f[k]] += n;
-  }
-  for (auto& n : m.normals) n = glm::normalize(n);
-  return m;
-}
+using sd::test::Mesh;
 
 double seconds_best(int repeats, const std::function<void()>& run) {
   double best = 1e300;
@@ -144,11 +100,12 @@ struct Rays {
 Rays bake_rays(const Mesh& m, const sd::OccluderMesh& occ, int rays, std::uint64_t seed) {
   Rays r;
   r.per_vertex = rays;
-  const double epsilon = sd::ray_epsilon(m.vertices, occ);
+  sd::TransferOptions one_ray;  // the bake's own ray origins
+  one_ray.rays = 1;
+  const std::vector<glm::dvec3> origins = sd::bake_transfer(m.vertices, m.normals, m.triangles, one_ray, occ).ray_origins;
   const auto base = sd::spherical_fibonacci(rays);
   for (size_t v = 0; v < m.vertices.size(); ++v) {
-    const glm::dvec3 o = m.vertices[v] + epsilon * m.normals[v];
-    for (int k = 0; k < 3; ++k) r.origins.push_back(static_cast<float>(o[k]));
+    for (int k = 0; k < 3; ++k) r.origins.push_back(static_cast<float>(origins[v][k]));
     const glm::dmat3 rotation = sd::vertex_ray_rotation(seed, v);
     for (const auto& b : base) {
       const glm::dvec3 x = rotation * b;
@@ -244,8 +201,8 @@ int main(int argc, char** argv) {
   const bool with_design = argc > 4 ? std::stoi(argv[4]) != 0 : true;
   const std::uint64_t seed = 1;
 
-  const Mesh mesh = bumpy_sphere(levels);
-  const sd::OccluderMesh ground{{{-4, -4, -1.3}, {4, -4, -1.3}, {4, 4, -1.3}, {-4, 4, -1.3}}, {{0, 1, 2}, {0, 2, 3}}};
+  const Mesh mesh = sd::test::bumpy_sphere(levels);
+  const sd::OccluderMesh ground = sd::test::ground_quad(4.0, -1.3);
   const size_t n = mesh.vertices.size();
   const double total_rays = static_cast<double>(n) * ray_count;
   std::printf("mesh: bumpy icosphere, %zu vertices, %zu triangles + ground quad; %d rays per vertex (%.3g rays)\n",

@@ -5,6 +5,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_design.h"
 
 #include <glm/mat3x3.hpp>
@@ -24,11 +25,9 @@ namespace py = pybind11;
 
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-// Highest SH order of sh_basis / rotate_sh / gaunt_coefficients (ShRotation's limit).
-inline constexpr int kMaxShOrder = 64;
-// Highest order of the one-dimensional tables (legendre, zonal_coefficients): a guard against
-// absurd allocations, not a limit of the recurrences.
-inline constexpr int kMaxLegendreOrder = 100000;
+// The library's one range checker: its std::invalid_argument surfaces as ValueError.
+using sd::check_order;
+using sd::check_range;
 
 [[noreturn]] inline void value_error(const std::string& message) { throw py::value_error(message); }
 
@@ -44,14 +43,7 @@ inline std::string shape_string(const py::array& a) {
   return out.str();
 }
 
-inline void check_range(const char* name, int value, int lo, int hi) {
-  if (value < lo || value > hi) {
-    value_error(std::string(name) + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                "], got " + std::to_string(value));
-  }
-}
-
-inline void check_design_degree(int degree) { check_range("degree", degree, 0, sd::kMaxDesignDegree); }
+inline void check_design_degree(int degree) { check_order("degree", degree, sd::kMaxDesignDegree); }
 
 inline void check_finite(const char* name, const double* data, size_t count) {
   for (size_t i = 0; i < count; ++i) {
@@ -98,7 +90,6 @@ inline std::vector<glm::dvec3> read_directions(const char* name, const DoubleArr
   return dirs;
 }
 
-// numpy row-major R[row][col] -> glm column-major m[col][row].
 // The order s of an SH expansion with `count` = (s+1)² coefficients, at most max_order.
 inline int sh_order_from_count(const char* name, py::ssize_t count, int max_order) {
   const auto root = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(count))));
@@ -107,10 +98,11 @@ inline int sh_order_from_count(const char* name, py::ssize_t count, int max_orde
                 std::to_string(count));
   }
   const int order = static_cast<int>(root) - 1;
-  check_range((std::string("lmax of ") + name).c_str(), order, 0, max_order);
+  check_order(std::string("lmax of ") + name, order, max_order);
   return order;
 }
 
+// numpy row-major R[row][col] -> glm column-major m[col][row].
 inline glm::dmat3 read_rotation(const DoubleArray& r) {
   if (r.ndim() != 2 || r.shape(0) != 3 || r.shape(1) != 3) {
     value_error("rotation must have shape (3, 3), got " + shape_string(r));

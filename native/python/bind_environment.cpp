@@ -7,6 +7,7 @@
 // raises RuntimeError. Heavy work runs without the GIL.
 #include "array_checks.h"
 #include "bindings.h"
+#include "design_arrays.h"
 #include "sdlighting/environment.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -120,31 +121,11 @@ int parse_channel(const py::object& channel) {
   value_error("channel must be an int (0, 1, 2) or 'luminance'");
 }
 
-py::array_t<double> py_rotated_environment_sh(const DoubleArray& coeffs, const DoubleArray& g) {
-  if (coeffs.ndim() != 1 && coeffs.ndim() != 2) {
-    value_error("coeffs must have shape (K, 3) (or (K,) / (K, C)), got " + shape_string(coeffs));
-  }
-  const py::ssize_t k = coeffs.shape(0);
-  const py::ssize_t channels = coeffs.ndim() == 2 ? coeffs.shape(1) : 1;
-  const auto root = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(k))));
-  if (k < 1 || root * root != k) {
-    value_error("coeffs must hold (lmax+1)^2 coefficients along axis 0 (a perfect square), got " + std::to_string(k));
-  }
-  const int order = static_cast<int>(root) - 1;
-  check_range("lmax of coeffs", order, 0, kMaxShOrder);
-  if (channels < 1 || channels > 1024) value_error("coeffs must have between 1 and 1024 channels");
-  check_finite("coeffs", coeffs.data(), static_cast<size_t>(k * channels));
-  const glm::dmat3 rotation = read_rotation(g);
-  std::vector<double> in(coeffs.data(), coeffs.data() + k * channels);
-  std::vector<double> out;
-  {
-    py::gil_scoped_release release;
-    out = sd::rotated_sh(in, order, rotation, static_cast<int>(channels));  // bad g: ValueError
-  }
-  std::vector<py::ssize_t> shape(coeffs.shape(), coeffs.shape() + coeffs.ndim());
-  py::array_t<double> result(shape);
-  std::copy(out.begin(), out.end(), result.mutable_data());
-  return result;
+// A per-channel measure of the map for R, G, B and the luminance, shape (4,).
+py::array_t<double> per_channel(const sd::Environment& e, double (sd::Environment::*measure)(int) const) {
+  py::array_t<double> out(4);
+  for (int c = 0; c < 4; ++c) out.mutable_data()[c] = (e.*measure)(c);
+  return out;
 }
 
 py::dict report_dict(const sd::BandLimitedReport& r) {
@@ -159,9 +140,9 @@ py::dict report_dict(const sd::BandLimitedReport& r) {
 
 py::object py_band_limited(const sd::Environment& env, int lmax, int width, int height, const std::string& window,
                            bool report) {
-  check_range("lmax", lmax, 0, sd::kMaxEnergyOrder);
-  check_range("width", width, 1, 16384);
-  check_range("height", height, 1, 16384);
+  check_order("lmax", lmax, sd::kMaxEnergyOrder);
+  check_range("width", width, 1, sd::kMaxTextureSide);
+  check_range("height", height, 1, sd::kMaxTextureSide);
   const sd::RingingWindow w = sd::ringing_window_from_name(window);
   sd::BandLimitedReport r;
   std::vector<float> rgb;
@@ -181,14 +162,9 @@ py::object py_band_limited_texture(const DoubleArray& coeffs, int width, int hei
     value_error("coeffs must have shape (K, 3), got " + shape_string(coeffs));
   }
   const py::ssize_t k = coeffs.shape(0);
-  const auto root = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(k))));
-  if (k < 1 || root * root != k) {
-    value_error("coeffs must hold (lmax+1)^2 coefficients along axis 0 (a perfect square), got " + std::to_string(k));
-  }
-  const int order = static_cast<int>(root) - 1;
-  check_range("lmax of coeffs", order, 0, sd::kMaxEnergyOrder);
-  check_range("width", width, 1, 16384);
-  check_range("height", height, 1, 16384);
+  const int order = sh_order_from_count("coeffs", k, sd::kMaxEnergyOrder);
+  check_range("width", width, 1, sd::kMaxTextureSide);
+  check_range("height", height, 1, sd::kMaxTextureSide);
   check_finite("coeffs", coeffs.data(), static_cast<size_t>(3 * k));
   const sd::RingingWindow w = sd::ringing_window_from_name(window);
   std::vector<double> c(coeffs.data(), coeffs.data() + 3 * k);
@@ -248,9 +224,6 @@ py::array_t<float> py_pixels(const sd::Environment& env) {
 }  // namespace
 
 void bind_environment(py::module_& m) {
-  m.attr("MAX_PROJECTION_ORDER") = sd::kMaxProjectionOrder;
-  m.attr("MAX_ENERGY_ORDER") = sd::kMaxEnergyOrder;
-
   py::class_<sd::Environment> env(m, "Environment", R"doc(A distant environment map L (immutable).
 
 Built by load_environment, load_cube_environment, environment_from_pixels or
@@ -275,26 +248,16 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
       .def_property_readonly("clamped_negative_pixels", &sd::Environment::clamped_negative_pixels,
                              "Pixels that had a negative channel; they were clamped to 0 on load.")
       .def_property_readonly(
-          "mass",
-          [](const sd::Environment& e) {
-            py::array_t<double> out(4);
-            for (int c = 0; c < 4; ++c) out.mutable_data()[c] = e.mass(c);
-            return out;
-          },
+          "mass", [](const sd::Environment& e) { return per_channel(e, &sd::Environment::mass); },
           "integral L dmu (the average radiance) of R, G, B and the luminance Y = 0.2126 R + 0.7152 G + "
           "0.0722 B, shape (4,).")
       .def_property_readonly(
-          "norm_squared",
-          [](const sd::Environment& e) {
-            py::array_t<double> out(4);
-            for (int c = 0; c < 4; ++c) out.mutable_data()[c] = e.norm_squared(c);
-            return out;
-          },
+          "norm_squared", [](const sd::Environment& e) { return per_channel(e, &sd::Environment::norm_squared); },
           "integral L**2 dmu of R, G, B and the luminance, shape (4,).")
       .def(
           "sh",
           [](const sd::Environment& e, int lmax, int threads) {
-            check_range("lmax", lmax, 0, sd::kMaxProjectionOrder);
+            check_order("lmax", lmax, sd::kMaxProjectionOrder);
             check_range("threads", threads, 0, 1024);
             std::vector<double> c;
             {
@@ -305,7 +268,7 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
           },
           py::arg("lmax"), py::arg("threads") = 0,
           R"doc(SH coefficients L_lm = sum over texels of L y_lm(centre) * solid angle (midpoint rule of
-integral L y_lm dmu), for l <= lmax (0 .. MAX_PROJECTION_ORDER = 16).
+integral L y_lm dmu), for l <= lmax (0 .. MAX_PROJECTION_ORDER).
 
 threads: worker threads, 0 = all cores; the result does not depend on it (bit-identical).
 Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
@@ -315,7 +278,7 @@ Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
 width x height equirectangular image (same orientation, rows top-first), as float32 of shape
 (height, width, 3) — a float texture. Negative lobes are kept (not clamped).
 
-lmax: 0 .. MAX_ENERGY_ORDER (64); coefficients from sh(lmax) up to 16, above that from the cached
+lmax: 0 .. MAX_ENERGY_ORDER; coefficients from sh(lmax) up to MAX_PROJECTION_ORDER, above that from the cached
       high-order projection (see band_energies).
 window: 'none' (sigma_l = 1), 'hanning' ((1 + cos(pi l/(lmax+1)))/2) or 'lanczos'
         (sinc(l/(lmax+1))): windows against ringing.
@@ -326,7 +289,7 @@ report: if True, returns (image, report) where report is a dict with 'min' and '
       .def(
           "band_energies",
           [](const sd::Environment& e, int lmax) {
-            check_range("lmax", lmax, 0, sd::kMaxEnergyOrder);
+            check_order("lmax", lmax, sd::kMaxEnergyOrder);
             std::vector<double> energies;
             {
               py::gil_scoped_release release;
@@ -337,7 +300,7 @@ report: if True, returns (image, report) where report is a dict with 'min' and '
             return out;
           },
           py::arg("lmax"),
-          R"doc(Band energies E_l = sum_m L_lm**2 for l = 0 .. lmax (lmax <= MAX_ENERGY_ORDER = 64),
+          R"doc(Band energies E_l = sum_m L_lm**2 for l = 0 .. lmax (lmax <= MAX_ENERGY_ORDER),
 shape (lmax+1, 4): columns R, G, B, luminance. Rotation invariant. Computed once per map from an
 order-64 projection (of the map itself up to 4096 x 2048 texels or cube faces of 128; of an
 area-averaged copy above that: the box filter attenuates band l by about l(l+1)h^2/12 in
@@ -345,7 +308,7 @@ energy, h the texel's angular size). Releases the GIL.)doc")
       .def(
           "low_frequency_error",
           [](const sd::Environment& e, int s, const py::object& channel) {
-            check_range("s", s, 0, sd::kMaxEnergyOrder);
+            check_order("s", s, sd::kMaxEnergyOrder);
             const int c = parse_channel(channel);
             py::gil_scoped_release release;
             return e.low_frequency_error(s, c);
@@ -353,11 +316,11 @@ energy, h the texel's angular size). Releases the GIL.)doc")
           py::arg("s"), py::arg("channel") = "luminance",
           R"doc(The seed's epsilon(s) = ||L - L~_s|| / ||L|| in L2(dmu), exact via Parseval:
 ||L||^2 = sum L^2 * solid angle over the texels, ||L~_s||^2 = sum_{l<=s} E_l.
-channel: 0, 1, 2 or 'luminance'. s: 0 .. 64. Returns 0 for a black channel.)doc")
+channel: 0, 1, 2 or 'luminance'. s: 0 .. MAX_ENERGY_ORDER. Returns 0 for a black channel.)doc")
       .def(
           "lobe_filtered_error",
           [](const sd::Environment& e, const std::string& lobe, double exponent, int s) {
-            check_range("s", s, 0, sd::kMaxEnergyOrder);
+            check_order("s", s, sd::kMaxEnergyOrder);
             const sd::ZonalLobe z = sd::ZonalLobe::from_name(lobe, exponent);
             py::gil_scoped_release release;
             return e.lobe_filtered_error(z, s);
@@ -366,12 +329,12 @@ channel: 0, 1, 2 or 'luminance'. s: 0 .. 64. Returns 0 for a black channel.)doc"
           R"doc(The error that decides s: relative RMS over lobe axes a of the truncation error of the
 unshadowed B(a) = sum_lm w_l L_lm y_lm(a), on luminance:
 sqrt(sum_{s<l<=64} w_l^2 E_l / sum_{l<=64} w_l^2 E_l).
-lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, 1e4]); s: 0 .. 64.)doc")
+lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, MAX_PHONG_EXPONENT]); s: 0 .. MAX_ENERGY_ORDER.)doc")
       .def(
           "smallest_order",
           [](const sd::Environment& e, const std::string& lobe, double exponent, double target_error,
              int max_order) -> py::object {
-            check_range("max_order", max_order, 0, sd::kMaxEnergyOrder);
+            check_order("max_order", max_order, sd::kMaxEnergyOrder);
             if (!std::isfinite(target_error) || target_error < 0.0) {
               value_error("target_error must be finite and >= 0");
             }
@@ -386,7 +349,7 @@ lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, 1e4]); s: 0
           },
           py::arg("lobe"), py::arg("exponent"), py::arg("target_error"), py::arg("max_order") = 16,
           R"doc(The smallest s <= max_order whose lobe_filtered_error is <= target_error, or None if
-no such s exists up to max_order (<= 64).)doc")
+no such s exists up to max_order (<= MAX_ENERGY_ORDER).)doc")
       .def(
           "channel_design",
           [](const sd::Environment& e, const py::object& channel, int degree) {
@@ -397,15 +360,7 @@ no such s exists up to max_order (<= 64).)doc")
               py::gil_scoped_release release;
               design = e.channel_design(c, degree);
             }
-            const auto n = static_cast<py::ssize_t>(design.size());
-            py::array_t<double> nodes({n, py::ssize_t(3)}), weights(n);
-            for (py::ssize_t i = 0; i < n; ++i) {
-              nodes.mutable_data()[3 * i] = design.nodes[i].x;
-              nodes.mutable_data()[3 * i + 1] = design.nodes[i].y;
-              nodes.mutable_data()[3 * i + 2] = design.nodes[i].z;
-              weights.mutable_data()[i] = design.weights[i];
-            }
-            return py::make_tuple(std::move(nodes), std::move(weights));
+            return design_tuple(design);
           },
           py::arg("channel"), py::arg("degree"),
           R"doc(A weighted spherical design of the given degree (0 .. MAX_DESIGN_DEGREE) for the measure
@@ -479,13 +434,6 @@ empty image; negative values are clamped to 0 and counted.)doc");
         R"doc(A cube-map environment from linear RGB of shape (6, N, N, 3) (or (6, N, N, 4)): faces +X, -X,
 +Y, -Y, +Z, -Z, rows top-first (see load_cube_environment for the orientation).)doc");
 
-  m.def("rotated_environment_sh", &py_rotated_environment_sh, py::arg("coeffs"), py::arg("g"),
-        R"doc(Coefficients of x -> L(g x), the environment seen through the rotation g of eq. (1):
-D(g^T) L (the same as rotate_sh(coeffs, g.T)).
-
-coeffs: shape (K, 3) (or (K,), (K, C)) with K = (lmax+1)**2, lmax <= MAX_SH_ORDER.
-g: proper rotation of shape (3, 3), numpy row-major. Returns the shape of coeffs.)doc");
-
   m.def("band_limited_texture", &py_band_limited_texture, py::arg("coeffs"), py::arg("width"), py::arg("height"),
         py::arg("window") = "none", py::arg("report") = false,
         R"doc(The band-limited texture of given RGB coefficients (e.g. rotated_environment_sh of
@@ -494,48 +442,6 @@ equirectangular image (Blender's orientation, rows top-first), float32 of shape 
 
 coeffs: shape ((lmax+1)**2, 3), lmax <= MAX_ENERGY_ORDER. window and report as for
 Environment.band_limited. Releases the GIL.)doc");
-
-  py::class_<sd::EnvironmentSampler>(m, "EnvironmentSampler", R"doc(Importance sampling of an Environment for
-Monte Carlo reference integrals: a texel is chosen with probability 0.99 Y dmu / sum(Y dmu) +
-0.01 dmu (luminance times solid angle with a 1 % uniform floor, so every direction has a positive
-density), then a point uniformly inside it (uniform in phi and cos(theta) in an equirect texel,
-uniform in face coordinates in a cube texel). Densities are with respect to dmu = dx/(4 pi):
-mean(f(x) / pdf(x)) estimates integral f dmu.)doc")
-      .def(py::init([](const sd::Environment& e) {
-             py::gil_scoped_release release;
-             return sd::EnvironmentSampler(e);
-           }),
-           py::arg("environment"))
-      .def(
-          "sample",
-          [](const sd::EnvironmentSampler& s, const DoubleArray& u) {
-            if (u.ndim() != 2 || u.shape(1) != 2) value_error("u must have shape (N, 2), got " + shape_string(u));
-            const py::ssize_t n = u.shape(0);
-            check_finite("u", u.data(), static_cast<size_t>(2 * n));
-            py::array_t<double> dirs({n, py::ssize_t(3)}), pdf(n);
-            const double* in = u.data();
-            double* d = dirs.mutable_data();
-            double* p = pdf.mutable_data();
-            {
-              py::gil_scoped_release release;
-              for (py::ssize_t i = 0; i < n; ++i) {
-                const glm::dvec3 dir = s.sample(in[2 * i], in[2 * i + 1], p + i);
-                d[3 * i] = dir.x, d[3 * i + 1] = dir.y, d[3 * i + 2] = dir.z;
-              }
-            }
-            return py::make_tuple(std::move(dirs), std::move(pdf));
-          },
-          py::arg("u"),
-          "Maps uniform numbers u of shape (N, 2) in [0, 1) to (dirs (N, 3), pdf (N,)), pdf w.r.t. dmu.")
-      .def(
-          "pdf",
-          [](const sd::EnvironmentSampler& s, const DoubleArray& dirs) {
-            const std::vector<glm::dvec3> d = read_directions("dirs", dirs, false);
-            py::array_t<double> out(static_cast<py::ssize_t>(d.size()));
-            for (size_t i = 0; i < d.size(); ++i) out.mutable_data()[i] = s.pdf(d[i]);
-            return out;
-          },
-          py::arg("dirs"), "The density w.r.t. dmu of sample() at directions of shape (N, 3); returns (N,).");
 }
 
 }  // namespace sdpy

@@ -1,8 +1,6 @@
 // Bindings of the shading formulas: sdnative.shade(method, ...).
 #include "array_checks.h"
 #include "bindings.h"
-#include "mesh_arrays.h"
-#include "sdlighting/reference.h"
 #include "sdlighting/sh_rotation.h"
 #include "sdlighting/shading.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -23,8 +21,6 @@
 
 namespace sdpy {
 namespace {
-
-constexpr int kMaxShadingOrder = 16;
 
 using IndexArray = py::array_t<int64_t, py::array::c_style | py::array::forcecast>;
 
@@ -71,7 +67,7 @@ const DoubleArray& require(const char* name, const std::optional<DoubleArray>& a
 // The order s' of per-vertex SH data whose last axis holds (s'+1)² coefficients.
 int trailing_order(const char* name, const std::optional<DoubleArray>& a) {
   if (!a || a->ndim() < 2) value_error(std::string("this method needs ") + name + " with SH coefficients on its last axis");
-  return sh_order_from_count(name, a->shape(a->ndim() - 1), kMaxShadingOrder);
+  return sh_order_from_count(name, a->shape(a->ndim() - 1), sd::kMaxShadingOrder);
 }
 
 py::array_t<double> shade(const std::string& method, const DoubleArray& light, const DoubleArray& normals,
@@ -82,7 +78,7 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
                           const std::optional<IndexArray>& design_offsets, const std::optional<DoubleArray>& design_nodes,
                           const std::optional<DoubleArray>& design_weights) {
   if (light.ndim() != 2 || light.shape(1) != 3) value_error("light must have shape (K, 3), got " + shape_string(light));
-  const int s = sh_order_from_count("light", light.shape(0), kMaxShadingOrder);
+  const int s = sh_order_from_count("light", light.shape(0), sd::kMaxShadingOrder);
   check_finite("light", light.data(), static_cast<size_t>(light.size()));
   if (normals.ndim() != 2) value_error("normals must have shape (N, 3), got " + shape_string(normals));
   const size_t n = static_cast<size_t>(normals.shape(0));
@@ -95,10 +91,9 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
     unit_views = unit_rows("views", *views, n);
   }
 
-  // Coefficients of x ↦ L(g x) = D(gᵀ) L.
-  std::vector<double> rotated(static_cast<size_t>(light.size()));
   const glm::dmat3 g = rotation ? read_rotation(*rotation) : glm::dmat3(1.0);
-  sd::ShRotation(glm::transpose(g), s).apply(light.data(), rotated.data(), 3);
+  const std::vector<double> rotated =
+      sd::rotated_sh(std::vector<double>(light.data(), light.data() + light.size()), s, g);
 
   sd::ShadingInputs in;
   in.light_order = s;
@@ -138,7 +133,7 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
     }
   } else if (method == "msd_visibility") {
     if (!visibility_order) value_error("msd_visibility needs visibility_order (s', the order of the truncated lobe)");
-    check_range("visibility_order", *visibility_order, 0, kMaxShadingOrder);
+    check_order("visibility_order", *visibility_order, sd::kMaxShadingOrder);
     if (!design_offsets || design_offsets->ndim() != 1 || design_offsets->shape(0) != rows + 1) {
       value_error("msd_visibility needs design_offsets of shape (N+1,)");
     }
@@ -161,58 +156,9 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
   return out;
 }
 
-py::tuple reference(const sd::Environment& environment, const DoubleArray& vertices, const DoubleArray& normals,
-                    const py::object& triangles, const std::optional<DoubleArray>& views,
-                    const std::optional<DoubleArray>& rotation, const std::string& lobe, double exponent, int samples,
-                    std::uint64_t seed, const std::optional<DoubleArray>& occluder_vertices,
-                    const py::object& occluder_triangles, int threads) {
-  const std::vector<glm::dvec3> points = read_points("vertices", vertices);
-  const std::vector<glm::dvec3> normal_rows = read_points("normals", normals);
-  const sd::Material material = sd::Material::from_name(lobe, exponent);
-  std::vector<glm::dvec3> view_rows;
-  if (material.glossy) {
-    if (!views) value_error("a phong material needs views (unit vectors from the vertices to the eye)");
-    view_rows = read_directions("views", *views, false);
-  }
-  const std::vector<sd::Triangle> mesh = read_triangles("triangles", triangles);
-  const sd::OccluderMesh occluders = read_occluders(occluder_vertices, occluder_triangles);
-  const glm::dmat3 g = rotation ? read_rotation(*rotation) : glm::dmat3(1.0);
-  check_range("threads", threads, 0, 1024);
-  sd::ReferenceOptions options;
-  options.samples = samples;
-  options.seed = seed;
-  options.threads = threads;
-  sd::ReferenceResult result;
-  {
-    py::gil_scoped_release release;
-    result = sd::shade_reference(environment, g, points, normal_rows, view_rows, mesh, material, options, occluders);
-  }
-  const auto rows = static_cast<py::ssize_t>(points.size());
-  py::array_t<double> radiance({rows, py::ssize_t{3}}), error({rows, py::ssize_t{3}});
-  std::copy(result.radiance.begin(), result.radiance.end(), radiance.mutable_data());
-  std::copy(result.standard_error.begin(), result.standard_error.end(), error.mutable_data());
-  return py::make_tuple(radiance, error);
-}
-
 }  // namespace
 
 void bind_shading(py::module_& m) {
-  m.def("reference", &reference, py::arg("environment"), py::arg("vertices"), py::arg("normals"),
-        py::arg("triangles"), py::arg("views") = py::none(), py::arg("rotation") = py::none(),
-        py::arg("lobe") = "lambert", py::arg("exponent") = 1.0, py::arg("samples") = 4096, py::arg("seed") = 0,
-        py::arg("occluder_vertices") = py::none(), py::arg("occluder_triangles") = py::none(),
-        py::arg("threads") = 0,
-        R"doc(The reference: eq. (1) by Monte Carlo with the full-resolution environment, ray-traced V and the
-exact lobe — what every method is measured against.
-
-environment: an Environment (load_environment); vertices, normals (N, 3); triangles (T, 3) int:
-the object's mesh (it shadows itself); occluder_vertices/occluder_triangles: other blockers.
-views (N, 3): unit vectors to the eye (phong only); rotation g (3, 3) as in shade().
-samples: sample pairs per vertex, one from the environment (∝ luminance) and one from the lobe,
-combined by the balance heuristic; seed makes it deterministic (independent of threads).
-Returns (radiance, standard_error), both (N, 3): the estimate and its Monte Carlo standard
-error. Rays start at p + ε n with the bake's ε. Releases the GIL.)doc");
-
   m.def("shade", &shade, py::arg("method"), py::arg("light"), py::arg("normals"), py::arg("views") = py::none(),
         py::arg("rotation") = py::none(), py::arg("lobe") = "lambert", py::arg("exponent") = 1.0,
         py::arg("ambient_occlusion") = py::none(), py::arg("transfer") = py::none(),
@@ -229,11 +175,11 @@ method: which formula (equation numbers of the seed):
   "prt_gaunt"          eq. (10) with visibility Ṽ and real Gaunt coefficients
   "msd_lobe"           eq. (12), Theorem 2.1: a lobe design of degree s+s' (built once and cached)
   "msd_visibility"     eq. (13), Theorem 2.2: per-vertex designs of V, lobe truncated at visibility_order
-light: environment SH coefficients, shape ((s+1)**2, 3), s <= 16, *not* rotated.
+light: environment SH coefficients, shape ((s+1)**2, 3), s <= MAX_SHADING_ORDER, *not* rotated.
 normals: (N, 3); views: (N, 3) unit vectors from the vertex to the eye (needed for phong).
 rotation: g (3, 3), the environment rotation of eq. (1) (default identity); L is rotated to
           L(g x) internally.
-lobe, exponent: "lambert", or "phong" with σ in [0, 1e4].
+lobe, exponent: "lambert", or "phong" with σ in [0, MAX_PHONG_EXPONENT].
 ambient_occlusion (N,), transfer (N, (s+1)**2), visibility (N, (s'+1)**2),
 product_matrices (N, (s+1)**2, (s'+1)**2), design_offsets int64 (N+1,), design_nodes (total, 3),
 design_weights (total,): per-vertex data as returned by bake_transfer.

@@ -55,9 +55,21 @@ std::function<bool(size_t, size_t)> progress_function(const py::object* progress
   };
 }
 
+// An (s, s') pair of orders: None leaves both -1 (not requested); a pair must hold two valid orders.
+void read_order_pair(const char* name, const IndexPair& pair, int& s, int& s_prime) {
+  if (!pair) return;
+  s = pair->first;
+  s_prime = pair->second;
+  check_order(std::string(name) + " s", s, sd::kMaxTransferOrder);
+  check_order(std::string(name) + " s'", s_prime, sd::kMaxVisibilityOrder);
+}
+
 sd::TransferBake run_bake(const DoubleArray& vertices, const DoubleArray& normals, const py::object& triangles,
                           sd::TransferOptions options, const std::optional<DoubleArray>& occluder_vertices,
                           const py::object& occluder_triangles, const py::object& progress) {
+  if (options.threads < 0) {
+    value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(options.threads));
+  }
   const std::vector<glm::dvec3> v = read_points("vertices", vertices);
   if (v.empty()) value_error("vertices is empty: the mesh needs at least one vertex");
   const std::vector<glm::dvec3> n = read_points("normals", normals);
@@ -125,20 +137,9 @@ py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normal
   options.rays = rays;
   options.seed = seed;
   options.visibility_order = visibility_order;
-  if (product_orders) {
-    options.product_order = product_orders->first;
-    options.product_visibility_order = product_orders->second;
-    check_range("product_orders s", options.product_order, 0, sd::kMaxTransferOrder);
-    check_range("product_orders s'", options.product_visibility_order, 0, sd::kMaxVisibilityOrder);
-  }
+  read_order_pair("product_orders", product_orders, options.product_order, options.product_visibility_order);
   options.transfer_order = transfer_order;
-  if (design_orders) {
-    options.design_order = design_orders->first;
-    options.design_visibility_order = design_orders->second;
-    check_range("design_orders s", options.design_order, 0, sd::kMaxTransferOrder);
-    check_range("design_orders s'", options.design_visibility_order, 0, sd::kMaxVisibilityOrder);
-  }
-  if (threads < 0) value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(threads));
+  read_order_pair("design_orders", design_orders, options.design_order, options.design_visibility_order);
   options.threads = threads;
   options.record_rays = return_rays;
   return bake_dict(run_bake(vertices, normals, triangles, options, occluder_vertices, occluder_triangles, progress),
@@ -149,8 +150,7 @@ py::array py_bake_visibility(const DoubleArray& vertices, const DoubleArray& nor
                              int order, int rays, std::uint64_t seed,
                              const std::optional<DoubleArray>& occluder_vertices,
                              const py::object& occluder_triangles, const py::object& progress, int threads) {
-  check_range("order", order, 0, sd::kMaxVisibilityOrder);
-  if (threads < 0) value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(threads));
+  check_order("order", order, sd::kMaxVisibilityOrder);
   sd::TransferOptions options;
   options.rays = rays;
   options.seed = seed;
@@ -183,9 +183,6 @@ void bind_visibility(py::module_& m) {
   m.attr("BakeCancelled").attr("__doc__") =
       "Raised by bake_transfer / bake_visibility when the progress callback returns False (or the bake "
       "is otherwise cancelled). A subclass of RuntimeError; nothing is returned.";
-  m.attr("MAX_VISIBILITY_ORDER") = sd::kMaxVisibilityOrder;
-  m.attr("MAX_TRANSFER_ORDER") = sd::kMaxTransferOrder;
-  m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
 
   m.def("bake_transfer", &py_bake_transfer, py::arg("vertices"), py::arg("normals"), py::arg("triangles"),
         py::arg("rays"), py::arg("seed") = 0, py::arg("visibility_order") = -1,

@@ -1,20 +1,30 @@
-// One registration function per concept; sdnative_module.cpp calls them all.
+// One registration function per concept, in the order of the pipeline; sdnative_module.cpp calls
+// them all.
 #pragma once
 
 #include <pybind11/pybind11.h>
 
 namespace sdpy {
 
-/// Spherical harmonics, rotation, lobes, Gaunt coefficients, designs.
-void bind_core(pybind11::module_& m);
+/// Spherical harmonics: basis, recurrence constants, rotation, lobes' factors, Legendre, Gaunt.
+void bind_sh(pybind11::module_& m);
 
-/// Environment maps: loading, SH projection, band-limited textures, error measures, sampling.
+/// Weighted spherical designs of lobes, tabulated zonal weights and discrete measures.
+void bind_designs(pybind11::module_& m);
+
+/// Environment maps: loading, SH projection, band-limited textures, error measures, designs.
 void bind_environment(pybind11::module_& m);
+
+/// Importance sampling of environment maps.
+void bind_environment_sampler(pybind11::module_& m);
 
 /// Per-vertex visibility and transfer baking with Embree.
 void bind_visibility(pybind11::module_& m);
 
-/// The shading formulas (unshadowed, AO, PRT (2), (8)-(9), (10), MSD (12), (13)) and the reference.
+/// The shading formulas (unshadowed, AO, PRT (2), (8)-(9), (10), MSD (12), (13)).
 void bind_shading(pybind11::module_& m);
+
+/// The Monte Carlo reference of eq. (1).
+void bind_reference(pybind11::module_& m);
 
 }  // namespace sdpy

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "array_checks.h"
-#include "sdlighting/visibility.h"
+#include "sdlighting/mesh.h"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

@@ -6,6 +6,7 @@
 // the library's own std::invalid_argument also surfaces as ValueError and its std::runtime_error
 // ("no certified design") as RuntimeError. Long computations release the GIL.
 #include "bindings.h"
+#include "sdlighting/limits.h"
 
 namespace {
 
@@ -26,7 +27,7 @@ Spherical-harmonic convention (the same in C++, Python and GLSL):
   (lmax+1)^2 coefficients. Coefficients of f are f_lm = integral of f y_lm dmu.
 
 Lobes (zonal around an axis a, normalised to integral w(a.x) dmu(x) = 1):
-  "lambert": w(t) = 4 max(0, t);  "phong": w(t) = (2 sigma + 2) max(0, t)^sigma, sigma in [0, 1e4].
+  "lambert": w(t) = 4 max(0, t);  "phong": w(t) = (2 sigma + 2) max(0, t)^sigma, sigma in [0, MAX_PHONG_EXPONENT].
 
 A weighted spherical design of degree k for a weight w >= 0 is a set of nodes x_v on the sphere
 with weights lambda_v > 0 such that integral f w dmu = sum_v lambda_v f(x_v) for every polynomial
@@ -35,6 +36,7 @@ the weight's mass; a builder that cannot certify one raises RuntimeError.
 
 Functions:
   sh_basis(lmax, dirs)                  y_lm at directions
+  sh_recurrence_constants(order)        the constants of sh_basis's recurrences (for GLSL)
   rotate_sh(coeffs, rotation)           coefficients of x -> f(R^T x)
   zonal_coefficients(lobe, exponent, lmax)  Funk-Hecke factors of a lobe
   legendre(lmax, t)                     P_0(t) .. P_lmax(t)
@@ -49,6 +51,10 @@ Functions:
   shade(method, light, normals, ...)    eqs. (2), (8)-(9), (10), (12), (13), unshadowed, AO
   reference(environment, vertices, normals, triangles, ...)   eq. (1) by Monte Carlo
 
+Limits (module attributes, from one C++ header): MAX_SH_ORDER, MAX_LEGENDRE_ORDER,
+MAX_DESIGN_DEGREE, MAX_PHONG_EXPONENT, MAX_PROJECTION_ORDER, MAX_ENERGY_ORDER, MAX_TEXTURE_SIDE,
+MAX_VISIBILITY_ORDER, MAX_TRANSFER_ORDER, MAX_RAYS_PER_VERTEX, MAX_SHADING_ORDER.
+
 Arrays are accepted in any form numpy converts to float64 (C-contiguous copies are made when
 needed) and returned as float64 numpy arrays. Bad shapes, NaN or infinity, negative weights and
 out-of-range orders or degrees raise ValueError.
@@ -58,8 +64,23 @@ out-of-range orders or degrees raise ValueError.
 
 PYBIND11_MODULE(sdnative, m) {
   m.doc() = kModuleDoc;
-  sdpy::bind_core(m);
+  // sdlighting/limits.h, each limit once.
+  m.attr("MAX_SH_ORDER") = sd::kMaxShOrder;
+  m.attr("MAX_LEGENDRE_ORDER") = sd::kMaxLegendreOrder;
+  m.attr("MAX_DESIGN_DEGREE") = sd::kMaxDesignDegree;
+  m.attr("MAX_PHONG_EXPONENT") = sd::kMaxPhongExponent;
+  m.attr("MAX_PROJECTION_ORDER") = sd::kMaxProjectionOrder;
+  m.attr("MAX_ENERGY_ORDER") = sd::kMaxEnergyOrder;
+  m.attr("MAX_TEXTURE_SIDE") = sd::kMaxTextureSide;
+  m.attr("MAX_VISIBILITY_ORDER") = sd::kMaxVisibilityOrder;
+  m.attr("MAX_TRANSFER_ORDER") = sd::kMaxTransferOrder;
+  m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
+  m.attr("MAX_SHADING_ORDER") = sd::kMaxShadingOrder;
+  sdpy::bind_sh(m);
+  sdpy::bind_designs(m);
   sdpy::bind_environment(m);
+  sdpy::bind_environment_sampler(m);
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);
+  sdpy::bind_reference(m);
 }

@@ -155,3 +155,31 @@ def test_valid_edge_cases_do_not_raise(sd):
     assert sd.zonal_coefficients("phong", 0.0, 0).tolist() == [1.0]
     # A rotation with rounding noise well below the 1e-9 tolerance is accepted.
     assert sd.rotate_sh(np.ones(4), rotation_z(0.7) + 1e-13).shape == (4,)
+
+
+def test_limits_are_exported_and_enforced(sd):
+    # Each limit is a module attribute, and one past it is refused with the limit in the message.
+    light = lambda order: np.ones(((order + 1) ** 2, 3))
+    normals = np.array([[0.0, 0.0, 1.0]])
+    calls = {
+        "MAX_SH_ORDER": lambda n: sd.sh_basis(n, [0.0, 0.0, 1.0]),
+        "MAX_LEGENDRE_ORDER": lambda n: sd.legendre(n, 0.5),
+        "MAX_DESIGN_DEGREE": lambda n: sd.zonal_design("lambert", 1.0, n),
+        "MAX_SHADING_ORDER": lambda n: sd.shade("unshadowed", light(n), normals),
+        "MAX_VISIBILITY_ORDER": lambda n: sd.bake_visibility(normals, normals, np.zeros((0, 3), int), n, 8),
+        "MAX_TRANSFER_ORDER": lambda n: sd.bake_transfer(normals, normals, np.zeros((0, 3), int), 8,
+                                                         transfer_order=n),
+        "MAX_RAYS_PER_VERTEX": lambda n: sd.vertex_ray_directions(n, 0, 0),
+        "MAX_ENERGY_ORDER": lambda n: sd.band_limited_texture(light(n), 4, 2),
+        "MAX_TEXTURE_SIDE": lambda n: sd.band_limited_texture(light(0), n, 2),
+    }
+    for name, call in calls.items():
+        limit = getattr(sd, name)
+        assert isinstance(limit, int) and limit > 0, name
+        with pytest.raises(ValueError, match=str(limit)):
+            call(limit + 1)
+    assert sd.MAX_SHADING_ORDER == 16
+    assert sd.MAX_PROJECTION_ORDER <= sd.MAX_ENERGY_ORDER <= sd.MAX_SH_ORDER
+    assert sd.MAX_PHONG_EXPONENT == 1e4
+    with pytest.raises(ValueError, match="Phong exponent"):
+        sd.zonal_coefficients("phong", sd.MAX_PHONG_EXPONENT * 1.5, 2)

@@ -1,4 +1,5 @@
-"""sdnative.shade: the formulas agree where the math says they must, and bad input is refused."""
+"""The binding contract of sdnative.shade (rotation, per-vertex arrays, bad input) with one real
+computation; every formula's math is tested in tests/cpp/shading."""
 import numpy as np
 import pytest
 
@@ -13,11 +14,10 @@ def random_inputs(rng, n=200, s=4, s_v=2):
     return light, random_directions(rng, n), random_directions(rng, n), visibility
 
 
-@pytest.mark.parametrize("lobe,exponent", [("lambert", 1.0), ("phong", 8.0), ("phong", 32.0)])
-def test_msd_theorem_2_1_equals_gaunt_prt(sd, rng, lobe, exponent):
+def test_msd_theorem_2_1_equals_gaunt_prt(sd, rng):
     light, normals, views, visibility = random_inputs(rng)
     g = random_rotation(rng)
-    common = dict(light=light, normals=normals, views=views, rotation=g, lobe=lobe, exponent=exponent,
+    common = dict(light=light, normals=normals, views=views, rotation=g, lobe="phong", exponent=8.0,
                   visibility=visibility)
     msd = sd.shade("msd_lobe", **common)
     prt = sd.shade("prt_gaunt", **common)
@@ -31,13 +31,6 @@ def test_rotation_turns_the_environment(sd, rng):
     turned = sd.shade("unshadowed", light=light, normals=normals, rotation=g)
     direct = sd.shade("unshadowed", light=light, normals=normals @ g.T)
     np.testing.assert_allclose(turned, direct, atol=1e-12 * np.abs(direct).max())
-
-
-def test_unshadowed_lambert_of_a_constant_sky_is_its_radiance(sd, rng):
-    light = np.zeros((sh_count(2), 3))
-    light[0] = [1.0, 2.0, 3.0]
-    out = sd.shade("unshadowed", light=light, normals=random_directions(rng, 10))
-    np.testing.assert_allclose(out, np.tile([1.0, 2.0, 3.0], (10, 1)), atol=1e-14)
 
 
 def test_ambient_occlusion_scales_unshadowed(sd, rng):
@@ -71,3 +64,34 @@ def test_bad_input_is_refused(sd, rng):
     with pytest.raises(ValueError, match="visibility_order"):
         sd.shade("msd_visibility", light=light, normals=normals, design_offsets=np.zeros(6, dtype=np.int64),
                  design_nodes=np.zeros((0, 3)), design_weights=np.zeros(0))
+
+
+def test_baked_arrays_feed_every_method(sd, rng):
+    """The arrays of bake_transfer go into shade as they are: MSD (13) equals PRT (8)-(9) on them, and
+    every method returns (N, 3) float64."""
+    dirs = random_directions(rng, 12)
+    vertices, normals = 2.0 * dirs, dirs  # probes on a sphere, no triangles: V = 1
+    triangles = np.zeros((0, 3), dtype=np.int64)
+    bake = sd.bake_transfer(vertices, normals, triangles, 256, visibility_order=2, product_orders=(4, 2),
+                            transfer_order=4, design_orders=(4, 2))
+    light, _, views, _ = random_inputs(rng, n=12)
+    common = dict(light=light, normals=normals, views=views, lobe="phong", exponent=8.0)
+    msd = sd.shade("msd_visibility", visibility_order=2, design_offsets=bake["design_offsets"],
+                   design_nodes=bake["design_nodes"], design_weights=bake["design_weights"], **common)
+    prt = sd.shade("prt_matrix", product_matrices=bake["product_matrices"], **common)
+    assert msd.shape == (12, 3) and msd.dtype == np.float64
+    np.testing.assert_allclose(msd, prt, rtol=0, atol=1e-9 * np.abs(prt).max())
+    diffuse = sd.shade("prt_diffuse", light=light, normals=normals, transfer=bake["transfer"])
+    assert diffuse.shape == (12, 3) and np.all(np.isfinite(diffuse))
+
+
+def test_reference_of_a_constant_sky_is_its_radiance(sd):
+    sky = sd.environment_from_pixels(np.tile([1.0, 2.0, 3.0], (8, 16, 1)))
+    normals = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    radiance, error = sd.reference(sky, np.zeros((2, 3)), normals, np.zeros((0, 3), dtype=int), samples=256)
+    assert radiance.shape == (2, 3) and error.shape == (2, 3) and radiance.dtype == np.float64
+    # Unoccluded and normalised lobes: B is the sky's radiance, within four standard errors.
+    assert np.all(error > 0.0)
+    assert np.all(np.abs(radiance - [1.0, 2.0, 3.0]) < 4.0 * error)
+    with pytest.raises(ValueError, match="views"):
+        sd.reference(sky, np.zeros((2, 3)), normals, np.zeros((0, 3), dtype=int), lobe="phong", exponent=8.0)

@@ -1,4 +1,5 @@
-"""sh_basis, legendre and rotate_sh against closed forms, quadrature and direct evaluation."""
+"""The binding contract of sh_basis, legendre, rotate_sh and sh_recurrence_constants, with one real
+computation each; the math of the basis and the rotation is tested in tests/cpp/sh."""
 import math
 
 import numpy as np
@@ -11,7 +12,6 @@ from sd_test_utils import (
     rotation_about_z,
     sh_count,
     sh_index,
-    sphere_product_rule,
 )
 
 
@@ -52,30 +52,6 @@ def test_single_direction_and_normalisation(sd, rng):
     np.testing.assert_allclose(sd.sh_basis(2, wide), sd.sh_basis(2, wide.astype(np.float64)), atol=0)
 
 
-def test_orthonormality_up_to_order_16(sd):
-    order = 16
-    dirs, weights = sphere_product_rule(20, 40)  # exact for the degree-32 products
-    Y = sd.sh_basis(order, dirs)
-    gram = Y.T @ (weights[:, None] * Y)
-    np.testing.assert_allclose(gram, np.eye(sh_count(order)), rtol=0, atol=EXACT)
-
-
-@pytest.mark.parametrize("order", [16, 64])
-def test_addition_theorem(sd, rng, order):
-    a = random_directions(rng, 20)
-    b = random_directions(rng, 20)
-    Ya, Yb = sd.sh_basis(order, a), sd.sh_basis(order, b)
-    cosines = np.sum(a * b, axis=1)
-    P = np.stack([np.polynomial.legendre.legval(cosines, np.eye(order + 1)[l]) for l in range(order + 1)], axis=1)
-    for l in range(order + 1):
-        band = slice(l * l, (l + 1) ** 2)
-        lhs = np.sum(Ya[:, band] * Yb[:, band], axis=1)
-        np.testing.assert_allclose(lhs, (2 * l + 1) * P[:, l], rtol=0, atol=EXACT * (2 * l + 1), err_msg=f"l={l}")
-    # y_lm(a) y_lm(a) summed over m is 2l+1 (P_l(1) = 1).
-    for l in (0, 1, order):
-        np.testing.assert_allclose(np.sum(Ya[:, l * l:(l + 1) ** 2] ** 2, axis=1), 2 * l + 1, rtol=EXACT)
-
-
 def test_legendre(sd, rng):
     t = np.concatenate([rng.uniform(-1, 1, 30), [-1.0, 0.0, 1.0]])
     P = sd.legendre(20, t)
@@ -101,58 +77,68 @@ def test_rotate_y11_about_z_by_90_degrees(sd, rng):
     np.testing.assert_allclose(sd.sh_basis(1, x) @ rotated, math.sqrt(3) * x[:, 1], rtol=0, atol=EXACT)
 
 
-def test_rotate_sh_matches_direct_evaluation(sd, rng):
-    order = 8
-    x = random_directions(rng, 40)
-    for _ in range(5):
-        R = random_rotation(rng)
-        c = rng.normal(size=sh_count(order))
-        rotated = sd.rotate_sh(c, R)
-        assert rotated.shape == c.shape
-        # Rows of x @ R are R^T x.
-        direct = sd.sh_basis(order, x @ R) @ c
-        scale = np.abs(c).sum()
-        np.testing.assert_allclose(sd.sh_basis(order, x) @ rotated, direct, rtol=0, atol=EXACT * scale)
-
-
 def test_rotate_sh_channels(sd, rng):
     order = 8
     R = random_rotation(rng)
-    x = random_directions(rng, 30)
     for channels in (1, 2, 3, 4, 5):
         c = rng.normal(size=(sh_count(order), channels))
         rotated = sd.rotate_sh(c, R)
-        assert rotated.shape == c.shape
+        assert rotated.shape == c.shape and rotated.dtype == np.float64
         for k in range(channels):
             np.testing.assert_allclose(rotated[:, k], sd.rotate_sh(c[:, k].copy(), R), rtol=0, atol=EXACT)
-        direct = sd.sh_basis(order, x @ R) @ c
-        np.testing.assert_allclose(sd.sh_basis(order, x) @ rotated, direct, rtol=0, atol=EXACT * np.abs(c).sum())
     # Non-contiguous inputs (a Fortran-order array, a transposed rotation) are converted.
     c = np.asfortranarray(rng.normal(size=(sh_count(order), 3)))
     np.testing.assert_allclose(sd.rotate_sh(c, R.T.copy().T), sd.rotate_sh(np.ascontiguousarray(c), R), atol=0)
     assert sd.rotate_sh(np.zeros((sh_count(2), 0)), R).shape == (9, 0)
 
 
-def test_rotate_sh_band_energy_composition_identity(sd, rng):
-    order = 24
-    c = rng.normal(size=sh_count(order))
-    R1, R2 = random_rotation(rng), random_rotation(rng)
-    rotated = sd.rotate_sh(c, R1)
-    for l in range(order + 1):
-        band = slice(l * l, (l + 1) ** 2)
-        np.testing.assert_allclose(np.sum(rotated[band] ** 2), np.sum(c[band] ** 2), rtol=1e-11, err_msg=f"l={l}")
-    # (f_R1)_R2 = f_{R2 R1}; the identity changes nothing; R^T undoes R.
-    np.testing.assert_allclose(sd.rotate_sh(rotated, R2), sd.rotate_sh(c, R2 @ R1), rtol=0, atol=1e-11)
-    np.testing.assert_allclose(sd.rotate_sh(c, np.eye(3)), c, rtol=0, atol=EXACT)
-    np.testing.assert_allclose(sd.rotate_sh(rotated, R1.T), c, rtol=0, atol=1e-11)
+def recurrence_formula(order):
+    """The recurrence constants by their closed forms (the formula gpu_shading.sh_recurrence_defines
+    evaluated in Python before sdnative exported them): Q_mm = (2m-1)!! sqrt(2 (2m+1) / (2m)!) for
+    m > 0, Q_00 = 1; for m < l, a_lm = sqrt((2l-1)(2l+1) / ((l-m)(l+m))) (sqrt(2m+3) at l = m+1) and
+    b_lm = sqrt((2l+1)(l+m-1)(l-m-1) / ((l-m)(l+m)(2l-3))) (0 at l = m+1), at l (l+1) / 2 + m."""
+    diagonal = np.array([1.0] + [math.prod(range(1, 2 * m, 2)) * math.sqrt(2.0 * (2 * m + 1) / math.factorial(2 * m))
+                                 for m in range(1, order + 1)])
+    l, m = np.array([(l, m) for l in range(order + 1) for m in range(l + 1)], dtype=float).T
+    below = m < l
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(below, np.sqrt((2 * l - 1) * (2 * l + 1) / ((l - m) * (l + m))), 0.0)
+        b = np.where(below & (l > m + 1),
+                     np.sqrt((2 * l + 1) * (l + m - 1) * (l - m - 1) / ((l - m) * (l + m) * (2 * l - 3))), 0.0)
+    return diagonal, a, b
 
 
-def test_rotate_sh_order_64(sd, rng):
-    order = 64
-    R = random_rotation(rng)
-    c = rng.normal(size=sh_count(order))
-    rotated = sd.rotate_sh(c, R)
-    np.testing.assert_allclose(np.linalg.norm(rotated), np.linalg.norm(c), rtol=1e-10)
-    x = random_directions(rng, 5)
-    direct = sd.sh_basis(order, x @ R) @ c
-    np.testing.assert_allclose(sd.sh_basis(order, x) @ rotated, direct, rtol=0, atol=1e-9 * np.linalg.norm(c))
+def test_sh_recurrence_constants_are_the_closed_forms(sd):
+    for order in (0, 1, 5, 24):
+        constants = sd.sh_recurrence_constants(order)
+        assert sorted(constants) == ["a", "b", "diagonal"]
+        size = (order + 1) * (order + 2) // 2
+        for key, length in (("diagonal", order + 1), ("a", size), ("b", size)):
+            assert constants[key].dtype == np.float64 and constants[key].shape == (length,), key
+        for key, expected in zip(("diagonal", "a", "b"), recurrence_formula(order)):
+            np.testing.assert_allclose(constants[key], expected, rtol=1e-14, atol=0, err_msg=key)
+    for order in (-1, 65):
+        with pytest.raises(ValueError, match="order"):
+            sd.sh_recurrence_constants(order)
+
+
+def test_sh_recurrence_constants_reproduce_sh_basis(sd, rng):
+    order = 20
+    constants = sd.sh_recurrence_constants(order)
+    a, b, diagonal = constants["a"], constants["b"], constants["diagonal"]
+    d = random_directions(rng, 40)
+    x, y, z = d.T
+    evaluated = np.zeros((len(d), sh_count(order)))
+    re, im = np.ones_like(x), np.zeros_like(x)  # (x + i y)^m
+    for m in range(order + 1):
+        if m > 0:
+            re, im = re * x - im * y, re * y + im * x
+        q_before, q = np.zeros_like(z), np.full_like(z, diagonal[m])
+        for l in range(m, order + 1):
+            if l > m:
+                k = l * (l + 1) // 2 + m
+                q_before, q = q, a[k] * z * q - b[k] * q_before
+            evaluated[:, sh_index(l, m)] = q * re
+            if m > 0:
+                evaluated[:, sh_index(l, -m)] = q * im
+    np.testing.assert_allclose(evaluated, sd.sh_basis(order, d), rtol=0, atol=EXACT)

@@ -1,8 +1,10 @@
-"""Tests of the visibility / transfer bake: sdnative.bake_transfer, bake_visibility, BakeCancelled.
+"""The binding contract of the visibility / transfer bake (sdnative.bake_transfer, bake_visibility,
+vertex_ray_directions, BakeCancelled): the arrays it returns, progress on the calling thread,
+cancellation, the GIL and bad input, with one real computation each. The bake's math (closed forms on
+a plane, a box, a convex sphere; determinism; designs) is tested in tests/cpp/bake.
 
 Exact checks (EXACT) recompute the outputs from the recorded ray bits (return_rays=True) and
-vertex_ray_directions with plain numpy; Monte-Carlo ones compare with closed forms within the error
-of the randomly rotated spherical Fibonacci rule at the ray count used.
+vertex_ray_directions with plain numpy.
 """
 import math
 import threading
@@ -10,29 +12,9 @@ import threading
 import numpy as np
 import pytest
 
-from sd_test_utils import EXACT, sh_count, sh_index
-
-# The error of a randomly rotated 4096-point Fibonacci rule on the hemisphere indicator (measured over
-# 3000 rotations: <= 5.2e-3 per SH coefficient up to l = 8, <= 2.5e-3 for the escaping fraction).
-FIBONACCI_4096 = 8e-3
-FRACTION_4096 = 4e-3
-
+from sd_test_utils import EXACT, sh_count
 
 # ---- meshes ----
-
-def plane_grid(half=10.0, cells=20):
-    """A flat square grid in z = 0 with normals +z."""
-    s = np.linspace(-half, half, cells + 1)
-    x, y = np.meshgrid(s, s)
-    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
-    normals = np.tile([0.0, 0.0, 1.0], (len(vertices), 1))
-    at = lambda i, j: j * (cells + 1) + i  # noqa: E731
-    triangles = []
-    for j in range(cells):
-        for i in range(cells):
-            triangles += [(at(i, j), at(i + 1, j), at(i + 1, j + 1)), (at(i, j), at(i + 1, j + 1), at(i, j + 1))]
-    return vertices, normals, np.array(triangles, dtype=np.int64)
-
 
 def icosphere(levels):
     """Unit icosphere; normals are the radial directions."""
@@ -81,71 +63,7 @@ def cube(h):
     return v, t
 
 
-def hemisphere_coefficients(order):
-    """SH coefficients of the upper-hemisphere indicator: 1/2 sqrt(2l+1) int_0^1 P_l, m = 0 only."""
-    out = np.zeros(sh_count(order))
-    p0 = [np.polynomial.legendre.legval(0.0, [0] * n + [1]) for n in range(order + 2)]
-    out[0] = 0.5
-    for l in range(1, order + 1):
-        out[sh_index(l, 0)] = 0.5 * math.sqrt(2 * l + 1) * (p0[l - 1] - p0[l + 1]) / (2 * l + 1)
-    return out
-
-
-# ---- the open plane ----
-
-@pytest.fixture(scope="module")
-def plane():
-    v, n, t = plane_grid()
-    interior = np.flatnonzero((np.abs(v[:, 0]) <= 2) & (np.abs(v[:, 1]) <= 2))
-    return v, n, t, interior
-
-
-def test_open_plane_visibility_is_the_hemisphere_indicator(sd, plane):
-    v, n, t, interior = plane
-    out = sd.bake_transfer(v, n, t, 4096, seed=2, visibility_order=8)
-    assert set(out) == {"visibility", "ambient_occlusion", "rays", "seed", "ray_origins", "seconds"}
-    assert out["visibility"].shape == (len(v), 81)
-    vis = out["visibility"][interior]
-    np.testing.assert_allclose(out["ambient_occlusion"][interior], 0.5, atol=FRACTION_4096)
-    np.testing.assert_array_equal(vis[:, 0], out["ambient_occlusion"][interior])
-    np.testing.assert_allclose(vis, np.tile(hemisphere_coefficients(8), (len(interior), 1)), atol=FIBONACCI_4096)
-    assert abs(hemisphere_coefficients(1)[2] - math.sqrt(3) / 4) < 1e-15
-    assert out["ray_origins"].shape == (len(v), 3) and out["ray_origins"].dtype == np.float64
-    assert np.all(out["ray_origins"][:, 2] > 0.0)  # above the plane the vertices lie in
-
-
-def test_open_plane_rays_above_escape_and_rays_below_are_blocked(sd, plane):
-    v, n, t, interior = plane
-    out = sd.bake_transfer(v, n, t, 1024, seed=4, return_rays=True)
-    bits = out["ray_visibility"]
-    assert bits.dtype == np.bool_ and bits.shape == (len(v), 1024)
-    np.testing.assert_array_equal(bits.mean(axis=1), out["ambient_occlusion"])
-    for i in interior:
-        dirs = sd.vertex_ray_directions(1024, 4, int(i))
-        assert np.all(bits[i][dirs[:, 2] > 0])
-        assert not np.any(bits[i][dirs[:, 2] < -1e-3])  # well below the horizon: they meet the grid
-
-
-def test_open_plane_transfer(sd, plane):
-    v, n, t, interior = plane
-    rays = 4096
-    out = sd.bake_transfer(v, n, t, rays, seed=8, transfer_order=4, return_rays=True)
-    tr = out["transfer"]
-    assert tr.shape == (len(v), 25)
-    w_hat = sd.zonal_coefficients("lambert", 1.0, 4)
-    expected = np.zeros(25)
-    for l in range(5):
-        expected[sh_index(l, 0)] = w_hat[l] * math.sqrt(2 * l + 1)
-    for i in interior:
-        dirs = sd.vertex_ray_directions(rays, 8, int(i))
-        hit = out["ray_visibility"][i]
-        direct = (4 * np.maximum(0, dirs[hit, 2]))[:, None] * sd.sh_basis(4, dirs[hit])
-        np.testing.assert_allclose(tr[i], direct.sum(axis=0) / rays, rtol=0, atol=EXACT)
-        assert tr[i, 0] == pytest.approx(1.0, abs=1e-3)
-        np.testing.assert_allclose(tr[i], expected, atol=1e-3)
-
-
-# ---- closed box and convex object ----
+# ---- what the bake returns ----
 
 def test_points_inside_a_closed_box_see_nothing(sd):
     v = np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.05], [0.0, 0.1, -0.05]])
@@ -164,26 +82,20 @@ def test_points_inside_a_closed_box_see_nothing(sd):
     assert np.all(free["ambient_occlusion"] > 0.3)
 
 
-def test_convex_icosphere_has_nothing_above_the_tangent_plane(sd):
-    v, n, t = icosphere(4)
-    out = sd.bake_transfer(v, n, t, 512, seed=3, return_rays=True)
-    for i in range(0, len(v), 17):
-        dirs = sd.vertex_ray_directions(512, 3, i)
-        above = dirs @ n[i] > 0
-        assert np.all(out["ray_visibility"][i][above])
-        assert out["ambient_occlusion"][i] >= above.mean()
-    # Rays slightly below the horizon pass the neighbouring facets (about 0.02 more at this level).
-    assert np.all(np.abs(out["ambient_occlusion"] - 0.515) < 0.035)
-
-
-# ---- exactness, consistency, determinism ----
-
 def test_outputs_equal_direct_sums_over_the_rays(sd):
     v, n, t = bumpy_sphere(1)
     rays = 300
     out = sd.bake_transfer(v, n, t, rays, seed=6, visibility_order=2, product_orders=(3, 2), transfer_order=3,
                            return_rays=True)
-    assert out["product_matrices"].shape == (len(v), 16, 9)
+    assert set(out) == {"ambient_occlusion", "visibility", "product_matrices", "transfer", "ray_visibility", "rays",
+                        "seed", "ray_origins", "seconds"}
+    assert out["visibility"].shape == (len(v), 9) and out["transfer"].shape == (len(v), 16)
+    assert out["product_matrices"].shape == (len(v), 16, 9) and out["product_matrices"].dtype == np.float64
+    assert out["ray_visibility"].dtype == np.bool_ and out["ray_visibility"].shape == (len(v), rays)
+    assert (out["rays"], out["seed"]) == (rays, 6) and out["seconds"] > 0.0
+    assert out["ray_origins"].shape == (len(v), 3) and out["ray_origins"].dtype == np.float64
+    offsets = np.einsum("ij,ij->i", out["ray_origins"] - v, n / np.linalg.norm(n, axis=1)[:, None])
+    assert np.all(offsets > 0.0)  # each vertex's rays start outside the surface
     assert out["ambient_occlusion"].min() < 0.45
     for i in range(len(v)):
         dirs = sd.vertex_ray_directions(rays, 6, i)
@@ -196,25 +108,15 @@ def test_outputs_equal_direct_sums_over_the_rays(sd):
         assert out["ambient_occlusion"][i] == pytest.approx(hit.sum() / rays, abs=EXACT)
 
 
-def test_product_matrix_column_zero_is_the_visibility(sd):
-    v, n, t = bumpy_sphere(1)
-    out = sd.bake_transfer(v, n, t, 256, visibility_order=3, product_orders=(2, 3))
-    m, vis = out["product_matrices"], out["visibility"]
-    np.testing.assert_allclose(m[:, :, 0], vis[:, :9], rtol=0, atol=EXACT)
-    np.testing.assert_allclose(m[:, :, :9], np.transpose(m[:, :, :9], (0, 2, 1)), rtol=0, atol=EXACT)
-
-
-def test_same_seed_same_result_for_any_thread_count(sd):
+def test_threads_change_nothing(sd):
     v, n, t = bumpy_sphere(2)
     kwargs = dict(seed=99, visibility_order=2, product_orders=(2, 1), transfer_order=2, design_orders=(2, 1),
                   return_rays=True)
-    runs = [sd.bake_transfer(v, n, t, 200, threads=k, **kwargs) for k in (1, 2, 3, 0)]
+    runs = [sd.bake_transfer(v, n, t, 200, threads=k, **kwargs) for k in (1, 2)]
     for other in runs[1:]:
         for key, value in runs[0].items():
             if key != "seconds":
                 np.testing.assert_array_equal(other[key], value, err_msg=key)
-    different = sd.bake_transfer(v, n, t, 200, **dict(kwargs, seed=100))
-    assert not np.array_equal(different["ray_visibility"], runs[0]["ray_visibility"])
 
 
 def test_bake_visibility_is_the_transfer_bakes_visibility(sd):
@@ -223,9 +125,8 @@ def test_bake_visibility_is_the_transfer_bakes_visibility(sd):
     gt = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
     vis = sd.bake_visibility(v, n, t, 2, 128, seed=5, occluder_vertices=gv, occluder_triangles=gt)
     out = sd.bake_transfer(v, n, t, 128, seed=5, visibility_order=2, occluder_vertices=gv, occluder_triangles=gt)
+    assert vis.shape == (len(v), 9) and vis.dtype == np.float64
     np.testing.assert_array_equal(vis, out["visibility"])
-    free = sd.bake_visibility(v, n, t, 2, 128, seed=5)
-    assert vis[:, 0].sum() < free[:, 0].sum() - 1.0  # the ground occludes
 
 
 # ---- designs ----
@@ -372,8 +273,3 @@ def test_degenerate_triangles_and_probes_are_fine(sd):
     assert sd.bake_transfer(V, N, t, 32)["ambient_occlusion"].shape == (12,)
     probes = sd.bake_transfer(V, N, np.zeros((0, 3), dtype=np.int32), 32)
     np.testing.assert_array_equal(probes["ambient_occlusion"], 1.0)
-
-
-def test_docstrings(sd):
-    for name in ("bake_transfer", "bake_visibility", "vertex_ray_directions", "BakeCancelled"):
-        assert getattr(sd, name).__doc__ and len(getattr(sd, name).__doc__) > 40, name

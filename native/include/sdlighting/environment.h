@@ -1,6 +1,7 @@
 // Environment maps L (the distant light of eq. (1)): loading through OpenImageIO, projection to
-// real spherical harmonics, rotation, band-limited textures L̃, the error measures that choose the
-// order s, weighted designs of a channel, and importance sampling for reference integrators.
+// real spherical harmonics, band-limited textures L̃, the error measures that choose the order s
+// and weighted designs of a channel. Rotation: rotated_sh (sh_rotation.h); importance sampling:
+// environment_sampler.h.
 //
 // Orientation (Blender/Cycles world, blender-notes "Cycles as a reference"): a direction d is
 // seen in an equirectangular image at
@@ -32,10 +33,10 @@
 // as ShRotation::apply(in, out, 3) and the shading evaluators (shading.h) expect.
 #pragma once
 
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/zonal_lobe.h"
 
-#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -46,21 +47,17 @@
 
 namespace sd {
 
-/// Highest order of Environment::sh (the full-resolution projection used for shading).
-constexpr int kMaxProjectionOrder = 16;
-
-/// Highest order of the band energies, the error measures and band_limited: the "high order" to
-/// which lobe-filtered errors are summed. The neglected tail Σ_{l>64} ŵ_l² E_l has factors
-/// ŵ_l² < 1e-19 for Phong σ <= 100 (< 2e-13 for σ = 150, < 3e-9 for Lambert); for much
-/// narrower lobes the lobe-filtered error is underestimated (it is then close to 1 anyway).
-constexpr int kMaxEnergyOrder = 64;
-
 /// Channel index meaning the luminance Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 / linear sRGB
 /// primaries, as Blender's default scene-linear space) in the functions that take a channel.
 constexpr int kLuminance = 3;
 
 /// The luminance weights of R, G, B.
 constexpr std::array<double, 3> kLuminanceWeights = {0.2126, 0.7152, 0.0722};
+
+/// The luminance Y of linear RGB.
+inline double luminance(double r, double g, double b) {
+  return kLuminanceWeights[0] * r + kLuminanceWeights[1] * g + kLuminanceWeights[2] * b;
+}
 
 /// The two storage layouts.
 enum class EnvironmentLayout { Equirect, Cube };
@@ -206,6 +203,9 @@ class Environment {
   /// B(a) = Σ_lm ŵ_l L_lm y_lm(a) (Funk–Hecke) cut at l <= s, on luminance:
   ///     sqrt( Σ_{order<l<=64} ŵ_l² E_l / Σ_{l<=64} ŵ_l² E_l ),
   /// since ∫ (B − B̃_s)² dμ(a) = Σ_{l>s} ŵ_l² E_l. order in 0..kMaxEnergyOrder. 0 for a black map.
+  /// The neglected tail Σ_{l>64} ŵ_l² E_l has factors ŵ_l² < 1e-19 for Phong σ <= 100 (< 2e-13 for
+  /// σ = 150, < 3e-9 for Lambert); for much narrower lobes the error is underestimated (it is then
+  /// close to 1 anyway).
   double lobe_filtered_error(const ZonalLobe& lobe, int order) const;
 
   /// The smallest s in [0, max_order] with lobe_filtered_error(lobe, s) <= target_error, or −1
@@ -241,13 +241,6 @@ class Environment {
   std::shared_ptr<EnergyCache> cache_;
 };
 
-/// Coefficients of x ↦ L(g x), the environment seen through the rotation g of eq. (1) (L_lm(g)
-/// in the seed): D(gᵀ) L with ShRotation(gᵀ, order) (sh_rotation.h). `coeffs` holds
-/// sh_count(order) × channels doubles, coefficient-major (coeffs[channels i + c]); g must be a
-/// proper rotation (ShRotation's checks). Throws std::invalid_argument for a wrong size, an order
-/// outside [0, 64], channels < 1 or a bad g.
-std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels = 3);
-
 /// The texture of Environment::band_limited from given RGB coefficients (layout as sh(), e.g.
 /// already rotated by rotated_sh): L̃(d) = Σ_{l<=order} σ_l c_lm y_lm(d) at the texel centres of
 /// a width × height equirect image in the file comment's orientation, rows top-first, 3 floats
@@ -261,44 +254,5 @@ std::vector<float> band_limited_texture(const std::vector<double>& coefficients,
 /// Σ_{l<=order} Σ_m c_lm y_lm(dir) for the three channels of RGB coefficients (layout as sh()).
 /// `dir` must be unit.
 glm::dvec3 evaluate_sh_rgb(const std::vector<double>& coeffs, int order, const glm::dvec3& dir);
-
-/// Importance sampling of an environment for Monte Carlo reference integrators.
-///
-/// A texel t is chosen with probability p_t = 0.99 Y_t Δμ_t / Σ Y Δμ + 0.01 Δμ_t (luminance ×
-/// solid angle, mixed with 1 % proportional to solid angle so that every texel — and every
-/// direction — has a positive density; a black map is sampled ∝ solid angle), then a point
-/// uniformly inside the texel: uniform in φ and in cos θ inside an equirect texel (exactly
-/// uniform in solid angle), uniform in the face coordinates inside a cube texel. Densities are
-/// with respect to dμ = dx/4π, so E[f(x)/pdf(x)] = ∫ f dμ: pdf = p_t / Δμ_t (equirect) and
-/// p_t 4π (1 + a² + b²)^{3/2} / (Δa Δb) (cube, face coordinates a, b in [−1, 1]).
-/// Holds its own copy of the geometry and the tables (no reference to the Environment).
-class EnvironmentSampler {
- public:
-  /// Builds the tables: O(texels), 16 bytes per texel.
-  explicit EnvironmentSampler(const Environment& environment);
-
-  /// Maps (u1, u2) ∈ [0, 1)² (values outside are clamped) to a unit direction; writes its
-  /// density w.r.t. dμ to *pdf if non-null (the same value pdf(direction) returns).
-  glm::dvec3 sample(double u1, double u2, double* pdf = nullptr) const;
-
-  /// The density w.r.t. dμ of sample() at direction `dir` (finite, non-zero).
-  double pdf(const glm::dvec3& dir) const;
-
-  /// Probability of choosing texel t (they sum to 1).
-  double texel_probability(int64_t t) const { return probability_[static_cast<size_t>(t)]; }
-
- private:
-  double pdf_in_texel(int64_t t, const glm::dvec3& dir) const;
-
-  EnvironmentLayout layout_;
-  int width_;
-  int height_;
-  int rows_;     // equirect: height; cube: 6 × face size
-  int columns_;  // equirect: width; cube: face size
-  std::vector<double> probability_;      // per texel
-  std::vector<double> row_solid_angle_;  // equirect: Δμ of each row's texels; empty for cubes
-  std::vector<double> row_cdf_;      // rows_ + 1 entries, row_cdf_[0] = 0, row_cdf_[rows_] = 1
-  std::vector<double> column_cdf_;   // per texel: cumulative probability within its row, ending at 1
-};
 
 }  // namespace sd

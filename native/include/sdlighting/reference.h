@@ -3,8 +3,8 @@
 #pragma once
 
 #include "sdlighting/environment.h"
+#include "sdlighting/mesh.h"
 #include "sdlighting/shading.h"
-#include "sdlighting/visibility.h"
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>

@@ -11,8 +11,8 @@ namespace sd {
 /// Ivanic–Ruedenberg recurrence (J. Phys. Chem. 1996, 100, 6342; errata 1998).
 ///
 /// Meaning: if f has coefficients c, then the rotated function f_R(x) = f(Rᵀ x) (f turned by R,
-/// so that f_R(R x) = f(x)) has coefficients D(R) c. For eq. (1) the environment seen through
-/// g is L(g x) = L_{gᵀ}(x): its coefficients are D(gᵀ) L.
+/// so that f_R(R x) = f(x)) has coefficients D(R) c. The environment of eq. (1) goes through
+/// rotated_sh, never through this class directly.
 class ShRotation {
  public:
   /// Builds D(R) for all bands l <= order. `rotation` (column-major glm: rotation[col][row]) must
@@ -36,5 +36,15 @@ class ShRotation {
   int order_;
   std::vector<std::vector<double>> bands_;
 };
+
+/// THE convention of the environment rotation g of eq. (1), stated here only: the environment
+/// seen through g is x ↦ L(g x) = L_{gᵀ}(x), whose coefficients (the seed's L_lm(g)) are
+///     L(g) = D(gᵀ) L      (ShRotation(gᵀ, order)).
+/// Every caller (shading, the bindings, the add-on through sdnative.rotated_environment_sh)
+/// rotates L with this function. `coeffs` holds sh_count(order) × channels doubles,
+/// coefficient-major (coeffs[channels i + c]); g must be a proper rotation (ShRotation's checks).
+/// Throws std::invalid_argument for a wrong size, an order outside [0, kMaxShOrder],
+/// channels < 1 or a bad g.
+std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels = 3);
 
 }  // namespace sd

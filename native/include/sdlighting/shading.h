@@ -6,7 +6,7 @@
 //   B_p(v, g) ≈ ∫ L(g x) V_p(x) w(a_p · x) dμ(x)                                       eq. (1)
 // with the lobe axis a_p = n_p for Lambert and a_p = v_n = 2(n·v)n − v for Phong, from the
 // environment's coefficients *already rotated*: light[3 i + c] is coefficient i of channel c of
-// x ↦ L(g x) (rotate once per frame, e.g. ShRotation(gᵀ, s).apply(L, light, 3)).
+// x ↦ L(g x) (rotate once per frame with rotated_sh, sh_rotation.h).
 #pragma once
 
 #include "sdlighting/spherical_design.h"

@@ -2,15 +2,14 @@
 // ∫ f w dμ = Σ λ_ν f(x_ν) for every polynomial f of degree <= k.
 #pragma once
 
+#include "sdlighting/limits.h"
+
 #include <glm/vec3.hpp>
 
 #include <string>
 #include <vector>
 
 namespace sd {
-
-/// Highest design degree the builders accept.
-constexpr int kMaxDesignDegree = 30;
 
 /// A design is certified when its moment residual is at most this fraction of the mass.
 constexpr double kDesignTolerance = 1e-10;

@@ -8,7 +8,10 @@
 // Condon–Shortley phase, so y_00 = 1, y_1,-1 = √3 y, y_10 = √3 z, y_11 = √3 x.
 // Flat index of (l, m) is l² + l + m; an expansion of order s has (s+1)² coefficients.
 // Evaluation uses the fully normalised three-term recurrences of geodesy, stable far beyond
-// order 32 (msd-notes: "Spherical harmonics convention").
+// order 32 (msd-notes: "Spherical harmonics convention"):
+//   Q_mm = sqrt((2m+1)/(2m)) Q_{m-1,m-1}   (Q_00 = 1, Q_11 = √3)
+//   Q_lm = a_lm z Q_{l-1,m} − b_lm Q_{l-2,m}   (m < l; a_{m+1,m} = √(2m+3), b_{m+1,m} = 0)
+// with the constants of sh_recurrence(), which the GLSL shader receives too.
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -22,6 +25,20 @@ constexpr int sh_count(int order) { return (order + 1) * (order + 1); }
 
 /// Flat index l² + l + m of the harmonic y_lm.
 constexpr int sh_index(int l, int m) { return l * l + l + m; }
+
+/// Position l(l+1)/2 + m of (l, m), 0 <= m <= l, in the triangular tables of ShRecurrence.
+constexpr int sh_triangle_index(int l, int m) { return l * (l + 1) / 2 + m; }
+
+/// The constants of the recurrences above for l <= order: what sh_basis evaluates with, exported
+/// so that other evaluators (the GLSL shader) use the very same numbers.
+struct ShRecurrence {
+  std::vector<double> diagonal;  ///< Q_mm, m = 0 .. order
+  /// a_lm and b_lm at sh_triangle_index(l, m), (order+1)(order+2)/2 entries; 0 where m == l.
+  std::vector<double> a, b;
+};
+
+/// The recurrence constants up to `order` in [0, kMaxShOrder] (else std::invalid_argument).
+ShRecurrence sh_recurrence(int order);
 
 /// Writes y_lm(dir) for all l <= order into out[0 .. sh_count(order)).
 /// `dir` must be a unit vector.

@@ -24,10 +24,12 @@
 //
 #pragma once
 
+#include "sdlighting/limits.h"
+#include "sdlighting/mesh.h"
+
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
-#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -43,27 +45,6 @@ class BakeCancelled : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Highest order s' of the visibility expansion Ṽ (and the column order of M, the design's s').
-constexpr int kMaxVisibilityOrder = 8;
-/// Highest order s of the transfer vector T and the row order of M (the design's s).
-constexpr int kMaxTransferOrder = 16;
-/// Most rays per vertex a bake accepts (a guard against absurd allocations).
-constexpr int kMaxRaysPerVertex = 1 << 24;
-/// A vertex without faces starts its rays at p + ε n, ε = kRayEpsilonScale × the bounding-box
-/// diagonal of the object (see ray_epsilon()).
-constexpr double kRayEpsilonScale = 1e-4;
-/// ... but at least kRayEpsilonFloat × the largest absolute vertex coordinate of the object.
-constexpr double kRayEpsilonFloat = 1e-5;
-
-/// A triangle as three vertex indices (each must be in [0, vertex count)).
-using Triangle = std::array<std::int64_t, 3>;
-
-/// Triangles that block rays without being baked (a ground plane, other objects).
-struct OccluderMesh {
-  std::vector<glm::dvec3> vertices;
-  std::vector<Triangle> triangles;
-};
-
 /// What to bake. An order of -1 (the default) means "not requested"; AO is always computed.
 struct TransferOptions {
   int rays = 1024;          ///< R >= 1 rays per vertex
@@ -76,11 +57,13 @@ struct TransferOptions {
   int design_visibility_order = -1;  ///< s' of the design, in [0, kMaxVisibilityOrder]
   int threads = 0;            ///< worker threads; 0 = every hardware thread
   bool record_rays = false;   ///< test hook: keep every V_r in TransferBake::ray_visibility
-  /// Called from the calling thread only, about every 50 ms and once more after the last vertex,
-  /// with (vertices done, vertex count); returning false cancels the bake (BakeCancelled). An
-  /// exception it throws cancels the bake and propagates once the workers have stopped.
+  /// Called from the calling thread only (which then bakes no vertex itself), once before the
+  /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
+  /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws
+  /// cancels the bake and propagates once the workers have stopped.
   std::function<bool(std::size_t done, std::size_t total)> progress;
-  /// Polled by the workers and the calling thread; true cancels the bake (BakeCancelled).
+  /// Polled by the workers before every few vertices and by the calling thread; true cancels the
+  /// bake (BakeCancelled).
   const std::atomic<bool>* cancel = nullptr;
 };
 
@@ -122,8 +105,8 @@ struct TransferBake {
 /// Throws std::invalid_argument on bad input (NaN/inf, zero normal, index out of range, orders out
 /// of range, rays < 1, no vertices), BakeCancelled when cancelled, std::runtime_error naming the
 /// vertex when its design cannot be certified or Embree fails. Runs options.threads workers over
-/// chunks of vertices; the calling thread only reports progress. Results are returned only on
-/// success.
+/// chunks of vertices (parallel_for); with a progress callback the calling thread only reports.
+/// Results are returned only on success.
 TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
                            const std::vector<Triangle>& triangles, const TransferOptions& options,
                            const OccluderMesh& occluders = {});
@@ -135,10 +118,6 @@ std::vector<double> bake_visibility(const std::vector<glm::dvec3>& vertices, con
                                     std::uint64_t seed = 0, const OccluderMesh& occluders = {},
                                     std::function<bool(std::size_t, std::size_t)> progress = {});
 
-/// The ray-origin offset of vertices without faces for these object vertices (see
-/// kRayEpsilonScale); when all coincide at the origin, 1e-4 × the occluders' diagonal, or 1e-6 if
-/// that is 0 too.
-double ray_epsilon(const std::vector<glm::dvec3>& vertices, const OccluderMesh& occluders = {});
 
 /// The spherical Fibonacci set of `count` points: z_i = 1 − (2i+1)/count, azimuth 2π frac(i φ⁻¹)
 /// (φ the golden ratio), an equal-weight rule for dμ.

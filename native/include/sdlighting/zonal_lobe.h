@@ -3,14 +3,12 @@
 // with σ = 1, and both are handled through that one family.
 #pragma once
 
+#include "sdlighting/limits.h"
+
 #include <string>
 #include <vector>
 
 namespace sd {
-
-/// Largest Phong exponent accepted: the factor recurrence stays exact far beyond, but designs
-/// and textures for narrower lobes are meaningless in float32 shading.
-constexpr double kMaxPhongExponent = 1e4;
 
 /// A normalised zonal lobe around an axis a: w(a·x) = (2σ+2) max(0, a·x)^σ.
 struct ZonalLobe {

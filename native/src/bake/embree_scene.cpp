@@ -1,0 +1,208 @@
+#include "bake/embree_scene.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace sd {
+namespace {
+
+std::string vec_string(const glm::dvec3& v) {
+  return "(" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+}
+
+bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+void check_points(const char* name, const std::vector<glm::dvec3>& points) {
+  constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const glm::dvec3& p = points[i];
+    if (!finite(p)) {
+      throw std::invalid_argument(std::string(name) + "[" + std::to_string(i) + "] contains NaN or infinity");
+    }
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > 1e-3 * kFloatMax) {
+      throw std::invalid_argument(std::string(name) + "[" + std::to_string(i) + "] = " + vec_string(p) +
+                                  " is beyond the float32 range Embree works in");
+    }
+  }
+}
+
+void check_triangles(const char* name, const std::vector<Triangle>& triangles, std::size_t vertex_count,
+                     const char* vertices_name) {
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t index = triangles[t][k];
+      if (index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
+        throw std::invalid_argument(std::string(name) + "[" + std::to_string(t) + "][" + std::to_string(k) +
+                                    "] = " + std::to_string(index) + " is out of range for " +
+                                    std::to_string(vertex_count) + " " + vertices_name);
+      }
+    }
+  }
+}
+
+std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals) {
+  std::vector<glm::dvec3> out(normals.size());
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const glm::dvec3& n = normals[i];
+    if (!finite(n)) throw std::invalid_argument("normals[" + std::to_string(i) + "] contains NaN or infinity");
+    const double scale = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+    if (!(scale > 0.0)) throw std::invalid_argument("normals[" + std::to_string(i) + "] is the zero vector");
+    out[i] = glm::normalize(n / scale);
+  }
+  return out;
+}
+
+EmbreeScene::EmbreeScene() {
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) throw std::runtime_error("Embree: cannot create a device (" + error_name(rtcGetDeviceError(nullptr)) + ")");
+  rtcSetDeviceErrorFunction(device_, &EmbreeScene::on_error, this);
+  scene_ = rtcNewScene(device_);
+  check("rtcNewScene");
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+}
+
+EmbreeScene::~EmbreeScene() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles) {
+  if (triangles.empty()) return -1;
+  RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+  check("rtcNewGeometry");
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), vertices.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                            3 * sizeof(unsigned), triangles.size()));
+  if (!vb || !ib) {
+    rtcReleaseGeometry(geometry);
+    check("rtcSetNewGeometryBuffer");
+    throw std::runtime_error("Embree: cannot allocate geometry buffers");
+  }
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    vb[3 * i + 0] = static_cast<float>(vertices[i].x);
+    vb[3 * i + 1] = static_cast<float>(vertices[i].y);
+    vb[3 * i + 2] = static_cast<float>(vertices[i].z);
+  }
+  std::vector<glm::vec3> normals(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) ib[3 * t + k] = static_cast<unsigned>(triangles[t][k]);
+    const glm::dvec3& a = vertices[triangles[t][0]];
+    normals[t] = glm::vec3(glm::cross(vertices[triangles[t][1]] - a, vertices[triangles[t][2]] - a));
+  }
+  // Only rtcIntersect1 (first_side) calls it: the bake's rtcOccluded1M rays run without a filter.
+  rtcSetGeometryIntersectFilterFunction(geometry, &EmbreeScene::probe_filter);
+  rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
+  rtcCommitGeometry(geometry);
+  const unsigned id = rtcAttachGeometry(scene_, geometry);
+  rtcReleaseGeometry(geometry);
+  check("building the geometry");
+  if (face_normals_.size() <= id) face_normals_.resize(id + 1);
+  face_normals_[id] = std::move(normals);
+  return static_cast<int>(id);
+}
+
+void EmbreeScene::commit() {
+  rtcCommitScene(scene_);
+  check("rtcCommitScene");
+}
+
+bool EmbreeScene::occluded(const glm::dvec3& origin, const glm::dvec3& dir) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray = occlusion_ray(origin, dir);
+  rtcOccluded1(scene_, &context, &ray);
+  return is_occluded(ray);
+}
+
+namespace {
+
+// rtcIntersect1's context, extended with the probe's state (Embree passes the pointer through).
+struct ProbeContext {
+  RTCIntersectContext context;
+  const std::vector<std::vector<glm::vec3>>* face_normals;
+  int skipped_geometry;
+  const std::vector<unsigned>* skipped;
+  float tolerance;
+  float first_t;
+  EmbreeScene::Side first_side;
+};
+
+}  // namespace
+
+void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
+  auto* probe = reinterpret_cast<ProbeContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    args->valid[i] = 0;  // every hit is rejected, so traversal reports every triangle on the segment
+    const unsigned geometry = RTCHitN_geomID(args->hit, args->N, i);
+    const unsigned primitive = RTCHitN_primID(args->hit, args->N, i);
+    if (static_cast<int>(geometry) == probe->skipped_geometry &&
+        std::find(probe->skipped->begin(), probe->skipped->end(), primitive) != probe->skipped->end()) {
+      continue;
+    }
+    const glm::vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+                        RTCRayN_dir_z(args->ray, args->N, i));
+    const float t = RTCRayN_tfar(args->ray, args->N, i);  // the candidate hit's distance
+    const float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
+    const Side side = facing > 0.0f ? Side::kBack : (facing < 0.0f ? Side::kFront : Side::kNothing);
+    if (side == Side::kNothing) continue;  // the segment runs in the triangle's plane
+    if (probe->first_side == Side::kNothing || t < probe->first_t - probe->tolerance) {
+      probe->first_t = t;
+      probe->first_side = side;
+    } else if (t <= probe->first_t + probe->tolerance && side == Side::kBack) {
+      probe->first_side = Side::kBack;
+    }
+  }
+}
+
+EmbreeScene::Side EmbreeScene::first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
+                                          int skipped_geometry, const std::vector<unsigned>& skipped) const {
+  ProbeContext probe;
+  rtcInitIntersectContext(&probe.context);
+  probe.face_normals = &face_normals_;
+  probe.skipped_geometry = skipped_geometry;
+  probe.skipped = &skipped;
+  probe.tolerance = static_cast<float>(1e-4 * t_max);
+  probe.first_t = 0.0f;
+  probe.first_side = Side::kNothing;
+  RTCRayHit query{};
+  query.ray = occlusion_ray(origin, dir);
+  query.ray.tfar = static_cast<float>(t_max);
+  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene_, &probe.context, &query);
+  return probe.first_side;
+}
+
+std::string EmbreeScene::error_name(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+  }
+}
+
+void EmbreeScene::on_error(void* self, RTCError code, const char* message) {
+  auto* scene = static_cast<EmbreeScene*>(self);
+  if (scene->error_.empty()) scene->error_ = error_name(code) + (message ? std::string(": ") + message : "");
+}
+
+void EmbreeScene::check(const char* what) {
+  const RTCError code = rtcGetDeviceError(device_);
+  if (code != RTC_ERROR_NONE || !error_.empty()) {
+    throw std::runtime_error(std::string("Embree failed in ") + what + ": " + (error_.empty() ? error_name(code) : error_));
+  }
+}
+
+}  // namespace sd

@@ -1,0 +1,86 @@
+// Embree's occlusion scene and the checks of the meshes it is built from. Private to the library:
+// the visibility bake and the reference integrator trace against the same scene.
+#pragma once
+
+#include "sdlighting/mesh.h"
+
+#include <embree3/rtcore.h>
+
+#include <glm/vec3.hpp>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace sd {
+
+/// Throws std::invalid_argument naming `name`[i] when a point is not finite or beyond the float32
+/// range Embree works in.
+void check_points(const char* name, const std::vector<glm::dvec3>& points);
+
+/// Throws std::invalid_argument when a triangle's index is outside [0, vertex_count).
+void check_triangles(const char* name, const std::vector<Triangle>& triangles, std::size_t vertex_count,
+                     const char* vertices_name);
+
+/// The normals made unit length; throws std::invalid_argument for non-finite or zero ones.
+std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals);
+
+/// An occlusion ray from `origin` along `dir`, t in [0, ∞) (Embree works in float32).
+inline RTCRay occlusion_ray(const glm::dvec3& origin, const glm::dvec3& dir) {
+  RTCRay ray{};
+  ray.org_x = static_cast<float>(origin.x);
+  ray.org_y = static_cast<float>(origin.y);
+  ray.org_z = static_cast<float>(origin.z);
+  ray.dir_x = static_cast<float>(dir.x);
+  ray.dir_y = static_cast<float>(dir.y);
+  ray.dir_z = static_cast<float>(dir.z);
+  ray.tnear = 0.0f;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  return ray;
+}
+
+/// Whether Embree marked the ray occluded (it sets tfar to −∞ on a hit).
+inline bool is_occluded(const RTCRay& ray) { return ray.tfar < 0.0f; }
+
+/// A committed Embree scene of the object's triangles and the occluders' (robust, high quality).
+class EmbreeScene {
+ public:
+  EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+  ~EmbreeScene();
+
+  /// Adds a triangle mesh (indices already checked); returns its geometry ID, or -1 when it has no
+  /// triangles (nothing is added).
+  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles);
+  /// Builds the BVH; call once, after every add().
+  void commit();
+  RTCScene scene() const { return scene_; }
+
+  /// Whether the ray origin + t dir, t in [0, ∞), hits a triangle; thread-safe after commit().
+  bool occluded(const glm::dvec3& origin, const glm::dvec3& dir) const;
+
+  /// What a probe segment meets first.
+  enum class Side { kNothing, kFront, kBack };
+  /// The side of the first triangle the segment origin + t dir, t in [0, t_max], meets: the front
+  /// is the side its normal points to by the right-hand rule of its winding (Blender's). Triangles
+  /// met at the same t (coplanar ones: a box standing on a floor) count as kBack when any of them
+  /// is met from behind. Triangles `skipped` of geometry `skipped_geometry` are not seen.
+  /// Thread-safe after commit().
+  Side first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
+                  const std::vector<unsigned>& skipped = {}) const;
+
+ private:
+  static std::string error_name(RTCError code);
+  static void probe_filter(const RTCFilterFunctionNArguments* args);
+  static void on_error(void* self, RTCError code, const char* message);
+  void check(const char* what);
+
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  std::string error_;
+  std::vector<std::vector<glm::vec3>> face_normals_;  // per geometry ID, per triangle (unnormalised)
+};
+
+}  // namespace sd

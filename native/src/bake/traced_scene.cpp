@@ -1,0 +1,167 @@
+#include "bake/traced_scene.h"
+
+#include "util/parallel_for.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace sd {
+namespace {
+
+struct BoundingBox {
+  glm::dvec3 lo{0.0}, hi{0.0};
+  explicit BoundingBox(const std::vector<glm::dvec3>& points) {
+    if (points.empty()) return;
+    lo = hi = points[0];
+    for (const auto& p : points) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+  }
+  glm::dvec3 centre() const { return 0.5 * (lo + hi); }
+  double diagonal() const { return glm::length(hi - lo); }
+};
+
+double faceless_offset(const std::vector<glm::dvec3>& points, const OccluderMesh& occluders) {
+  for (double diagonal : {BoundingBox(points).diagonal(), BoundingBox(occluders.vertices).diagonal()}) {
+    if (diagonal > 0.0) return kFacelessOffset * diagonal;
+  }
+  return 1e-6;  // a single point and nothing else: any offset is as good
+}
+
+std::vector<glm::dvec3> shifted(const std::vector<glm::dvec3>& points, const glm::dvec3& by) {
+  std::vector<glm::dvec3> out(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) out[i] = points[i] - by;
+  return out;
+}
+
+double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
+
+// The triangles around each vertex (compressed rows), degenerate ones left out: they have no side.
+struct Fans {
+  std::vector<std::size_t> offsets;  // [N+1]
+  std::vector<unsigned> triangles;
+
+  Fans(std::size_t vertex_count, const std::vector<Triangle>& mesh, const std::vector<double>& areas)
+      : offsets(vertex_count + 1, 0) {
+    for (std::size_t t = 0; t < mesh.size(); ++t) {
+      if (areas[t] > 0.0) {
+        for (int k = 0; k < 3; ++k) ++offsets[mesh[t][k] + 1];
+      }
+    }
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    triangles.resize(offsets.back());
+    std::vector<std::size_t> fill(offsets.begin(), offsets.end() - 1);
+    for (std::size_t t = 0; t < mesh.size(); ++t) {
+      if (areas[t] > 0.0) {
+        for (int k = 0; k < 3; ++k) triangles[fill[mesh[t][k]]++] = static_cast<unsigned>(t);
+      }
+    }
+  }
+};
+
+}  // namespace
+
+TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
+                         const std::vector<Triangle>& triangles, const OccluderMesh& occluders, int threads)
+    : centre_(BoundingBox(vertices).centre()) {
+  const std::vector<glm::dvec3> points = shifted(vertices, centre_);
+  const OccluderMesh shifted_occluders{shifted(occluders.vertices, centre_), occluders.triangles};
+  const int object = scene_.add(points, triangles);
+  scene_.add(shifted_occluders.vertices, shifted_occluders.triangles);
+  scene_.commit();
+
+  std::vector<double> areas(triangles.size());
+  std::vector<glm::dvec3> centroids(triangles.size()), area_normals(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const glm::dvec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
+    area_normals[t] = 0.5 * glm::cross(b - a, c - a);
+    areas[t] = glm::length(area_normals[t]);
+    centroids[t] = (a + b + c) / 3.0;
+  }
+  const Fans fans(points.size(), triangles, areas);
+  const double faceless = faceless_offset(points, shifted_occluders);
+  const std::vector<glm::dvec3> fibonacci = spherical_fibonacci(kCandidateDirections);
+
+  origins_.resize(points.size());
+  parallel_for(points.size(), 64, [&](std::size_t begin, std::size_t end) {
+    std::vector<unsigned> fan, probed;
+    std::vector<std::size_t> order(fibonacci.size());
+    for (std::size_t v = begin; v < end; ++v) {
+      const glm::dvec3& p = points[v];
+      const glm::dvec3& n = unit_normals[v];
+      fan.assign(fans.triangles.begin() + fans.offsets[v], fans.triangles.begin() + fans.offsets[v + 1]);
+      const double floor = kOriginFloat * largest_coordinate(p);
+      if (fan.empty()) {
+        origins_[v] = p + std::max(faceless, floor) * n;
+        continue;
+      }
+      double shortest = std::numeric_limits<double>::infinity(), area = 0.0;
+      glm::dvec3 centre(0.0), faces_normal(0.0);
+      for (unsigned t : fan) {
+        faces_normal += area_normals[t];
+        for (int k = 0; k < 3; ++k) {
+          const double edge = glm::length(points[triangles[t][k]] - points[triangles[t][(k + 1) % 3]]);
+          if (edge > 0.0) shortest = std::min(shortest, edge);
+        }
+        centre += areas[t] * centroids[t];
+        area += areas[t];
+      }
+      const double eta = std::max(kOriginOffset * shortest, floor);
+      glm::dvec3 into_faces = (centre / area - p) / shortest;
+      const double reach = glm::length(into_faces);
+      if (reach > 1.0) into_faces /= reach;  // at most 45° off the normal, so q stays clear of the faces
+
+      probed = fan;
+      std::sort(probed.begin(), probed.end(), [&](unsigned a, unsigned b) { return areas[a] > areas[b]; });
+      if (probed.size() > static_cast<std::size_t>(kProbedFaces)) probed.resize(kProbedFaces);
+      auto passes = [&](const glm::dvec3& q) {
+        const glm::dvec3 to_p = p - q;
+        const double distance = glm::length(to_p);
+        if (scene_.first_side(q, to_p / distance, 2.0 * distance, object, fan) == EmbreeScene::Side::kBack) {
+          return false;
+        }
+        // In front of every face around p, a segment from q to a face's centroid can meet those
+        // faces only from the front: the probes towards them can fail only at concave vertices.
+        if (std::all_of(fan.begin(), fan.end(), [&](unsigned t) { return glm::dot(q - p, area_normals[t]) > 0.0; })) {
+          return true;
+        }
+        for (unsigned t : probed) {
+          const glm::dvec3 to_face = centroids[t] - q;
+          const double length = glm::length(to_face);
+          if (scene_.first_side(q, to_face / length, 1.01 * length) == EmbreeScene::Side::kBack) return false;
+        }
+        return true;
+      };
+      auto at = [&](const glm::dvec3& u) { return p + eta * glm::normalize(u); };
+
+      const glm::dvec3 first = glm::length(n + into_faces) > 1e-6 ? at(n + into_faces) : at(n);
+      // The given normal first; then the faces' own (a flipped normal points into the solid).
+      const glm::dvec3 outward = glm::length(faces_normal) > 0.0 ? glm::normalize(faces_normal) : n;
+      glm::dvec3 chosen = first;
+      if (!passes(first) && !passes(chosen = at(n)) && !passes(chosen = at(outward))) {
+        std::iota(order.begin(), order.end(), std::size_t{0});
+        std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+          return glm::dot(fibonacci[a], outward) > glm::dot(fibonacci[b], outward);
+        });
+        chosen = first;
+        for (std::size_t i : order) {
+          const glm::dvec3 q = at(fibonacci[i]);
+          if (passes(q)) {
+            chosen = q;
+            break;
+          }
+        }
+      }
+      origins_[v] = chosen;
+    }
+  }, ParallelOptions(threads));
+}
+
+std::vector<glm::dvec3> TracedScene::object_frame_origins() const { return shifted(origins_, -centre_); }
+
+}  // namespace sd

@@ -1,0 +1,73 @@
+// The scene a bake or a reference traces, and the point each vertex's rays start from. Private to
+// the library.
+//
+// A ray that starts at a vertex p, or at p + εn, meets the surfaces through p at t ≈ 0 in float32:
+// at a concave hard edge whose vertices are split (glTF), p + εn lies in the plane of the wall rising
+// from the edge and the open quarter-space reads as blocked; at the bottom corner of a box standing
+// on a floor, p + εn lies below the floor and the lower half-space leaks in. So each vertex's rays
+// start at a point q = p + η u in free space next to p:
+//   η = kOriginOffset × the shortest edge of the triangles around p (the size of the local
+//       geometry: thin slabs and fine detail stay resolved, the scale of the object does not
+//       matter), at least kOriginFloat × |p|∞ in the traced frame (above float32 rounding);
+//   u is the first of these candidates whose q passes the probes: n + (c − p)/h — along the normal
+//       and into the faces around p, towards the area-weighted mean c of their centroids (h the
+//       shortest edge), as Cycles' bakes move their ray origins into the face —, then n, then the
+//       faces' own area-weighted normal m (by their winding: it survives a flipped n), then
+//       kCandidateDirections spherical-Fibonacci directions by decreasing u·m;
+//   q fails a probe when the first surface a segment from q meets is met from behind (the side
+//       opposite its normal by the right-hand rule of its winding): q is then inside a solid or under
+//       a surface. The probes run from q through p to 2|q − p| with p's own faces skipped (other
+//       surfaces through p: a floor the object stands on) and, unless q is in front of every face
+//       around p (then no segment from q can meet them from behind), from q to the centroid of
+//       each face around p (the largest kProbedFaces).
+//   When no candidate passes (an enclosed vertex, a mesh with inconsistent winding) the first is used.
+//   A vertex without faces (a probe point) starts at p + η n, η = kFacelessOffset × the diagonal of
+//   the object's bounding box (of the occluders' when the object is one point), at least the floor.
+// The traced frame is the object's shifted by the centre of its vertices' bounding box, so Embree's
+// float32 keeps the object's own precision however far from the origin it sits.
+#pragma once
+
+#include "sdlighting/visibility.h"
+
+#include "bake/embree_scene.h"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <vector>
+
+namespace sd {
+
+/// η = kOriginOffset × the shortest edge around the vertex (see the file comment).
+constexpr double kOriginOffset = 1e-3;
+/// ... but at least kOriginFloat × the vertex's largest coordinate in the traced frame.
+constexpr double kOriginFloat = 1e-5;
+/// The faces around a vertex whose centroids a candidate origin is probed towards, largest first.
+constexpr int kProbedFaces = 16;
+/// η of a vertex without faces, relative to the object's bounding-box diagonal.
+constexpr double kFacelessOffset = 1e-4;
+/// Spherical-Fibonacci candidates tried after n + (c − p)/h, n and the faces' normal.
+constexpr int kCandidateDirections = 64;
+
+/// The object's and the occluders' triangles in one Embree scene, in the traced frame, and every
+/// object vertex's ray origin.
+class TracedScene {
+ public:
+  /// vertices/unit_normals/triangles: the object (checked by the caller); occluders: other
+  /// blocking triangles; threads: as parallel_for (the origins are found in parallel).
+  TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
+              const std::vector<Triangle>& triangles, const OccluderMesh& occluders, int threads);
+
+  const EmbreeScene& scene() const { return scene_; }
+  /// Vertex v's ray origin in the traced frame (the one scene() is built in).
+  const glm::dvec3& origin(std::size_t v) const { return origins_[v]; }
+  /// Every ray origin in the object's frame.
+  std::vector<glm::dvec3> object_frame_origins() const;
+
+ private:
+  glm::dvec3 centre_;
+  EmbreeScene scene_;
+  std::vector<glm::dvec3> origins_;
+};
+
+}  // namespace sd

@@ -1,0 +1,333 @@
+#include "sdlighting/visibility.h"
+
+#include "util/parallel_for.h"
+#include "sdlighting/spherical_design.h"
+#include "sdlighting/spherical_harmonics.h"
+#include "sdlighting/weighted_design.h"
+
+#include "bake/embree_scene.h"
+#include "bake/traced_scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <Eigen/Core>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace sd {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Most vertices a worker takes per grab of the shared counter, and the rays a chunk aims at.
+constexpr std::size_t kChunk = 8;
+constexpr std::size_t kChunkRays = 8 * 1024;
+// Rays per rtcOccluded1M call (bounds the scratch memory for huge ray counts).
+constexpr int kStreamBlock = 1024;
+
+// ---- random rotations ----
+
+std::uint64_t splitmix64_mix(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+struct SplitMix64 {
+  std::uint64_t state;
+  std::uint64_t next() { return splitmix64_mix(state += 0x9e3779b97f4a7c15ULL); }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+};
+
+// ---- validation ----
+
+// An order of the bake's options: in [0, max_order], or -1 (not requested).
+void check_requested_order(const char* name, int order, int max_order) {
+  if (order != -1) check_order(std::string(name) + " (-1: not requested)", order, max_order);
+}
+
+// Both orders of a pair requested, or neither.
+void check_pair(const char* name, int s, int s_prime) {
+  if ((s < 0) != (s_prime < 0)) {
+    throw std::invalid_argument(std::string(name) + " needs both orders s and s' (or neither), got s = " +
+                                std::to_string(s) + ", s' = " + std::to_string(s_prime));
+  }
+}
+
+// ---- the per-vertex work ----
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct Plan {
+  int rays = 0;
+  int basis_order = -1;  // SH order evaluated at the escaping rays (-1: none)
+  int visibility_count = 0, product_rows = 0, product_cols = 0, transfer_count = 0;
+  int design_degree = -1;
+  bool record_rays = false;
+  std::uint64_t seed = 0;
+  const std::vector<glm::dvec3>* fibonacci = nullptr;
+};
+
+struct Scratch {
+  std::vector<RTCRay> stream;          // one block of rays for rtcOccluded1M
+  std::vector<glm::dvec3> directions;  // their directions in double
+  std::vector<glm::dvec3> escaped;
+  std::vector<double> weights;
+  RowMatrix y;           // [escaping rays][sh_count(basis_order)]
+  Eigen::VectorXd cosine;  // 4 max(0, n·x_r) at the escaping rays
+  Eigen::MatrixXd product;
+  Eigen::VectorXd vector;
+};
+
+struct Outputs {
+  TransferBake* bake;
+  std::vector<SphericalDesign>* designs;
+};
+
+void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
+                 Scratch& s, const Outputs& out) {
+  const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, v);
+  const std::vector<glm::dvec3>& base = *plan.fibonacci;
+  const int rays = plan.rays;
+  std::uint8_t* record = plan.record_rays ? out.bake->ray_visibility.data() + v * static_cast<std::size_t>(rays)
+                                          : nullptr;
+
+  // Rays go to Embree as streams of up to kStreamBlock (rtcOccluded1M): with one origin per vertex
+  // Embree packs them into SIMD packets, about twice the throughput of rtcOccluded1 on these machines
+  // (visibility_benchmarks).
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  s.escaped.clear();
+  for (int start = 0; start < rays; start += kStreamBlock) {
+    const int count = std::min(kStreamBlock, rays - start);
+    s.directions.resize(count);
+    s.stream.resize(count);
+    for (int i = 0; i < count; ++i) {
+      const glm::dvec3 x = rotation * base[start + i];
+      s.directions[i] = x;
+      s.stream[i] = occlusion_ray(origin, x);
+    }
+    rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(count), sizeof(RTCRay));
+    for (int i = 0; i < count; ++i) {
+      const bool escapes = !is_occluded(s.stream[i]);
+      if (escapes) s.escaped.push_back(s.directions[i]);
+      if (record) record[start + i] = escapes ? 1 : 0;
+    }
+  }
+
+  const int e = static_cast<int>(s.escaped.size());
+  const double inv_rays = 1.0 / rays;
+  TransferBake& bake = *out.bake;
+  bake.ambient_occlusion[v] = e * inv_rays;
+
+  if (plan.basis_order >= 0) {
+    const int k = sh_count(plan.basis_order);
+    s.y.resize(e, k);
+    for (int r = 0; r < e; ++r) sh_basis(plan.basis_order, s.escaped[r], s.y.row(r).data());
+  }
+  if (plan.visibility_count > 0) {
+    s.vector = s.y.leftCols(plan.visibility_count).colwise().sum().transpose() * inv_rays;
+    std::copy(s.vector.data(), s.vector.data() + plan.visibility_count,
+              bake.visibility.data() + v * static_cast<std::size_t>(plan.visibility_count));
+  }
+  if (plan.product_rows > 0) {
+    s.product.noalias() = s.y.leftCols(plan.product_rows).transpose() * s.y.leftCols(plan.product_cols);
+    double* dst = bake.product_matrices.data() + v * static_cast<std::size_t>(plan.product_rows) * plan.product_cols;
+    for (int i = 0; i < plan.product_rows; ++i) {
+      for (int j = 0; j < plan.product_cols; ++j) dst[i * plan.product_cols + j] = s.product(i, j) * inv_rays;
+    }
+  }
+  if (plan.transfer_count > 0) {
+    s.cosine.resize(e);
+    for (int r = 0; r < e; ++r) s.cosine(r) = 4.0 * std::max(0.0, glm::dot(n, s.escaped[r]));
+    s.vector.noalias() = s.y.leftCols(plan.transfer_count).transpose() * s.cosine;
+    double* dst = bake.transfer.data() + v * static_cast<std::size_t>(plan.transfer_count);
+    for (int i = 0; i < plan.transfer_count; ++i) dst[i] = s.vector(i) * inv_rays;
+  }
+  if (plan.design_degree >= 0 && e > 0) {
+    s.weights.assign(e, inv_rays);
+    try {
+      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree);
+    } catch (const std::exception& error) {
+      throw std::runtime_error("the visibility design of degree " + std::to_string(plan.design_degree) +
+                               " for vertex " + std::to_string(v) + " (" + std::to_string(e) + " of " +
+                               std::to_string(rays) + " rays escaping) failed: " + error.what());
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<glm::dvec3> spherical_fibonacci(int count) {
+  if (count < 1) throw std::invalid_argument("spherical_fibonacci needs count >= 1, got " + std::to_string(count));
+  const double golden_fraction = 0.5 * (std::sqrt(5.0) - 1.0);  // 1/φ
+  std::vector<glm::dvec3> points(count);
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / count;
+    const double r = std::sqrt((1.0 - z) * (1.0 + z));
+    const double turns = i * golden_fraction;
+    const double phi = 2.0 * kPi * (turns - std::floor(turns));
+    points[i] = glm::dvec3(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return points;
+}
+
+glm::dmat3 vertex_ray_rotation(std::uint64_t seed, std::size_t vertex) {
+  SplitMix64 rng{splitmix64_mix(seed) ^ static_cast<std::uint64_t>(vertex)};
+  const double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+  // Shoemake: a uniformly distributed unit quaternion (w, x, y, z).
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  const double x = a * std::sin(2.0 * kPi * u2), y = a * std::cos(2.0 * kPi * u2);
+  const double z = b * std::sin(2.0 * kPi * u3), w = b * std::cos(2.0 * kPi * u3);
+  glm::dmat3 m;  // column-major: m[column][row]
+  m[0][0] = 1.0 - 2.0 * (y * y + z * z);
+  m[0][1] = 2.0 * (x * y + w * z);
+  m[0][2] = 2.0 * (x * z - w * y);
+  m[1][0] = 2.0 * (x * y - w * z);
+  m[1][1] = 1.0 - 2.0 * (x * x + z * z);
+  m[1][2] = 2.0 * (y * z + w * x);
+  m[2][0] = 2.0 * (x * z + w * y);
+  m[2][1] = 2.0 * (y * z - w * x);
+  m[2][2] = 1.0 - 2.0 * (x * x + y * y);
+  return m;
+}
+
+std::vector<glm::dvec3> vertex_ray_directions(int rays, std::uint64_t seed, std::size_t vertex) {
+  std::vector<glm::dvec3> dirs = spherical_fibonacci(rays);
+  const glm::dmat3 rotation = vertex_ray_rotation(seed, vertex);
+  for (auto& d : dirs) d = rotation * d;
+  return dirs;
+}
+
+TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
+                           const std::vector<Triangle>& triangles, const TransferOptions& options,
+                           const OccluderMesh& occluders) {
+  const auto start = std::chrono::steady_clock::now();
+
+  // ---- validation ----
+  if (vertices.empty()) throw std::invalid_argument("the mesh has no vertices");
+  if (normals.size() != vertices.size()) {
+    throw std::invalid_argument("normals must match vertices: " + std::to_string(normals.size()) + " normals for " +
+                                std::to_string(vertices.size()) + " vertices");
+  }
+  check_range("rays", options.rays, 1, kMaxRaysPerVertex);
+  if (options.threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all), got " + std::to_string(options.threads));
+  check_requested_order("visibility_order s'", options.visibility_order, kMaxVisibilityOrder);
+  check_requested_order("product_order s", options.product_order, kMaxTransferOrder);
+  check_requested_order("product_visibility_order s'", options.product_visibility_order, kMaxVisibilityOrder);
+  check_pair("the product matrix", options.product_order, options.product_visibility_order);
+  check_requested_order("transfer_order s", options.transfer_order, kMaxTransferOrder);
+  check_requested_order("design_order s", options.design_order, kMaxTransferOrder);
+  check_requested_order("design_visibility_order s'", options.design_visibility_order, kMaxVisibilityOrder);
+  check_pair("the design", options.design_order, options.design_visibility_order);
+  if (options.design_order >= 0) {
+    check_order("design degree s + s'", options.design_order + options.design_visibility_order, kMaxDesignDegree);
+  }
+  check_points("vertices", vertices);
+  const std::vector<glm::dvec3> units = unit_normals(normals);
+  check_triangles("triangles", triangles, vertices.size(), "vertices");
+  check_points("occluder vertices", occluders.vertices);
+  check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
+  if (vertices.size() > std::numeric_limits<unsigned>::max() ||
+      occluders.vertices.size() > std::numeric_limits<unsigned>::max()) {
+    throw std::invalid_argument("Embree indexes vertices with 32 bits: too many vertices");
+  }
+
+  // ---- the plan and the result arrays ----
+  const std::size_t n = vertices.size();
+  const std::vector<glm::dvec3> fibonacci = spherical_fibonacci(options.rays);
+  Plan plan;
+  plan.rays = options.rays;
+  plan.seed = options.seed;
+  plan.fibonacci = &fibonacci;
+  plan.record_rays = options.record_rays;
+  plan.basis_order = std::max({options.visibility_order, options.product_order, options.product_visibility_order,
+                               options.transfer_order});
+  if (options.visibility_order >= 0) plan.visibility_count = sh_count(options.visibility_order);
+  if (options.product_order >= 0) {
+    plan.product_rows = sh_count(options.product_order);
+    plan.product_cols = sh_count(options.product_visibility_order);
+  }
+  if (options.transfer_order >= 0) plan.transfer_count = sh_count(options.transfer_order);
+  if (options.design_order >= 0) plan.design_degree = options.design_order + options.design_visibility_order;
+
+  TransferBake bake;
+  bake.vertex_count = n;
+  bake.rays = options.rays;
+  bake.seed = options.seed;
+  bake.visibility_order = options.visibility_order;
+  bake.product_order = options.product_order;
+  bake.product_visibility_order = options.product_visibility_order;
+  bake.transfer_order = options.transfer_order;
+  bake.design_degree = plan.design_degree;
+  bake.ambient_occlusion.assign(n, 0.0);
+  bake.visibility.assign(n * plan.visibility_count, 0.0);
+  bake.product_matrices.assign(n * plan.product_rows * plan.product_cols, 0.0);
+  bake.transfer.assign(n * plan.transfer_count, 0.0);
+  if (plan.record_rays) bake.ray_visibility.assign(n * static_cast<std::size_t>(options.rays), 0);
+  std::vector<SphericalDesign> designs(plan.design_degree >= 0 ? n : 0);
+  const Outputs outputs{&bake, &designs};
+
+  // ---- the scene and the ray origins ----
+  const TracedScene traced(vertices, units, triangles, occluders, options.threads);
+  bake.ray_origins = traced.object_frame_origins();
+
+  // ---- the workers; with a progress callback the calling thread only reports ----
+  ParallelOptions parallel(options.threads);
+  parallel.progress = options.progress;
+  parallel.cancel = options.cancel;
+  // Chunks of about kChunkRays rays (at most kChunk vertices) keep a cancel prompt for any ray count.
+  const std::size_t chunk = std::clamp<std::size_t>(kChunkRays / options.rays, 1, kChunk);
+  const ParallelOutcome outcome = parallel_for(
+      n, chunk,
+      [&, scratch = Scratch()](std::size_t begin, std::size_t end) mutable {
+        for (std::size_t v = begin; v < end; ++v) bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, scratch, outputs);
+      },
+      parallel);
+  if (!outcome.completed) {
+    throw BakeCancelled("bake cancelled after " + std::to_string(outcome.done) + " of " + std::to_string(n) +
+                        " vertices");
+  }
+
+  // ---- flatten the designs ----
+  if (plan.design_degree >= 0) {
+    bake.design_offsets.assign(n + 1, 0);
+    bake.design_residuals.assign(n, 0.0);
+    std::size_t total = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+      total += designs[v].nodes.size();
+      bake.design_offsets[v + 1] = static_cast<std::int64_t>(total);
+      bake.design_residuals[v] = designs[v].residual;
+    }
+    bake.design_nodes.reserve(total);
+    bake.design_weights.reserve(total);
+    for (auto& d : designs) {
+      bake.design_nodes.insert(bake.design_nodes.end(), d.nodes.begin(), d.nodes.end());
+      bake.design_weights.insert(bake.design_weights.end(), d.weights.begin(), d.weights.end());
+    }
+  }
+  bake.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return bake;
+}
+
+std::vector<double> bake_visibility(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
+                                    const std::vector<Triangle>& triangles, int order, int rays, std::uint64_t seed,
+                                    const OccluderMesh& occluders,
+                                    std::function<bool(std::size_t, std::size_t)> progress) {
+  check_order("visibility order", order, kMaxVisibilityOrder);
+  TransferOptions options;
+  options.rays = rays;
+  options.seed = seed;
+  options.visibility_order = order;
+  options.progress = std::move(progress);
+  return bake_transfer(vertices, normals, triangles, options, occluders).visibility;
+}
+
+}  // namespace sd

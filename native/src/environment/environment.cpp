@@ -1,0 +1,159 @@
+// Environment maps: construction (from files or pixels), their texels' radiance, masses and norms,
+// and the weighted designs of a channel. The layouts are in texel_layout.cpp, the SH side in
+// projection.cpp. Conventions and equations: environment.h and msd-notes.
+#include "sdlighting/environment.h"
+
+#include "environment/environment_detail.h"
+#include "environment/image_io.h"
+#include "sdlighting/weighted_design.h"
+
+#include <algorithm>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace sd {
+namespace {
+
+// channel_design's area-averaged copy.
+constexpr int kDesignEquirectWidth = 64;
+constexpr int kDesignEquirectHeight = 32;
+constexpr int kDesignCubeFace = 18;
+
+}  // namespace
+
+void check_channel(const char* what, int channel) {
+  if (channel < 0 || channel > kLuminance) {
+    throw std::invalid_argument(std::string(what) + ": channel must be 0, 1, 2 (R, G, B) or 3 (luminance), got " +
+                                std::to_string(channel));
+  }
+}
+
+Environment Environment::from_texels(EnvironmentLayout layout, int width, int height, std::vector<float> rgb,
+                                     const std::string& origin) {
+  const int64_t texels = layout == EnvironmentLayout::Equirect ? static_cast<int64_t>(width) * height
+                                                                : int64_t(6) * width * width;
+  check_image_size(width, height, texels, origin);
+  if (layout == EnvironmentLayout::Cube && width != height) {
+    throw std::invalid_argument(origin + ": cube faces must be square, got " + std::to_string(width) + " x " +
+                                std::to_string(height));
+  }
+  if (rgb.size() != static_cast<size_t>(texels) * 3) {
+    throw std::invalid_argument(origin + ": expected " + std::to_string(texels * 3) + " floats (" +
+                                (layout == EnvironmentLayout::Cube ? "6 x " : "") + std::to_string(width) + " x " +
+                                std::to_string(height) + " x 3), got " + std::to_string(rgb.size()));
+  }
+  check_finite_pixels(rgb, width, height, origin);
+
+  Environment env;
+  env.layout_ = layout;
+  env.width_ = width;
+  env.height_ = height;
+  env.rgb_ = std::move(rgb);
+  for (int64_t t = 0; t < texels; ++t) {
+    float* px = env.rgb_.data() + 3 * t;
+    bool negative = false;
+    for (int c = 0; c < 3; ++c) {
+      if (px[c] < 0.0f) {
+        px[c] = 0.0f;
+        negative = true;
+      }
+    }
+    env.clamped_negative_pixels_ += negative ? 1 : 0;
+  }
+  // Masses and norms (sequential: deterministic).
+  for (int64_t t = 0; t < texels; ++t) {
+    const double dmu = env.texel_solid_angle(t);
+    const float* px = env.rgb_.data() + 3 * t;
+    const double v[4] = {px[0], px[1], px[2], luminance(px[0], px[1], px[2])};
+    for (int c = 0; c < 4; ++c) {
+      env.mass_[c] += v[c] * dmu;
+      env.norm_squared_[c] += v[c] * v[c] * dmu;
+    }
+  }
+  env.cache_ = std::make_shared<EnergyCache>();
+  return env;
+}
+
+Environment Environment::load(const std::string& path) {
+  LoadedImage image = read_image_file(path);
+  return from_texels(EnvironmentLayout::Equirect, image.width, image.height, std::move(image.rgb),
+                     "environment map '" + path + "'");
+}
+
+Environment Environment::load_cube(const std::array<std::string, 6>& faces) {
+  std::vector<float> rgb;
+  int size = 0;
+  for (int f = 0; f < 6; ++f) {
+    const LoadedImage image = read_image_file(faces[f]);
+    const std::string origin = std::string("cube face ") + kFaceNames[f] + " '" + faces[f] + "'";
+    if (image.width != image.height) {
+      throw std::invalid_argument(origin + " is not square (" + std::to_string(image.width) + " x " +
+                                  std::to_string(image.height) + ")");
+    }
+    if (f == 0) {
+      size = image.width;
+      rgb.reserve(static_cast<size_t>(size) * size * 18);
+    } else if (image.width != size) {
+      throw std::invalid_argument(origin + " is " + std::to_string(image.width) + " pixels wide, face +X is " +
+                                  std::to_string(size) + ": all faces must have one size");
+    }
+    rgb.insert(rgb.end(), image.rgb.begin(), image.rgb.end());
+  }
+  return from_texels(EnvironmentLayout::Cube, size, size, std::move(rgb), "cube map '" + faces[0] + "', ...");
+}
+
+Environment Environment::from_equirect_pixels(int width, int height, std::vector<float> rgb) {
+  return from_texels(EnvironmentLayout::Equirect, width, height, std::move(rgb), "equirect pixels");
+}
+
+Environment Environment::from_cube_pixels(int face_size, std::vector<float> rgb) {
+  return from_texels(EnvironmentLayout::Cube, face_size, face_size, std::move(rgb), "cube pixels");
+}
+
+glm::dvec3 Environment::texel_radiance(int64_t t) const {
+  const float* px = rgb_.data() + 3 * t;
+  return {px[0], px[1], px[2]};
+}
+
+double Environment::mass(int channel) const {
+  check_channel("mass", channel);
+  return mass_[channel];
+}
+
+double Environment::norm_squared(int channel) const {
+  check_channel("norm_squared", channel);
+  return norm_squared_[channel];
+}
+
+SphericalDesign Environment::channel_design(int channel, int degree) const {
+  check_channel("Environment::channel_design", channel);
+  check_order("Environment::channel_design: degree", degree, kMaxDesignDegree);
+  if (!(mass_[channel] > 0.0)) {
+    throw std::invalid_argument("Environment::channel_design: channel " + std::to_string(channel) +
+                                " is black everywhere: its measure L dμ is empty");
+  }
+  const Environment* source = this;
+  Environment reduced;
+  if (layout_ == EnvironmentLayout::Equirect && (width_ > kDesignEquirectWidth || height_ > kDesignEquirectHeight)) {
+    reduced = area_averaged(std::min(width_, kDesignEquirectWidth), std::min(height_, kDesignEquirectHeight));
+    source = &reduced;
+  } else if (layout_ == EnvironmentLayout::Cube && width_ > kDesignCubeFace) {
+    reduced = area_averaged(kDesignCubeFace, kDesignCubeFace);
+    source = &reduced;
+  }
+  std::vector<glm::dvec3> dirs;
+  std::vector<double> weights;
+  for (int64_t t = 0; t < source->texel_count(); ++t) {
+    const glm::dvec3 l = source->texel_radiance(t);
+    const double value = channel == kLuminance ? luminance(l.x, l.y, l.z) : l[channel];
+    if (!(value > 0.0)) continue;
+    dirs.push_back(source->texel_direction(t));
+    weights.push_back(value * source->texel_solid_angle(t));
+  }
+  return weighted_design(dirs, weights, degree);
+}
+
+}  // namespace sd

@@ -1,0 +1,367 @@
+// The SH side of an environment: projection to SH coefficients (eq. (1)'s L_lm), band energies and
+// the error measures that choose s, band-limited textures L̃ (eqs. (12), (13)) and their ringing
+// windows. Conventions: environment.h.
+#include "sdlighting/environment.h"
+
+#include "environment/environment_detail.h"
+#include "environment/texel_layout.h"
+#include "sdlighting/spherical_harmonics.h"
+#include "util/parallel_for.h"
+
+#include <glm/vec3.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace sd {
+namespace {
+
+// The reference copy for the high-order projection (band_energies): see environment.h.
+constexpr int64_t kReferenceEquirectTexels = int64_t(4096) * 2048;
+constexpr int kReferenceCubeFace = 128;
+
+// cos(mφ_i) and sin(mφ_i) of every equirect column i, m < mc, stored by column: [i mc + m].
+struct AzimuthTables {
+  std::vector<double> cos, sin;
+  AzimuthTables(int width, int mc) : cos(static_cast<size_t>(width) * mc), sin(static_cast<size_t>(width) * mc) {
+    for (int i = 0; i < width; ++i) {
+      const double phi = equirect_phi(i, width);
+      for (int m = 0; m < mc; ++m) {
+        cos[static_cast<size_t>(i) * mc + m] = std::cos(m * phi);
+        sin[static_cast<size_t>(i) * mc + m] = std::sin(m * phi);
+      }
+    }
+  }
+};
+
+// Coefficient-major RGB: out[3 i + c]. Cost ∝ W H (order+1) + H (order+1)²; bit-identical for any
+// thread count: every row's azimuthal sums are computed by one thread, then combined in row order.
+std::vector<double> project_equirect(const float* rgb, int width, int height, int order, int threads) {
+  const int mc = order + 1;  // number of m >= 0
+  const int k = sh_count(order);
+  const AzimuthTables azimuth(width, mc);
+  // Per row j: Σ_i L_c cos(mφ_i) and Σ_i L_c sin(mφ_i), six arrays of mc: (cos R, G, B, sin R, G, B).
+  std::vector<double> sums(static_cast<size_t>(height) * 6 * mc, 0.0);
+  parallel_for(
+      static_cast<size_t>(height), 4,
+      [&](size_t j0, size_t j1) {
+        for (size_t j = j0; j < j1; ++j) {
+          double* __restrict cr = sums.data() + j * 6 * mc;
+          double* __restrict cg = cr + mc;
+          double* __restrict cb = cg + mc;
+          double* __restrict sr = cb + mc;
+          double* __restrict sg = sr + mc;
+          double* __restrict sb = sg + mc;
+          const float* row = rgb + j * 3 * static_cast<size_t>(width);
+          for (int i = 0; i < width; ++i) {
+            const double r = row[3 * i], g = row[3 * i + 1], b = row[3 * i + 2];
+            if (r == 0.0 && g == 0.0 && b == 0.0) continue;
+            const double* __restrict ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
+            const double* __restrict st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
+            for (int m = 0; m < mc; ++m) {
+              cr[m] += ct[m] * r;
+              cg[m] += ct[m] * g;
+              cb[m] += ct[m] * b;
+              sr[m] += st[m] * r;
+              sg[m] += st[m] * g;
+              sb[m] += st[m] * b;
+            }
+          }
+        }
+      },
+      ParallelOptions(threads));
+
+  // y_l,±m(θ, φ) = P̄_lm(θ) {cos, sin}(mφ) with P̄_lm = y_l,+m at φ = 0 (spherical_harmonics.h),
+  // so one sh_basis call per row gives the associated-Legendre part.
+  std::vector<double> out(static_cast<size_t>(k) * 3, 0.0), p(k);
+  for (int j = 0; j < height; ++j) {
+    const double theta = equirect_theta(j, height);
+    sh_basis(order, glm::dvec3(std::sin(theta), 0.0, std::cos(theta)), p.data());
+    const double dmu = equirect_row_solid_angle(j, width, height);
+    const double* s = sums.data() + static_cast<size_t>(j) * 6 * mc;
+    for (int l = 0; l <= order; ++l) {
+      const int center = l * l + l;
+      for (int m = 0; m <= l; ++m) {
+        const double w = p[center + m] * dmu;
+        double* plus = out.data() + 3 * (center + m);
+        for (int c = 0; c < 3; ++c) plus[c] += w * s[c * mc + m];
+        if (m > 0) {
+          double* minus = out.data() + 3 * (center - m);
+          for (int c = 0; c < 3; ++c) minus[c] += w * s[(3 + c) * mc + m];
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// Cube maps: y_lm per texel. Fixed blocks of texel rows (independent of the thread count) are
+// summed by one thread each, then reduced in block order: bit-identical for any thread count.
+std::vector<double> project_cube(const float* rgb, int n, int order, int threads) {
+  const int k = sh_count(order);
+  const int rows = 6 * n;
+  const int rows_per_block = std::max(1, (rows + 63) / 64);
+  const int blocks = (rows + rows_per_block - 1) / rows_per_block;
+  std::vector<double> partial(static_cast<size_t>(blocks) * 3 * k, 0.0);
+  parallel_for(
+      static_cast<size_t>(blocks), 1,
+      [&](size_t b0, size_t b1) {
+        std::vector<double> y(k);
+        for (size_t block = b0; block < b1; ++block) {
+          double* __restrict ar = partial.data() + block * 3 * k;
+          double* __restrict ag = ar + k;
+          double* __restrict ab = ag + k;
+          const int row_end = std::min(rows, static_cast<int>(block + 1) * rows_per_block);
+          for (int row = static_cast<int>(block) * rows_per_block; row < row_end; ++row) {
+            const int face = row / n, j = row % n;
+            for (int i = 0; i < n; ++i) {
+              const float* px = rgb + 3 * (static_cast<size_t>(row) * n + i);
+              if (px[0] == 0.0f && px[1] == 0.0f && px[2] == 0.0f) continue;
+              const double dmu = cube_texel_solid_angle(i, j, n);
+              const double r = px[0] * dmu, g = px[1] * dmu, b = px[2] * dmu;
+              sh_basis(order, cube_texel_direction(face, i, j, n), y.data());
+              for (int q = 0; q < k; ++q) {
+                ar[q] += y[q] * r;
+                ag[q] += y[q] * g;
+                ab[q] += y[q] * b;
+              }
+            }
+          }
+        }
+      },
+      ParallelOptions(threads));
+  std::vector<double> out(static_cast<size_t>(k) * 3, 0.0);
+  for (int block = 0; block < blocks; ++block) {
+    const double* a = partial.data() + static_cast<size_t>(block) * 3 * k;
+    for (int q = 0; q < k; ++q) {
+      for (int c = 0; c < 3; ++c) out[3 * q + c] += a[c * k + q];
+    }
+  }
+  return out;
+}
+
+std::vector<double> project(EnvironmentLayout layout, const std::vector<float>& rgb, int width, int height, int order,
+                            int threads) {
+  return layout == EnvironmentLayout::Equirect ? project_equirect(rgb.data(), width, height, order, threads)
+                                                : project_cube(rgb.data(), width, order, threads);
+}
+
+void check_output_size(const char* what, int width, int height) {
+  check_range(std::string(what) + ": width", width, 1, kMaxTextureSide);
+  check_range(std::string(what) + ": height", height, 1, kMaxTextureSide);
+}
+
+}  // namespace
+
+RingingWindow ringing_window_from_name(const std::string& name) {
+  if (name == "none") return RingingWindow::None;
+  if (name == "hanning" || name == "hann") return RingingWindow::Hanning;
+  if (name == "lanczos") return RingingWindow::Lanczos;
+  throw std::invalid_argument("unknown window '" + name + "' (expected 'none', 'hanning' or 'lanczos')");
+}
+
+double ringing_window_factor(RingingWindow window, int l, int order) {
+  const double x = static_cast<double>(l) / (order + 1.0);
+  switch (window) {
+    case RingingWindow::Hanning: return 0.5 * (1.0 + std::cos(kPi * x));
+    case RingingWindow::Lanczos: return l == 0 ? 1.0 : std::sin(kPi * x) / (kPi * x);
+    default: return 1.0;
+  }
+}
+
+std::vector<double> Environment::sh(int order, int threads) const {
+  check_order("Environment::sh: order", order, kMaxProjectionOrder);
+  return project(layout_, rgb_, width_, height_, order, threads);
+}
+
+const Environment::EnergyCache& Environment::energy_cache() const {
+  EnergyCache& cache = *cache_;
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  if (cache.ready) return cache;
+  // The reference copy (environment.h, band_energies).
+  const Environment* source = this;
+  Environment reduced;
+  if (layout_ == EnvironmentLayout::Equirect && texel_count() > kReferenceEquirectTexels) {
+    const double scale = std::sqrt(static_cast<double>(texel_count()) / kReferenceEquirectTexels);
+    reduced = area_averaged(std::max(1, static_cast<int>(width_ / scale)), std::max(1, static_cast<int>(height_ / scale)));
+    source = &reduced;
+  } else if (layout_ == EnvironmentLayout::Cube && width_ > kReferenceCubeFace) {
+    reduced = area_averaged(kReferenceCubeFace, kReferenceCubeFace);
+    source = &reduced;
+  }
+  std::vector<double> coefficients =
+      project(source->layout_, source->rgb_, source->width_, source->height_, kMaxEnergyOrder, 0);
+  std::vector<double> energies(static_cast<size_t>(kMaxEnergyOrder + 1) * 4, 0.0);
+  for (int l = 0; l <= kMaxEnergyOrder; ++l) {
+    for (int m = -l; m <= l; ++m) {
+      const double* c = coefficients.data() + 3 * sh_index(l, m);
+      const double y = luminance(c[0], c[1], c[2]);
+      for (int ch = 0; ch < 3; ++ch) energies[4 * l + ch] += c[ch] * c[ch];
+      energies[4 * l + 3] += y * y;
+    }
+  }
+  cache.coefficients = std::move(coefficients);
+  cache.energies = std::move(energies);
+  cache.norm_squared = source->norm_squared_;
+  cache.ready = true;
+  return cache;
+}
+
+std::vector<float> Environment::band_limited(int order, int width, int height, RingingWindow window,
+                                             BandLimitedReport* report) const {
+  check_order("Environment::band_limited: order", order, kMaxEnergyOrder);
+  check_output_size("Environment::band_limited", width, height);
+  std::vector<double> coefficients;
+  if (order <= kMaxProjectionOrder) {
+    coefficients = sh(order);
+  } else {
+    const auto& all = energy_cache().coefficients;
+    coefficients.assign(all.begin(), all.begin() + 3 * sh_count(order));
+  }
+  return band_limited_texture(coefficients, order, width, height, window, report);
+}
+
+std::vector<double> Environment::band_energies(int lmax) const {
+  check_order("Environment::band_energies: lmax", lmax, kMaxEnergyOrder);
+  const auto& energies = energy_cache().energies;
+  return std::vector<double>(energies.begin(), energies.begin() + 4 * (lmax + 1));
+}
+
+double Environment::low_frequency_error(int order, int channel) const {
+  check_order("Environment::low_frequency_error: order", order, kMaxEnergyOrder);
+  check_channel("Environment::low_frequency_error", channel);
+  const EnergyCache& cache = energy_cache();
+  const double norm2 = cache.norm_squared[channel];
+  if (!(norm2 > 0.0)) return 0.0;
+  double kept = 0.0;
+  for (int l = 0; l <= order; ++l) kept += cache.energies[4 * l + channel];
+  return std::sqrt(std::max(0.0, norm2 - kept) / norm2);
+}
+
+double Environment::lobe_filtered_error(const ZonalLobe& lobe, int order) const {
+  check_order("Environment::lobe_filtered_error: order", order, kMaxEnergyOrder);
+  const std::vector<double> w = lobe.coefficients(kMaxEnergyOrder);
+  const auto& energies = energy_cache().energies;
+  double missed = 0.0, total = 0.0;  // summed separately: no cancellation
+  for (int l = 0; l <= kMaxEnergyOrder; ++l) {
+    const double term = w[l] * w[l] * energies[4 * l + kLuminance];
+    total += term;
+    if (l > order) missed += term;
+  }
+  if (!(total > 0.0)) return 0.0;
+  return std::sqrt(missed / total);
+}
+
+int Environment::smallest_order(const ZonalLobe& lobe, double target_error, int max_order) const {
+  check_order("Environment::smallest_order: max_order", max_order, kMaxEnergyOrder);
+  if (!(target_error >= 0.0) || !std::isfinite(target_error)) {
+    throw std::invalid_argument("Environment::smallest_order: target_error must be finite and >= 0");
+  }
+  for (int s = 0; s <= max_order; ++s) {
+    if (lobe_filtered_error(lobe, s) <= target_error) return s;
+  }
+  return -1;
+}
+
+std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficients, int order, int width, int height,
+                                        RingingWindow window, BandLimitedReport* report) {
+  check_order("band_limited_texture: order", order, kMaxEnergyOrder);
+  check_output_size("band_limited_texture", width, height);
+  const int k = sh_count(order), mc = order + 1;
+  if (sh_coefficients.size() != static_cast<size_t>(3 * k)) {
+    throw std::invalid_argument("band_limited_texture: expected 3 (order+1)^2 = " + std::to_string(3 * k) +
+                                " coefficients, got " + std::to_string(sh_coefficients.size()));
+  }
+  for (double c : sh_coefficients) {
+    if (!std::isfinite(c)) throw std::invalid_argument("band_limited_texture: coefficients contain NaN or infinity");
+  }
+  std::vector<double> coefficients = sh_coefficients;
+  // Windowed coefficients σ_l L_lm.
+  for (int l = 0; l <= order; ++l) {
+    const double sigma = ringing_window_factor(window, l, order);
+    for (int q = 3 * l * l; q < 3 * (l + 1) * (l + 1); ++q) coefficients[q] *= sigma;
+  }
+  const AzimuthTables azimuth(width, mc);
+  std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
+  // Per-row statistics, reduced in row order afterwards.
+  std::vector<std::array<double, 6>> row_extrema(height);
+  std::vector<int64_t> row_negative(height, 0);
+  parallel_for(static_cast<size_t>(height), 4, [&](size_t j0, size_t j1) {
+    std::vector<double> p(k), a(6 * static_cast<size_t>(mc));
+    for (size_t j = j0; j < j1; ++j) {
+      const double theta = equirect_theta(static_cast<int>(j), height);
+      sh_basis(order, glm::dvec3(std::sin(theta), 0.0, std::cos(theta)), p.data());
+      // a[c mc + m] = Σ_l σ_l L_l,+m P̄_lm;  a[(3+c) mc + m] = Σ_l σ_l L_l,−m P̄_lm.
+      std::fill(a.begin(), a.end(), 0.0);
+      for (int l = 0; l <= order; ++l) {
+        const int center = l * l + l;
+        for (int m = 0; m <= l; ++m) {
+          const double pl = p[center + m];
+          for (int c = 0; c < 3; ++c) a[c * mc + m] += pl * coefficients[3 * (center + m) + c];
+          if (m > 0) {
+            for (int c = 0; c < 3; ++c) a[(3 + c) * mc + m] += pl * coefficients[3 * (center - m) + c];
+          }
+        }
+      }
+      std::array<double, 6> extrema = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                                       std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                                       -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+      int64_t negative = 0;
+      float* out = rgb.data() + j * 3 * static_cast<size_t>(width);
+      for (int i = 0; i < width; ++i) {
+        const double* ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
+        const double* st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
+        bool below = false;
+        for (int c = 0; c < 3; ++c) {
+          const double* ac = a.data() + c * mc;
+          const double* as = a.data() + (3 + c) * mc;
+          double v = 0.0;
+          for (int m = 0; m < mc; ++m) v += ac[m] * ct[m] + as[m] * st[m];
+          out[3 * i + c] = static_cast<float>(v);
+          extrema[c] = std::min(extrema[c], v);
+          extrema[3 + c] = std::max(extrema[3 + c], v);
+          below = below || v < 0.0;
+        }
+        negative += below ? 1 : 0;
+      }
+      row_extrema[j] = extrema;
+      row_negative[j] = negative;
+    }
+  });
+  if (report != nullptr) {
+    BandLimitedReport r;
+    r.min_value.fill(std::numeric_limits<double>::infinity());
+    r.max_value.fill(-std::numeric_limits<double>::infinity());
+    for (int j = 0; j < height; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        r.min_value[c] = std::min(r.min_value[c], row_extrema[j][c]);
+        r.max_value[c] = std::max(r.max_value[c], row_extrema[j][3 + c]);
+      }
+      r.negative_texels += row_negative[j];
+      r.negative_solid_angle += row_negative[j] * equirect_row_solid_angle(j, width, height);
+    }
+    r.negative_fraction = static_cast<double>(r.negative_texels) / (static_cast<double>(width) * height);
+    *report = r;
+  }
+  return rgb;
+}
+
+glm::dvec3 evaluate_sh_rgb(const std::vector<double>& coeffs, int order, const glm::dvec3& dir) {
+  const int k = sh_count(order);
+  if (order < 0 || coeffs.size() < static_cast<size_t>(k) * 3) {
+    throw std::invalid_argument("evaluate_sh_rgb: need 3 (order+1)^2 coefficients");
+  }
+  std::vector<double> y(k);
+  sh_basis(order, dir, y.data());
+  glm::dvec3 sum(0.0);
+  for (int q = 0; q < k; ++q) sum += y[q] * glm::dvec3(coeffs[3 * q], coeffs[3 * q + 1], coeffs[3 * q + 2]);
+  return sum;
+}
+
+}  // namespace sd

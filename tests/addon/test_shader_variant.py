@@ -1,0 +1,126 @@
+"""Shader variants: defines, samplers and the uniform block (std140) against the GLSL."""
+
+import itertools
+import re
+
+import numpy as np
+import pytest
+
+from sd_lighting.utils import methods, shader_variant
+from sd_lighting.utils.shader_variant import BlockField, Variant
+
+
+def all_variants():
+    for method in methods.METHODS:
+        for glossy, per_pixel, target, texture in itertools.product((False, True), repeat=4):
+            if texture and not method.band_limited_texture:
+                continue
+            yield Variant(method, glossy, 4, 2, 0 if method.data is None else 3,
+                          18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
+                          per_pixel, target,
+                          shader_variant.band_limited_texture_size(4) if texture else ())
+
+
+def test_defines_of_a_known_variant(sdnative):
+    variant = Variant(methods.get("prt_gaunt"), True, 4, 2, data_stride=3, gaunt_count=77,
+                      per_pixel=True)
+    defines = variant.defines(sdnative.sh_recurrence_constants)
+    assert defines.pop("SD_SH_DIAGONAL").split(", ")[:3] == [
+        "1.000000000e+00", "1.732050808e+00", "1.936491673e+00"]
+    a = defines.pop("SD_SH_A").split(", ")        # at l (l + 1) / 2 + m
+    assert (a[1], a[3], a[4]) == ("1.732050808e+00", "1.936491673e+00", "2.236067977e+00")
+    assert defines.pop("SD_SH_B").split(", ")[3] == "1.118033989e+00"   # b_20
+    assert defines == {
+        "SD_METHOD_PRT_GAUNT": "1", "SD_LIGHT_COUNT": "25", "SD_VIS_ORDER": "2",
+        "SD_VIS_COUNT": "9", "SD_LOBE_VEC4S": "2", "SD_DATA_STRIDE": "3",
+        "SD_TEXTURE_WIDTH_LOG2": "12", "SD_BASIS_ORDER": "6", "SD_BASIS_COUNT": "49",
+        "SD_SH_TABLE_SIZE": "28", "SD_GLOSSY": "1", "SD_GAUNT_COUNT": "77", "SD_PER_PIXEL": "1"}
+    assert variant.samplers() == [(0, "sd_data"), (1, "sd_gaunt")]
+
+
+def test_band_limited_texture_variant(sdnative):
+    variant = Variant(methods.get("msd_visibility"), False, 8, 2, data_stride=20,
+                      band_limited_texture=shader_variant.band_limited_texture_size(8))
+    defines = variant.defines(sdnative.sh_recurrence_constants)
+    assert "SD_BASIS_ORDER" not in defines           # L~ from the texture: no SH basis at all
+    assert defines["SD_BAND_LIMITED_TEXTURE_WIDTH"] == "576"
+    assert defines["SD_BAND_LIMITED_TEXTURE_HEIGHT"] == "288"
+    assert variant.samplers() == [(0, "sd_data"), (2, "sd_band_limited_texture")]
+    assert shader_variant.band_limited_texture_size(1) == (256, 128)
+
+
+def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source, sdnative):
+    source = glsl_source
+    produced, fields, samplers = set(), set(), set()
+    for variant in all_variants():
+        produced |= set(variant.defines(sdnative.sh_recurrence_constants))
+        fields |= {f.name for f in variant.frame_fields()}
+        samplers |= {name for _, name in variant.samplers()}
+    defined_in_glsl = set(re.findall(r"#\s*define\s+(SD_[A-Z0-9_]+)", source))
+    used = set(re.findall(r"\b(SD_[A-Z0-9_]*[A-Z0-9])\b", source)) - defined_in_glsl
+    assert used == produced
+    assert set(re.findall(r"\bsd\.([a-z_]+)", source)) == fields
+    glsl_samplers = set(re.findall(r"texelFetch\((sd_[a-z_]+)", source))
+    assert glsl_samplers == samplers
+
+
+STD140 = {"float": (4, 4), "vec2": (8, 8), "vec3": (16, 12), "vec4": (16, 16), "mat4": (16, 64)}
+
+
+def std140_offsets(struct_text):
+    """Offsets and total size of a GLSL struct by the std140 rules (arrays: element stride rounded
+    up to 16; the struct's size rounded up to 16)."""
+    offsets, offset = {}, 0
+    for glsl_type, name, length in re.findall(r"^\s*(\w+)\s+(\w+)(?:\[(\d+)\])?;", struct_text, re.M):
+        align, size = STD140[glsl_type]
+        if length:
+            align = max(align, 16)
+            size = int(length) * (size + (-size) % 16)
+        offset += (-offset) % align
+        offsets[name] = offset
+        offset += size
+    return offsets, offset + (-offset) % 16
+
+
+@pytest.mark.parametrize("variant", list(all_variants()), ids=lambda v: "%s%s%s" % (
+    v.method.id, "-texture" if v.band_limited_texture else "", "-glossy" if v.glossy else ""))
+def test_struct_text_and_packing_agree_by_std140(variant):
+    offsets, size = std140_offsets(variant.frame_struct())
+    rng = np.random.default_rng(0)
+    values = {}
+    for field in variant.frame_fields():
+        values[field.name] = rng.normal(size=(4, 4) if field.glsl_type == "mat4" else (field.rows, 4))
+    block = variant.frame_block(values)
+    assert block.dtype == np.float32 and 4 * block.size == size
+    for field in variant.frame_fields():
+        start = offsets[field.name] // 4
+        if field.glsl_type == "mat4":       # column-major: column c, row r at 4 c + r
+            assert np.array_equal(block[start:start + 16].reshape(4, 4).T,
+                                  values[field.name].astype(np.float32))
+        else:
+            assert np.array_equal(block[start:start + 4 * field.rows],
+                                  values[field.name].astype(np.float32).ravel())
+
+
+def test_packing_pads_rows_and_embeds_rotations():
+    field = BlockField("light", "vec4", 2)
+    assert field.pack([[1, 2, 3], [4, 5, 6]]).tolist() == [[1, 2, 3, 0], [4, 5, 6, 0]]
+    rotation = BlockField("local_to_environment", "mat4").pack(np.arange(9.0).reshape(3, 3))
+    assert rotation[:, 3].tolist() == [0, 0, 0, 1] and rotation[0, :3].tolist() == [0, 3, 6]
+    with pytest.raises(ValueError):
+        BlockField("lights", "mat4", 2)
+    with pytest.raises(ValueError):
+        BlockField("normal", "vec3")
+
+
+def test_frame_block_wants_exactly_the_fields():
+    variant = Variant(methods.get("unshadowed"), False, 1, 0)
+    values = {"model": np.eye(4), "view_projection": np.eye(4), "world_to_local": np.eye(3),
+              "camera": (0, 0, 1, 1), "params": (1, 1, 1, 0), "light": np.ones((4, 3)),
+              "lobe": np.zeros(4)}
+    assert variant.frame_block(values).size == 3 * 16 + 2 * 4 + 4 * 4 + 4
+    with pytest.raises(ValueError):
+        variant.frame_block(dict(values, design=np.zeros((1, 4))))
+    del values["lobe"]
+    with pytest.raises(ValueError):
+        variant.frame_block(values)

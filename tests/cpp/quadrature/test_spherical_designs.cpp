@@ -1,0 +1,209 @@
+#include "sdlighting/gauss_quadrature.h"
+#include "sdlighting/spherical_harmonics.h"
+#include "sdlighting/weighted_design.h"
+#include "sdlighting/zonal_design.h"
+#include "sdtesting/sphere.h"
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <numeric>
+#include <random>
+
+namespace sd {
+namespace {
+
+// Checks a design of a lobe independently of the builder's own certificate: its SH moments must
+// be the Funk–Hecke values ŵ_l sqrt(2l+1) δ_m0 from the factor recurrence.
+void expect_lobe_design(const SphericalDesign& design, const ZonalLobe& lobe, int degree) {
+  ASSERT_GT(design.size(), 0);
+  EXPECT_EQ(design.degree, degree);
+  EXPECT_LE(design.residual, kDesignTolerance);
+  for (double w : design.weights) EXPECT_GT(w, 0.0);
+  EXPECT_NEAR(std::accumulate(design.weights.begin(), design.weights.end(), 0.0), 1.0, 1e-12);
+  const auto w_hat = lobe.coefficients(degree);
+  const auto moments = design_moments(design.nodes, design.weights, degree);
+  double error = 0.0;
+  for (int l = 0; l <= degree; ++l)
+    for (int m = -l; m <= l; ++m) {
+      const double expected = m == 0 ? w_hat[l] * std::sqrt(2.0 * l + 1.0) : 0.0;
+      error = std::max(error, std::abs(moments[sh_index(l, m)] - expected));
+    }
+  EXPECT_LT(error, kDesignTolerance) << "sigma=" << lobe.exponent << " degree=" << degree;
+  for (const auto& x : design.nodes) {
+    EXPECT_NEAR(glm::length(x), 1.0, 1e-14);
+    EXPECT_GE(x.z, -1e-15) << "node below the lobe's horizon";
+  }
+}
+
+TEST(ZonalDesign, EveryMethodCertifiesForLambertAndPhong) {
+  // σ = 0 is the uniform hemisphere, σ = 2.5 a Jacobi weight of non-integer exponent.
+  for (double sigma : {0.0, 1.0, 2.5, 8.0, 1000.0, 1e4}) {
+    const ZonalLobe lobe = ZonalLobe::phong(sigma);
+    const ZonalWeight weight = ZonalWeight::from_lobe(lobe);
+    for (int degree = 0; degree <= 8; ++degree) {
+      for (DesignMethod method : {DesignMethod::Gauss, DesignMethod::Gradient, DesignMethod::Auto}) {
+        expect_lobe_design(zonal_design(weight, degree, method), lobe, degree);
+      }
+    }
+  }
+}
+
+TEST(ZonalDesign, ReachesTheSeedsNodeCounts) {
+  // The seed: 10 nodes for degree 4 and 18 for degree 6 by gradient projection; 11 and 22 by
+  // the Gauss product (with the pole node).
+  for (double sigma : {1.0, 8.0, 32.0, 128.0, 1000.0}) {
+    const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::phong(sigma));
+    EXPECT_LE(zonal_design(weight, 4, DesignMethod::Gradient).size(), 10) << sigma;
+    EXPECT_LE(zonal_design(weight, 6, DesignMethod::Gradient).size(), 18) << sigma;
+    EXPECT_EQ(zonal_design(weight, 4, DesignMethod::Gauss).size(), 11);
+    EXPECT_EQ(zonal_design(weight, 6, DesignMethod::Gauss).size(), 22);
+    for (int degree = 2; degree <= 8; ++degree) {
+      EXPECT_GE(zonal_design(weight, degree).size(), design_lower_bound(degree));
+    }
+  }
+}
+
+TEST(ZonalDesign, GaussForOddDegreeUsesThePlainProduct) {
+  const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::lambert());
+  // n = (k+1)/2 Gauss rings of k+1 nodes beat the Radau variant's 1 + (k+1)²/2.
+  EXPECT_EQ(zonal_design(weight, 5, DesignMethod::Gauss).size(), 18);
+  EXPECT_EQ(zonal_design(weight, 5, DesignMethod::Gauss).method, "gauss");
+  EXPECT_EQ(zonal_design(weight, 6, DesignMethod::Gauss).method, "gauss-radau");
+}
+
+TEST(ZonalDesign, TabulatedWeightMatchesTheLobeItSamples) {
+  const ZonalLobe lobe = ZonalLobe::phong(8.0);
+  std::vector<double> t, w;
+  for (int i = 0; i <= 4000; ++i) {
+    t.push_back(-1.0 + 2.0 * i / 4000.0);
+    w.push_back(lobe.value(t.back()));
+  }
+  const ZonalWeight tabulated = ZonalWeight::tabulated(t, w);
+  EXPECT_NEAR(tabulated.mass(), 1.0, 1e-5);  // linear interpolation error only
+  const SphericalDesign design = zonal_design(tabulated, 6);
+  EXPECT_LE(design.residual, kDesignTolerance);
+  EXPECT_LE(design.size(), 18);
+  const auto exact = lobe.coefficients(6);
+  const auto table = tabulated.legendre_moments(6);
+  for (int l = 0; l <= 6; ++l) EXPECT_NEAR(table[l], exact[l], 1e-5);
+}
+
+TEST(ZonalDesign, TabulatedWeightAwayFromThePole) {
+  // A band 0.2 <= t <= 0.6: no Radau pole node is possible, designs still certify.
+  const ZonalWeight band = ZonalWeight::tabulated({0.2, 0.4, 0.6}, {1.0, 2.0, 1.0});
+  for (int degree : {2, 4, 6}) {
+    const SphericalDesign design = zonal_design(band, degree);
+    EXPECT_LE(design.residual, kDesignTolerance);
+    EXPECT_NEAR(std::accumulate(design.weights.begin(), design.weights.end(), 0.0), band.mass(), 1e-13);
+  }
+  EXPECT_EQ(zonal_design(band, 4, DesignMethod::Gauss).method, "gauss");
+}
+
+TEST(ZonalDesign, TabulatedWeightHasTheMomentsOfItsPiecewiseLinearWeight) {
+  // A ragged band: the SH moments of the interpolated weight by a product rule on each segment
+  // (Gauss–Legendre in z, exact for the linear weight times y_l0; equally spaced φ for m ≠ 0).
+  const std::vector<double> t = {-0.5, 0.0, 0.3, 0.9}, w = {0.0, 2.0, 0.5, 3.0};
+  const ZonalWeight band = ZonalWeight::tabulated(t, w);
+  constexpr int kDegree = 6, kNodes = 8;
+  const Rule1D unit = gauss_rule(jacobi_recurrence_unit_interval(0.0, kNodes), kNodes);
+  std::vector<glm::dvec3> dirs;
+  std::vector<double> weights;
+  for (size_t segment = 0; segment + 1 < t.size(); ++segment) {
+    const double a = t[segment], b = t[segment + 1];
+    std::vector<double> z(kNodes), dz(kNodes);
+    for (int i = 0; i < kNodes; ++i) {
+      z[i] = a + (b - a) * unit.nodes[i];
+      dz[i] = 0.5 * (b - a) * unit.weights[i];  // dμ = dz dφ / 4π
+    }
+    const test::SphereRule rule = test::product_rule(z, dz, kDegree + 1, 0.25);
+    for (size_t q = 0; q < rule.dirs.size(); ++q) {
+      const double s = (rule.dirs[q].z - a) / (b - a);
+      dirs.push_back(rule.dirs[q]);
+      weights.push_back(rule.weights[q] * ((1.0 - s) * w[segment] + s * w[segment + 1]));
+    }
+  }
+  const double mass = std::accumulate(weights.begin(), weights.end(), 0.0);
+  EXPECT_NEAR(band.mass(), mass, 1e-14);
+  for (DesignMethod method : {DesignMethod::Auto, DesignMethod::Gauss}) {
+    const SphericalDesign design = zonal_design(band, kDegree, method);
+    const auto expected = design_moments(dirs, weights, kDegree);
+    const auto got = design_moments(design.nodes, design.weights, kDegree);
+    for (size_t j = 0; j < got.size(); ++j) EXPECT_NEAR(got[j], expected[j], kDesignTolerance * mass) << j;
+  }
+}
+
+TEST(ZonalDesign, RejectsBadInput) {
+  const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::lambert());
+  EXPECT_THROW(zonal_design(weight, -1), std::invalid_argument);
+  EXPECT_THROW(zonal_design(weight, kMaxDesignDegree + 1), std::invalid_argument);
+  EXPECT_THROW(design_method_from_name("newton"), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.0}, {1.0}), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.0, 0.5}, {1.0, -1.0}), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.5, 0.0}, {1.0, 1.0}), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.0, 1.5}, {1.0, 1.0}), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.0, 0.5}, {std::nan(""), 1.0}), std::invalid_argument);
+  EXPECT_THROW(ZonalWeight::tabulated({0.0, 0.5}, {0.0, 0.0}), std::invalid_argument);
+}
+
+using test::random_directions;
+
+TEST(WeightedDesign, CompressesARandomMeasure) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> uniform(0.1, 2.0);
+  const auto dirs = random_directions(2000, rng);
+  std::vector<double> weights(dirs.size());
+  for (double& w : weights) w = uniform(rng);
+  const double mass = std::accumulate(weights.begin(), weights.end(), 0.0);
+  for (int degree : {2, 4, 6}) {
+    const SphericalDesign design = weighted_design(dirs, weights, degree);
+    const auto expected = design_moments(dirs, weights, degree);
+    const auto got = design_moments(design.nodes, design.weights, degree);
+    for (size_t j = 0; j < got.size(); ++j) EXPECT_NEAR(got[j], expected[j], kDesignTolerance * mass);
+    EXPECT_LE(design.size(), sh_count(degree));
+    EXPECT_LT(design.size(), sh_count(degree)) << "gradient projection removed no node at degree " << degree;
+    for (double w : design.weights) EXPECT_GT(w, 0.0);
+  }
+}
+
+TEST(WeightedDesign, VisibilityLikeHemisphere) {
+  // Ray samples of an open plane: only the upper hemisphere escapes.
+  std::mt19937_64 rng(5);
+  std::vector<glm::dvec3> dirs;
+  for (const auto& d : random_directions(1024, rng))
+    if (d.z > 0.0) dirs.push_back(d);
+  const std::vector<double> weights(dirs.size(), 1.0 / 1024.0);
+  const SphericalDesign design = weighted_design(dirs, weights, 6);
+  EXPECT_LE(design.residual, kDesignTolerance);
+  EXPECT_LE(design.size(), 30);
+}
+
+TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {
+  const std::vector<glm::dvec3> dirs = {{0, 0, 1}, {1, 0, 0}, {0, 2, 0}};
+  const SphericalDesign design = weighted_design(dirs, {0.5, 0.25, 0.25}, 6);
+  EXPECT_LE(design.size(), 3);
+  EXPECT_LE(design.residual, kDesignTolerance);
+}
+
+TEST(WeightedDesign, APointMassGivesOneNode) {
+  // All the mass on one direction, given twice and unnormalised, beside a zero weight.
+  const SphericalDesign design = weighted_design({{0, 0, 2}, {0, 0, 5}, {1, 0, 0}}, {1.5, 0.5, 0.0}, 6);
+  ASSERT_EQ(design.size(), 1);
+  EXPECT_NEAR(glm::length(design.nodes[0] - glm::dvec3(0, 0, 1)), 0.0, 1e-12);
+  EXPECT_NEAR(design.weights[0], 2.0, 1e-12);
+}
+
+TEST(WeightedDesign, RejectsBadInput) {
+  const std::vector<glm::dvec3> dirs = {{0, 0, 1}, {1, 0, 0}};
+  EXPECT_THROW(weighted_design(dirs, {1.0}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_design(dirs, {1.0, -1.0}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_design(dirs, {0.0, 0.0}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_design(dirs, {1.0, std::nan("")}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_design({{0, 0, 0}, {1, 0, 0}}, {1.0, 1.0}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_design(dirs, {1.0, 1.0}, -1), std::invalid_argument);
+  EXPECT_THROW(weighted_design(dirs, {1.0, 1.0}, kMaxDesignDegree + 1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sd

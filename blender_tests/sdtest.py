@@ -4,7 +4,9 @@ checks with a one-line summary, and a crash-free exit.
 Every test script is run by Blender:
     blender [-b] --factory-startup --python-exit-code 1 --python blender_tests/<test>.py -- \
         --zip build/sd_lighting.zip --out build/blender_tests
-(run.py does that for all of them; GPU tests run under xvfb-run).
+or by the Python of Blender as a module (the bpy wheel), which behaves like `blender -b`:
+    VENV/bin/python blender_tests/<test>.py -- --zip build/sd_lighting.zip --out DIR
+(run.py does that for all of them; GPU tests run under xvfb-run with a Blender binary).
 """
 
 import argparse
@@ -17,14 +19,20 @@ import traceback
 import bpy
 
 BLENDER_HDRI_DIR = "/usr/share/blender/datafiles/studiolights/world"
+EXTENSION_REPOSITORY = "user_default"
+
+# The module name of the add-on the test installed: "sd_lighting" as a legacy add-on,
+# "bl_ext.user_default.sd_lighting" as an extension (4.2+).
+addon_module = "sd_lighting"
 
 
 def hdri(name="forest.exr"):
-    """A Blender-shipped HDRI (CC0)."""
-    candidates = [os.path.join(BLENDER_HDRI_DIR, name)]
+    """A Blender-shipped HDRI (CC0): the running Blender's own, else Debian's."""
+    candidates = []
     datafiles = bpy.utils.system_resource('DATAFILES')
     if datafiles:
         candidates.append(os.path.join(datafiles, "studiolights", "world", name))
+    candidates.append(os.path.join(BLENDER_HDRI_DIR, name))
     for path in candidates:
         if os.path.isfile(path):
             return path
@@ -54,6 +62,21 @@ def install_addon(zip_path):
     bpy.ops.preferences.addon_enable(module="sd_lighting")
     import sd_lighting
     return sd_lighting
+
+
+def install_extension(zip_path):
+    """Installs the zip as an extension (Blender 4.2+: Get Extensions > Install from Disk) into the
+    user repository and enables it; returns the add-on's package (bl_ext.user_default.sd_lighting)."""
+    global addon_module
+    import importlib
+    if not zip_path or not os.path.isfile(zip_path):
+        raise FileNotFoundError("add-on zip not found: %r (pass --zip)" % zip_path)
+    result = bpy.ops.extensions.package_install_files(
+        filepath=os.path.abspath(zip_path), repo=EXTENSION_REPOSITORY, enable_on_install=True)
+    if result != {'FINISHED'}:
+        raise RuntimeError("extensions.package_install_files returned %s" % result)
+    addon_module = "bl_ext.%s.sd_lighting" % EXTENSION_REPOSITORY
+    return importlib.import_module(addon_module)
 
 
 class Checks:
@@ -90,7 +113,8 @@ def finish(code):
     without running Blender's exit path (no crash at exit can change the test's result)."""
     try:
         import addon_utils
-        addon_utils.disable("sd_lighting")
+        if addon_module:
+            addon_utils.disable(addon_module)
     except Exception:
         traceback.print_exc()
         code = code or 1

@@ -47,7 +47,7 @@ def suzanne(scene, subdivisions=1):
     monkey.modifiers.new("Subdivision", 'SUBSURF').levels = subdivisions
     bpy.ops.object.shade_smooth()
     material = bpy.data.materials.new("Clay")
-    material.use_nodes = True
+    sdtest.use_nodes(material)
     principled = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     principled.inputs["Roughness"].default_value = 0.7
     monkey.data.materials.append(material)

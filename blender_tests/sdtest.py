@@ -150,10 +150,17 @@ def empty_scene():
     return scene
 
 
+def use_nodes(idblock):
+    """Shades a world or material with its node tree (5.0 always does; its use_nodes is
+    deprecated)."""
+    if bpy.app.version < (5, 0, 0):
+        idblock.use_nodes = True
+
+
 def hdri_world(scene, path, rotation_z=0.0, strength=1.0):
     """World: Texture Coordinate > Mapping > Environment Texture > Background."""
     world = bpy.data.worlds.new("SD World")
-    world.use_nodes = True
+    use_nodes(world)
     scene.world = world
     tree = world.node_tree
     background = tree.nodes["Background"]

@@ -158,7 +158,7 @@ def main():
                  "the Background strength scales L")
     background.inputs["Strength"].default_value = 1.0
     plain = bpy.data.worlds.new("Plain")
-    plain.use_nodes = True
+    sdtest.use_nodes(plain)
     plain.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
     world, scene.world = scene.world, plain
     light = environment.light_coefficients(environment.source(scene), 2)

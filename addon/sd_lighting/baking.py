@@ -28,7 +28,7 @@ import uuid
 
 import numpy as np
 
-from . import attributes, environment, materials, methods, native
+from . import attributes, compat, environment, materials, methods, native
 
 BAKED_MESH = "sd_baked_mesh"
 BAKE = "sd_bake"
@@ -44,13 +44,7 @@ class BakeError(Exception):
 # Geometry
 
 def _vertex_normals(mesh):
-    n = len(mesh.vertices)
-    normals = np.empty(n * 3, dtype=np.float32)
-    if hasattr(mesh, "vertex_normals"):          # Blender 3.5+
-        mesh.vertex_normals.foreach_get('vector', normals)
-    else:
-        mesh.vertices.foreach_get('normal', normals)
-    normals = normals.reshape(n, 3).astype(np.float64)
+    normals = compat.vertex_normals(mesh).astype(np.float64)
     length = np.linalg.norm(normals, axis=1)
     bad = ~(length > 1e-12)
     normals[bad] = (0.0, 0.0, 1.0)
@@ -81,9 +75,7 @@ class Geometry:
         mesh.loops.add(len(self.loop_vertices))
         mesh.loops.foreach_set('vertex_index', self.loop_vertices)
         mesh.polygons.add(len(self.loop_starts))
-        mesh.polygons.foreach_set('loop_start', self.loop_starts)
-        if bpy.app.version < (4, 0, 0):  # read-only (derived from loop_start) since 4.0
-            mesh.polygons.foreach_set('loop_total', self.loop_totals)
+        compat.set_polygon_loops(mesh, self.loop_starts, self.loop_totals)
         mesh.update(calc_edges=True)
         return mesh
 

@@ -9,6 +9,8 @@ By default the lobe is read from the object's first material with a Principled B
 An object without such a material is Lambert.
 """
 
+from . import compat
+
 MIN_EXPONENT = 1.0
 MAX_EXPONENT = 1000.0
 
@@ -21,7 +23,7 @@ def exponent_from_roughness(roughness):
 
 
 def _principled(material):
-    if material is None or not material.use_nodes or material.node_tree is None:
+    if not compat.uses_nodes(material):
         return None
     for node in material.node_tree.nodes:
         if node.type == 'BSDF_PRINCIPLED':

@@ -15,7 +15,7 @@ import zlib
 
 import numpy as np
 
-from . import attributes, drawing, gpu_context
+from . import attributes, compat, drawing, gpu_context
 
 OTHER_MESH_GREY = 0.18
 
@@ -24,8 +24,7 @@ def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
     """(shader, batch, model matrix) of the other visible meshes, for a grey depth-tested draw."""
     import gpu
     from gpu_extras.batch import batch_for_shader
-    name = '3D_UNIFORM_COLOR' if _blender_version() < (3, 5, 0) else 'UNIFORM_COLOR'
-    shader = gpu.shader.from_builtin(name)
+    shader = compat.uniform_color_shader()
     out = []
     for obj in scene.objects:
         if obj.name in exclude or obj.type not in {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}:
@@ -45,11 +44,6 @@ def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
         finally:
             evaluated.to_mesh_clear()
     return out
-
-
-def _blender_version():
-    import bpy
-    return tuple(bpy.app.version)
 
 
 def render(scene, depsgraph, view_layer, width, height, camera=None):

@@ -15,6 +15,7 @@ import os
 import sys
 import time
 import traceback
+import warnings
 
 import bpy
 
@@ -79,6 +80,24 @@ def install_extension(zip_path):
     return importlib.import_module(addon_module)
 
 
+# Warnings raised by the add-on's own code (DeprecationWarning: an API that the next Blender drops,
+# e.g. World.use_nodes in 5.0, vertex formats in 4.5); Checks.summary() fails on any. Python shows
+# DeprecationWarning only in __main__ by default: show them all.
+addon_warnings = []
+_show_warning = warnings.showwarning
+
+
+def _record_warning(message, category, filename, lineno, file=None, line=None):
+    if "sd_lighting" in os.path.normpath(filename).split(os.sep):
+        addon_warnings.append("%s:%d: %s: %s" % (os.path.basename(filename), lineno,
+                                                 category.__name__, message))
+    _show_warning(message, category, filename, lineno, file, line)
+
+
+warnings.showwarning = _record_warning
+warnings.simplefilter("always")
+
+
 class Checks:
     """Collects named checks; `summary()` prints one line and returns the exit code."""
 
@@ -98,6 +117,8 @@ class Checks:
         return ok
 
     def summary(self):
+        self.check(not addon_warnings, "the add-on raised no warnings (deprecated API)",
+                   "; ".join(addon_warnings[:3]))
         seconds = time.perf_counter() - self.start
         if self.failed:
             print("%s: FAILED %d of %d checks (%s) in %.1f s" % (

@@ -81,6 +81,11 @@ def main():
     checks.check(manifest["id"] == "sd_lighting" and
                  tuple(int(p) for p in manifest["version"].split(".")) == bl_info["version"],
                  "manifest id and version agree with bl_info", "%s %s" % (manifest["id"], manifest["version"]))
+    pythons = sorted(name.split(".")[1] for name in os.listdir(root) if name.startswith("sdnative.cpython-"))
+    checks.check(manifest.get("blender_version_max") == (None if "cpython-313-x86_64-linux-gnu" in pythons
+                                                         else "5.1.0"),
+                 "blender_version_max matches the native modules' Pythons",
+                 "%s: %s" % (", ".join(pythons), manifest.get("blender_version_max")))
     on = state()
     for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
         checks.check(on[key], "registered: " + key)

@@ -48,7 +48,7 @@ def manifest_text(path, natives):
     if newest not in BLENDER_AFTER_PYTHON:
         sys.exit("package_addon: no Blender range known for CPython %d.%d" % newest)
     maximum = BLENDER_AFTER_PYTHON[newest]
-    if maximum and "blender_version_max" not in text:
+    if maximum and not re.search(r"^blender_version_max\s*=", text, re.M):
         line = ("# Written by scripts/package_addon.py: the native module is built for CPython %d.%d "
                 "only,\n# and Blender %s moved to the next Python.\nblender_version_max = \"%s\"\n\n"
                 % (newest + (maximum, maximum)))

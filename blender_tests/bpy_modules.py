@@ -5,15 +5,18 @@ virtual environment of its own, cached outside the repository so that reruns cos
     python3 blender_tests/bpy_modules.py install [VERSION ...]   # idempotent; default: all pinned
     python3 blender_tests/bpy_modules.py python VERSION          # prints that version's interpreter
     python3 blender_tests/bpy_modules.py list                    # the pinned versions
+    python3 blender_tests/bpy_modules.py find-python 3.13        # a CPython 3.13 on this machine
 
 Cache: $SD_BPY_CACHE, else ${XDG_CACHE_HOME:-~/.cache}/sd-lighting: wheels/ (the downloaded bpy
-wheels, 350-375 MB each) and venv/bpy-VERSION/ (about 1 GB each). A venv counts as installed when
-its marker file names the same version and the same pinned dependencies (bpy_constraints.txt);
-otherwise it is built again. The venvs are made with the CPython 3.11 that runs this script
-(Debian's /usr/bin/python3 in the test command; its `venv` module is Debian's python3-venv).
+wheels, 350-430 MB each) and venv/bpy-VERSION/ (about 1 GB each). A venv counts as installed when
+its marker file names the same version, Python and pinned dependencies
+(bpy_constraints-<python>.txt); otherwise it is built again. Each venv is made with the CPython the
+pin names (3.11: Debian's /usr/bin/python3, whose `venv` module is Debian's python3-venv; 3.13:
+python3.13 on PATH or pyenv's). A version whose CPython is not on the machine is skipped.
 """
 
 import argparse
+import glob
 import hashlib
 import os
 import shutil
@@ -23,19 +26,52 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 VERSIONS_FILE = os.path.join(HERE, "bpy_versions.txt")
-CONSTRAINTS_FILE = os.path.join(HERE, "bpy_constraints.txt")
 MARKER = ".sd-lighting-installed"
+DEFAULT_PYTHON = "3.11"
+
+
+def pins():
+    """{bpy version: CPython "3.x" it needs}, in file order."""
+    out = {}
+    with open(VERSIONS_FILE, encoding="utf-8") as f:
+        for line in f:
+            fields = line.split("#", 1)[0].split()
+            if fields and fields[0].startswith("bpy=="):
+                python = DEFAULT_PYTHON
+                for field in fields[1:]:
+                    if field.startswith("python="):
+                        python = field[len("python="):]
+                out[fields[0][len("bpy=="):]] = python
+    return out
 
 
 def versions():
-    """The pinned bpy versions, in file order."""
-    out = []
-    with open(VERSIONS_FILE, encoding="utf-8") as f:
-        for line in f:
-            line = line.split("#", 1)[0].strip()
-            if line.startswith("bpy=="):
-                out.append(line[len("bpy=="):])
-    return out
+    return list(pins())
+
+
+def constraints_file(python):
+    return os.path.join(HERE, "bpy_constraints-%s.txt" % python)
+
+
+def find_python(python):
+    """A CPython `python` ("3.13") interpreter on this machine, or None: $SD_PYTHON313,
+    /usr/bin/python3.13 (and /usr/bin/python3 for Debian's own), python3.13 on PATH, pyenv's."""
+    digits = python.replace(".", "")
+    candidates = [os.environ.get("SD_PYTHON" + digits), "/usr/bin/python" + python]
+    if python == "3.11":
+        candidates.append("/usr/bin/python3")
+    candidates.append(shutil.which("python" + python))
+    pyenv = os.environ.get("PYENV_ROOT") or os.path.join(os.path.expanduser("~"), ".pyenv")
+    candidates += sorted(glob.glob(os.path.join(pyenv, "versions", python + "*", "bin", "python" + python)),
+                         reverse=True)
+    for candidate in candidates:
+        if not candidate or not os.access(candidate, os.X_OK):
+            continue
+        probe = subprocess.run([candidate, "-c", "import sys, venv; print('%d.%d' % sys.version_info[:2])"],
+                               capture_output=True, text=True)
+        if probe.returncode == 0 and probe.stdout.strip() == python:
+            return candidate
+    return None
 
 
 def cache_directory():
@@ -55,9 +91,10 @@ def interpreter(version):
 
 
 def _expected_marker(version):
-    with open(CONSTRAINTS_FILE, "rb") as f:
+    python = pins()[version]
+    with open(constraints_file(python), "rb") as f:
         constraints = hashlib.sha256(f.read()).hexdigest()[:16]
-    return "bpy==%s constraints=%s python=%d.%d\n" % (version, constraints, *sys.version_info[:2])
+    return "bpy==%s python=%s constraints=%s\n" % (version, python, constraints)
 
 
 def installed(version):
@@ -77,19 +114,21 @@ def _quiet_pip(python, *arguments):
 
 
 def install(version):
-    """Makes the version's venv (downloading the wheel when it is not cached); returns seconds
-    spent, 0 when it was already there."""
+    """Makes the version's venv (downloading the wheel when it is not cached). Returns the seconds
+    spent (0 when it was already there), or None when its CPython is not on this machine."""
     if installed(version):
         return 0.0
-    if sys.version_info[:2] != (3, 11):
-        raise SystemExit("bpy_modules: the bpy %s wheel needs CPython 3.11, this is %s (run it with "
-                         "/usr/bin/python3)" % (version, sys.version.split()[0]))
+    python_version = pins()[version]
+    base = find_python(python_version)
+    if base is None:
+        print("bpy_modules: bpy %s needs CPython %s, not found here: skipped" % (version, python_version))
+        return None
     start = time.perf_counter()
     wheels = os.path.join(cache_directory(), "wheels")
     venv = venv_directory(version)
     os.makedirs(wheels, exist_ok=True)
     shutil.rmtree(venv, ignore_errors=True)
-    _run([sys.executable, "-m", "venv", venv])
+    _run([base, "-m", "venv", venv])
     python = interpreter(version)
     prefix = "bpy-%s-" % version
     if not any(name.startswith(prefix) and name.endswith(".whl") for name in os.listdir(wheels)):
@@ -98,10 +137,10 @@ def install(version):
         _run(_quiet_pip(python, "download", "--no-deps", "--only-binary=:all:", "--no-cache-dir",
                         "--dest", wheels, "bpy==" + version))
         print("bpy_modules: downloaded bpy %s in %.0f s" % (version, time.perf_counter() - t), flush=True)
-    print("bpy_modules: installing bpy %s into %s ..." % (version, venv), flush=True)
+    print("bpy_modules: installing bpy %s (CPython %s) into %s ..." % (version, python_version, venv),
+          flush=True)
     _run(_quiet_pip(python, "install", "--no-cache-dir", "--find-links", wheels,
-                    "--constraint", CONSTRAINTS_FILE, "bpy==" + version))
-    # It must import and be the pinned version (this also compiles nothing: bpy is a binary).
+                    "--constraint", constraints_file(python_version), "bpy==" + version))
     probe = subprocess.run([python, "-c", "import bpy; print(bpy.app.version_string)"],
                            capture_output=True, text=True)
     if probe.returncode != 0 or not probe.stdout.strip().startswith(version):
@@ -121,6 +160,8 @@ def main():
     p.add_argument("versions", nargs="*")
     p = sub.add_parser("python")
     p.add_argument("version")
+    p = sub.add_parser("find-python")
+    p.add_argument("python", help='"3.13"')
     sub.add_parser("list")
     args = parser.parse_args()
     pinned = versions()
@@ -128,6 +169,11 @@ def main():
         print("\n".join(pinned))
     elif args.command == "python":
         print(interpreter(args.version))
+    elif args.command == "find-python":
+        found = find_python(args.python)
+        if found is None:
+            return 1
+        print(found)
     else:
         unknown = set(args.versions) - set(pinned)
         if unknown:

@@ -10,7 +10,8 @@ TEST names a test (test_bake, ...; default: all of TESTS, in order). Two kinds o
   --python-exit-code 1 --python SCRIPT -- ARGS`; tests that need a GPU context or a window run
   under `xvfb-run -a blender --factory-startup ...` instead;
 - Blender as a Python module (`--bpy VERSION`, one of blender_tests/bpy_versions.txt, installed by
-  blender_tests/bpy_modules.py): `VENV/bin/python SCRIPT -- ARGS`. The module behaves like
+  blender_tests/bpy_modules.py; a version whose CPython is not on the machine is skipped):
+  `VENV/bin/python SCRIPT -- ARGS`. The module behaves like
   `blender -b`: GPU tests get their context from a Workbench render (gpu_context.ensure(), EGL with
   Mesa's llvmpipe); tests that need a window and Blender's event loop (test_viewport: modal
   operators, timers, a simulated Esc) cannot run there and are reported as skipped.
@@ -93,12 +94,19 @@ class BlenderModule:
     def __init__(self, version):
         self.python = self.where = bpy_modules.interpreter(version)
         self.version = tuple(int(p) for p in version.split(".")[:3])
-        self.label = "bpy %s (module)" % version
-        if not os.path.isfile(self.python):
-            raise SystemExit("run.py: bpy %s is not installed (%s); run: /usr/bin/python3 "
-                             "blender_tests/bpy_modules.py install %s" % (version, self.python, version))
+        python = bpy_modules.pins()[version]
+        self.label = "bpy %s (module, CPython %s)" % (version, python)
+        self.missing = None
+        if not bpy_modules.installed(version):
+            if bpy_modules.find_python(python) is None:
+                self.missing = "bpy %s needs CPython %s, not found on this machine" % (version, python)
+            else:
+                raise SystemExit("run.py: bpy %s is not installed (%s); run: /usr/bin/python3 "
+                                 "blender_tests/bpy_modules.py install %s" % (version, self.python, version))
 
     def skip_reason(self, needs):
+        if self.missing:
+            return self.missing
         if needs == WINDOW:
             return "needs a window and Blender's event loop; the bpy module has neither"
         return None

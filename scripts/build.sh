@@ -9,15 +9,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 native313=""
-py313=""
-for candidate in "${SD_PYTHON313:-}" "$(command -v python3.13 || true)" \
-                 "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python3.13; do
-  if [[ -n "$candidate" && -x "$candidate" ]] &&
-     "$candidate" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' 2>/dev/null; then
-    py313="$candidate"
-    break
-  fi
-done
+py313="$(/usr/bin/python3 "$root/blender_tests/bpy_modules.py" find-python 3.13 || true)"
 if [[ -n "$py313" ]]; then
   venv="${XDG_CACHE_HOME:-$HOME/.cache}/sd-lighting/py313-build"
   if ! "$venv/bin/python" -c 'import pybind11, sys; sys.exit(pybind11.__version__ != "2.13.6")' 2>/dev/null; then

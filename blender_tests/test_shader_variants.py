@@ -9,8 +9,8 @@ live shading builds it (defines, frame block, samplers, interface).
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
    compiler accepts implicit int -> float conversions, as GLSL 4.x allows).
-2. Strict GLSL (on the Blender 5.0+ run - the sources do not depend on the Blender that runs the
-   check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
+2. Strict GLSL (on the Blender 5.0 run only - the sources do not depend on the Blender that runs
+   the check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
    assembled the way Blender declares the create-info (version line, defines, the frame block,
    samplers, vertex inputs, interface, fragment output) before the add-on's GLSL, compiled by
    glslang twice:
@@ -165,8 +165,8 @@ def main():
 
     # 2. glslang, strict.
     validator = shutil.which("glslangValidator")
-    if bpy.app.version < (5, 0, 0):
-        print("strict GLSL checks run on the Blender 5.0+ run only")
+    if tuple(bpy.app.version[:2]) != (5, 0):
+        print("strict GLSL checks run on the Blender 5.0 run only")
         return checks.summary()
     if validator is None:
         print("glslangValidator not found (Debian's glslang-tools): strict GLSL checks not run")

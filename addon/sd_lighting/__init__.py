@@ -25,7 +25,8 @@ Directions are in the object's local frame; SH follow sdnative's convention (ind
 
 Modules: properties (settings), operators, panels, drawing (draw handler), gpu_shading (shader
 variants, GPU data), baking, attributes, environment (world nodes, rotation), materials (lobe),
-methods, preview (stills), gpu_context (background GPU), native (the sdnative loader).
+methods, preview (stills), gpu_context (background GPU), native (the sdnative loader), compat (what
+differs between Blender versions).
 """
 
 bl_info = {
@@ -41,7 +42,7 @@ bl_info = {
 
 if "bpy" in locals():  # script reload (F3 > Reload Scripts)
     import importlib
-    for _name in ("native", "methods", "materials", "environment", "attributes", "baking",
+    for _name in ("compat", "native", "methods", "materials", "environment", "attributes", "baking",
                   "gpu_context", "gpu_shading", "drawing", "preview", "properties", "operators",
                   "panels"):
         if _name in locals():
@@ -50,8 +51,8 @@ if "bpy" in locals():  # script reload (F3 > Reload Scripts)
 import bpy  # noqa: E402
 from bpy.app.handlers import persistent  # noqa: E402
 
-from . import (attributes, baking, drawing, environment, gpu_context, gpu_shading,  # noqa: E402,F401
-               materials, methods, native, operators, panels, preview, properties)
+from . import (attributes, baking, compat, drawing, environment, gpu_context,  # noqa: E402,F401
+               gpu_shading, materials, methods, native, operators, panels, preview, properties)
 
 
 @persistent

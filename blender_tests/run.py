@@ -18,7 +18,8 @@ TEST names a test (test_bake, ...; default: all of TESTS, in order). Two kinds o
 
 A test may also need a minimum Blender version (test_extension: extensions exist since 4.2);
 below it, it is skipped. Every run gets its own BLENDER_USER_SCRIPTS/BLENDER_USER_CONFIG (and
-extension repository) under --out, so installing the zip never touches ~/.config/blender. Prints
+extension repository, and shader caches) under --out, so installing the zip never touches
+~/.config/blender and every shader is compiled afresh. Prints
 one line per test and a summary; exits non-zero if any test fails, and with SKIPPED (77) when
 every selected test was skipped (CTest's SKIP_RETURN_CODE).
 
@@ -129,6 +130,9 @@ def blender_environment(user):
         env["BLENDER_USER_CONFIG"] = os.path.join(user, "config")
         env["BLENDER_USER_EXTENSIONS"] = os.path.join(user, "extensions")   # 4.2+
         env["BLENDER_USER_DATAFILES"] = os.path.join(user, "datafiles")
+        # Blender's shader caches (OpenGL, Vulkan SPIR-V and pipelines) and Mesa's live under
+        # $XDG_CACHE_HOME: a fresh one per run, so every shader is really compiled.
+        env["XDG_CACHE_HOME"] = os.path.join(user, "cache")
     return env
 
 

@@ -8,7 +8,9 @@ live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
-   compiler accepts implicit int -> float conversions, as GLSL 4.x allows).
+   compiler accepts implicit int -> float conversions, as GLSL 4.x allows); bpy 5.3 defaults to
+   Vulkan (Mesa's lavapipe): Blender's own GLSL -> SPIR-V front end. run.py gives every run fresh
+   shader caches, so nothing comes from an earlier run.
 2. Strict GLSL (on the Blender 5.0 run only - the sources do not depend on the Blender that runs
    the check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
    assembled the way Blender declares the create-info (version line, defines, the frame block,
@@ -20,8 +22,8 @@ live shading builds it (defines, frame block, samplers, interface).
    - as Vulkan GLSL 4.50 to SPIR-V (-V): the front end of Blender's Vulkan backend (glslang, via
      shaderc), with gl_VertexID mapped to gl_VertexIndex as that backend does. (GLSL 4.50 itself
      allows implicit int -> float conversions; the ES pass is the one that forbids them.)
-   Blender's own Vulkan backend cannot be chosen headless: bpy ignores the gpu_backend
-   preference in background mode and creates an OpenGL context (seen on 5.0.1).
+   5.0's Vulkan backend cannot be chosen headless: bpy ignores the gpu_backend preference in
+   background mode and creates an OpenGL context (seen on 5.0.1; 5.3 picks Vulkan itself).
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_shader_variants.py -- --zip Z --out DIR
 """
 

@@ -2,9 +2,10 @@
 
 Blender creates no GPU context in background mode (`blender -b`, and Blender as a Python module,
 bpy): `gpu` raises "not available in background mode". Rendering one small frame with the
-Workbench engine creates one (EGL; Mesa's llvmpipe without a GPU), after which the `gpu` module
-works - seen on 3.4.1 and on bpy 4.2.23, 4.5.15 and 5.0.1, none of which has a `gpu.init()`
-(used if a later version brings one). The render leaves depth testing enabled, so every draw of
+Workbench engine creates one (OpenGL through EGL, or Vulkan where that is the default backend -
+5.3 -; Mesa's llvmpipe/lavapipe without a GPU), after which the `gpu` module works - seen on 3.4.1
+and on bpy 4.2.23, 4.5.15, 5.0.1 and 5.3.0, none of which has a `gpu.init()` (used if a later
+version brings one). The render leaves depth testing enabled, so every draw of
 this add-on sets the GPU state it needs itself.
 """
 

@@ -186,7 +186,7 @@ def main():
     real_counts = design_node_counts_of_a_real_bake(package, scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     view = package.drawing.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
-    uniform = package.preview.uniform_color_shader()
+    uniform = package.compat.uniform_color_shader()
     from mathutils import Matrix
     projection = Matrix(view.view_projection.tolist())
 

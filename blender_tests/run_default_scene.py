@@ -13,6 +13,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/ru
          --zip build/sd_lighting.zip --out out/
      (set BLENDER_USER_SCRIPTS to a scratch folder to keep the install out of ~/.config/blender)
 Options after --: --rays 1024 --hdri forest.exr --width 960 --height 540 --exposure -1
+                  --cuts 72 (the ground's grid) --subdivisions 1 (Suzanne's Subdivision levels)
 """
 
 import math
@@ -29,7 +30,8 @@ import numpy as np  # noqa: E402
 
 def options():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    out = {"rays": 1024, "hdri": "forest.exr", "width": 960, "height": 540, "exposure": -1.0}
+    out = {"rays": 1024, "hdri": "forest.exr", "width": 960, "height": 540, "exposure": -1.0,
+           "cuts": 72, "subdivisions": 1}
     for i, arg in enumerate(argv[:-1]):
         key = arg.lstrip("-")
         if key in out:
@@ -37,15 +39,15 @@ def options():
     return out
 
 
-def suzanne(scene):
+def suzanne(scene, subdivisions=1):
     bpy.ops.mesh.primitive_monkey_add(size=2.0, location=(0.0, 0.0, 0.0))
     monkey = bpy.context.active_object
     monkey.name = "Suzanne"
     monkey.rotation_euler = (math.radians(-20.0), 0.0, math.radians(-25.0))
-    monkey.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+    monkey.modifiers.new("Subdivision", 'SUBSURF').levels = subdivisions
     bpy.ops.object.shade_smooth()
     material = bpy.data.materials.new("Clay")
-    material.use_nodes = True
+    sdtest.use_nodes(material)
     principled = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
     principled.inputs["Roughness"].default_value = 0.7
     monkey.data.materials.append(material)
@@ -62,16 +64,13 @@ def suzanne(scene):
     return monkey
 
 
-def main():
-    args = sdtest.arguments()
-    opts = options()
-    start = time.perf_counter()
-    sdtest.install_addon(args.zip)
-
+def build_scene(opts):
+    """The default scene, its bake settings chosen and both objects selected: (scene, mapping,
+    Suzanne, ground)."""
     scene = sdtest.empty_scene()
     _, mapping = sdtest.hdri_world(scene, sdtest.hdri(opts["hdri"]), rotation_z=math.radians(30.0))
-    monkey = suzanne(scene)
-    ground = sdtest.grid(scene, name="Ground", cuts=72, size=6.0)
+    monkey = suzanne(scene, opts["subdivisions"])
+    ground = sdtest.grid(scene, name="Ground", cuts=opts["cuts"], size=6.0)
     sdtest.camera(scene, location=(3.2, -6.2, 3.0), target=(0.0, 0.0, 0.75), lens=45.0)
     scene.render.resolution_x, scene.render.resolution_y = opts["width"], opts["height"]
     scene.render.resolution_percentage = 100
@@ -83,8 +82,17 @@ def main():
     settings = sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 4, 2, rays=opts["rays"],
                                     select=[monkey, ground])
     settings.live_shading = True
+    return scene, mapping, monkey, ground
+
+
+def main():
+    args = sdtest.arguments()
+    opts = options()
+    start = time.perf_counter()
+    sdtest.install_addon(args.zip)
+    scene, mapping, monkey, ground = build_scene(opts)
     print("sd_lighting: baking %s and %s (MSD Theorem 2.2, s = 4, s' = 2, %d rays per vertex)..."
-          % (monkey.name, ground.name, settings.rays), flush=True)
+          % (monkey.name, ground.name, scene.sd_lighting.rays), flush=True)
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
         raise RuntimeError("the bake failed")
     for obj in (monkey, ground):
@@ -114,4 +122,5 @@ def main():
     return 0
 
 
-sdtest.run(main)
+if __name__ == "__main__":
+    sdtest.run(main)

@@ -4,7 +4,9 @@ checks with a one-line summary, and a crash-free exit.
 Every test script is run by Blender:
     blender [-b] --factory-startup --python-exit-code 1 --python blender_tests/<test>.py -- \
         --zip build/sd_lighting.zip --out build/blender_tests
-(run.py does that for all of them; GPU tests run under xvfb-run).
+or by the Python of Blender as a module (the bpy wheel), which behaves like `blender -b`:
+    VENV/bin/python blender_tests/<test>.py -- --zip build/sd_lighting.zip --out DIR
+(run.py does that for all of them; GPU tests run under xvfb-run with a Blender binary).
 """
 
 import argparse
@@ -13,18 +15,25 @@ import os
 import sys
 import time
 import traceback
+import warnings
 
 import bpy
 
 BLENDER_HDRI_DIR = "/usr/share/blender/datafiles/studiolights/world"
+EXTENSION_REPOSITORY = "user_default"
+
+# The module name of the add-on the test installed: "sd_lighting" as a legacy add-on,
+# "bl_ext.user_default.sd_lighting" as an extension (4.2+).
+addon_module = "sd_lighting"
 
 
 def hdri(name="forest.exr"):
-    """A Blender-shipped HDRI (CC0)."""
-    candidates = [os.path.join(BLENDER_HDRI_DIR, name)]
+    """A Blender-shipped HDRI (CC0): the running Blender's own, else Debian's."""
+    candidates = []
     datafiles = bpy.utils.system_resource('DATAFILES')
     if datafiles:
         candidates.append(os.path.join(datafiles, "studiolights", "world", name))
+    candidates.append(os.path.join(BLENDER_HDRI_DIR, name))
     for path in candidates:
         if os.path.isfile(path):
             return path
@@ -56,6 +65,39 @@ def install_addon(zip_path):
     return sd_lighting
 
 
+def install_extension(zip_path):
+    """Installs the zip as an extension (Blender 4.2+: Get Extensions > Install from Disk) into the
+    user repository and enables it; returns the add-on's package (bl_ext.user_default.sd_lighting)."""
+    global addon_module
+    import importlib
+    if not zip_path or not os.path.isfile(zip_path):
+        raise FileNotFoundError("add-on zip not found: %r (pass --zip)" % zip_path)
+    result = bpy.ops.extensions.package_install_files(
+        filepath=os.path.abspath(zip_path), repo=EXTENSION_REPOSITORY, enable_on_install=True)
+    if result != {'FINISHED'}:
+        raise RuntimeError("extensions.package_install_files returned %s" % result)
+    addon_module = "bl_ext.%s.sd_lighting" % EXTENSION_REPOSITORY
+    return importlib.import_module(addon_module)
+
+
+# Warnings raised by the add-on's own code (DeprecationWarning: an API that the next Blender drops,
+# e.g. World.use_nodes in 5.0, vertex formats in 4.5); Checks.summary() fails on any. Python shows
+# DeprecationWarning only in __main__ by default: show them all.
+addon_warnings = []
+_show_warning = warnings.showwarning
+
+
+def _record_warning(message, category, filename, lineno, file=None, line=None):
+    if "sd_lighting" in os.path.normpath(filename).split(os.sep):
+        addon_warnings.append("%s:%d: %s: %s" % (os.path.basename(filename), lineno,
+                                                 category.__name__, message))
+    _show_warning(message, category, filename, lineno, file, line)
+
+
+warnings.showwarning = _record_warning
+warnings.simplefilter("always")
+
+
 class Checks:
     """Collects named checks; `summary()` prints one line and returns the exit code."""
 
@@ -75,6 +117,8 @@ class Checks:
         return ok
 
     def summary(self):
+        self.check(not addon_warnings, "the add-on raised no warnings (deprecated API)",
+                   "; ".join(addon_warnings[:3]))
         seconds = time.perf_counter() - self.start
         if self.failed:
             print("%s: FAILED %d of %d checks (%s) in %.1f s" % (
@@ -90,7 +134,8 @@ def finish(code):
     without running Blender's exit path (no crash at exit can change the test's result)."""
     try:
         import addon_utils
-        addon_utils.disable("sd_lighting")
+        if addon_module:
+            addon_utils.disable(addon_module)
     except Exception:
         traceback.print_exc()
         code = code or 1
@@ -126,10 +171,17 @@ def empty_scene():
     return scene
 
 
+def use_nodes(idblock):
+    """Shades a world or material with its node tree (5.0 always does; its use_nodes is
+    deprecated)."""
+    if bpy.app.version < (5, 0, 0):
+        idblock.use_nodes = True
+
+
 def hdri_world(scene, path, rotation_z=0.0, strength=1.0):
     """World: Texture Coordinate > Mapping > Environment Texture > Background."""
     world = bpy.data.worlds.new("SD World")
-    world.use_nodes = True
+    use_nodes(world)
     scene.world = world
     tree = world.node_tree
     background = tree.nodes["Background"]

@@ -158,7 +158,7 @@ def main():
                  "the Background strength scales L")
     background.inputs["Strength"].default_value = 1.0
     plain = bpy.data.worlds.new("Plain")
-    plain.use_nodes = True
+    sdtest.use_nodes(plain)
     plain.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
     world, scene.world = scene.world, plain
     light = environment.light_coefficients(environment.source(scene), 2)
@@ -174,16 +174,58 @@ def main():
     mapping.vector_type = 'POINT'
     mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
 
+    # The rotation without a Mapping node (an HDRI file): kept by the settings themselves.
+    scene.sd_lighting.environment_source = 'FILE'
+    scene.sd_lighting.environment_rotation = (0.25, -0.5, 1.0)
+    checks.check(np.allclose(scene.sd_lighting.environment_rotation, (0.25, -0.5, 1.0)) and
+                 np.allclose(environment.rotation_matrix(scene),
+                             environment.euler_xyz((0.25, -0.5, 1.0))) and
+                 tuple(mapping.inputs["Rotation"].default_value) == (0.0, 0.0, 0.0),
+                 "the rotation slider without a Mapping node turns the environment")
+
     # Save and reload.
     path = os.path.join(args.out, "test_bake.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
     ball = bpy.data.objects["Ball"]
     baked = package.baking.baked_mesh(ball)
     checks.check(baked is not None and ball["sd_bake"]["method"] == "msd_lobe",
                  "bake survives save and reload")
     checks.check(np.array_equal(attributes.read(baked)["visibility"], visibility),
                  "attributes survive save and reload")
+    checks.check(np.allclose(scene.sd_lighting.environment_rotation, (0.25, -0.5, 1.0)),
+                 "the rotation without a Mapping node survives save and reload",
+                 str(tuple(scene.sd_lighting.environment_rotation)))
+    scene.sd_lighting.environment_source = 'WORLD'
+
+    # Vertex and corner normals through compat (Mesh.vertex_normals 3.5+, Mesh.corner_normals
+    # 4.1+, calc_normals_split before): a flat cube's corners carry their face's normal, a
+    # smooth sphere's corners their vertex's normal.
+    compat = package.compat
+    import bmesh
+    cube_mesh = bpy.data.meshes.new("Cube")
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=2.0)
+    bm.to_mesh(cube_mesh)
+    bm.free()
+    corner = compat.corner_normals(cube_mesh)
+    face_of_corner = np.repeat(np.arange(len(cube_mesh.polygons)),
+                               [p.loop_total for p in cube_mesh.polygons])
+    face_normals = np.array([tuple(p.normal) for p in cube_mesh.polygons])
+    vertex = compat.vertex_normals(cube_mesh)
+    checks.check(corner.shape == (24, 3) and np.allclose(corner, face_normals[face_of_corner], atol=1e-6) and
+                 np.allclose(np.abs(vertex), 1.0 / np.sqrt(3.0), atol=1e-6),
+                 "flat cube: corner normals are the face normals, vertex normals the diagonals")
+    smooth = bpy.data.objects["Ball"].data.copy()
+    smooth.polygons.foreach_set("use_smooth", [True] * len(smooth.polygons))
+    smooth.update()
+    loops = np.empty(len(smooth.loops), dtype=np.int32)
+    smooth.loops.foreach_get("vertex_index", loops)
+    checks.check(np.allclose(compat.corner_normals(smooth), compat.vertex_normals(smooth)[loops], atol=1e-5),
+                 "smooth mesh: corner normals are the vertex normals")
+    bpy.data.meshes.remove(smooth)
+    bpy.data.meshes.remove(cube_mesh)
 
     sdtest.select_only([ball])
     result = bpy.ops.sd_lighting.clear_bake()

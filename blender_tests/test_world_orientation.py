@@ -68,7 +68,7 @@ def main():
     ball = sdtest.ico_sphere(scene, subdivisions=5, radius=1.0, location=(0.0, 0.0, 0.0))
     ball.data.polygons.foreach_set("use_smooth", [True] * len(ball.data.polygons))
     material = bpy.data.materials.new("White")
-    material.use_nodes = True
+    sdtest.use_nodes(material)
     tree = material.node_tree
     for node in list(tree.nodes):
         if node.type != 'OUTPUT_MATERIAL':

@@ -1,56 +1,105 @@
 #!/usr/bin/env python3
 """Builds the installable add-on zip: sd_lighting/ with the Python package, the GLSL shaders and
-the native module sdnative.
+the native module sdnative (one build per CPython version: --native may be given several times).
 
     python3 scripts/package_addon.py --native build/native/sdnative.cpython-311-x86_64-linux-gnu.so \
-        --output build/sd_lighting.zip
+        [--native build/py313/native/sdnative.cpython-313-x86_64-linux-gnu.so] --output build/sd_lighting.zip
 
 Layout (one zip for both install paths: Preferences > Add-ons > Install on Blender 3.4 - 4.x via
 bl_info, and Get Extensions > Install from Disk on 4.2+ via blender_manifest.toml):
 
     sd_lighting/__init__.py, *.py, utils/*.py, blender_manifest.toml
     sd_lighting/shaders/sd_shading_lib.glsl, sd_shading_vert.glsl, sd_shading_frag.glsl
-    sd_lighting/sdnative.cpython-311-x86_64-linux-gnu.so
+    sd_lighting/sdnative.cpython-311-x86_64-linux-gnu.so   (Blender 3.4 - 5.0: CPython 3.11)
+    sd_lighting/sdnative.cpython-313-x86_64-linux-gnu.so   (Blender 5.1+: CPython 3.13, if built)
+
+The manifest's schema (1.0.0, Blender 4.2 - 5.0) has no python_versions key (Blender derives the
+Python versions of an extension from its `wheels` only), so the manifest written into the zip
+bounds the Blender versions instead: without a CPython 3.13 module it gets
+blender_version_max = "5.1.0" (5.1 is the first Blender on 3.13), which the extension installer
+honours. native.py picks the module of the running Python's ABI.
 """
 
 import argparse
 import os
+import re
 import sys
 import zipfile
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+# The first Blender that no longer runs each CPython of the native modules (None: still current).
+BLENDER_AFTER_PYTHON = {(3, 11): "5.1.0", (3, 13): None}
+
+
+def python_version(module_path):
+    """(3, 11) for sdnative.cpython-311-x86_64-linux-gnu.so."""
+    match = re.search(r"\.cpython-3(\d+)-", os.path.basename(module_path))
+    if not match:
+        sys.exit("package_addon: not a CPython extension module: %s" % module_path)
+    return (3, int(match.group(1)))
+
+
+def manifest_text(path, natives):
+    """The package's blender_manifest.toml, with blender_version_max from the newest Python
+    among the native modules."""
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    newest = max(python_version(n) for n in natives)
+    if newest not in BLENDER_AFTER_PYTHON:
+        sys.exit("package_addon: no Blender range known for CPython %d.%d" % newest)
+    maximum = BLENDER_AFTER_PYTHON[newest]
+    if maximum and not re.search(r"^blender_version_max\s*=", text, re.M):
+        line = ("# Written by scripts/package_addon.py: the native module is built for CPython %d.%d "
+                "only,\n# and Blender %s moved to the next Python.\nblender_version_max = \"%s\"\n\n"
+                % (newest + (maximum, maximum)))
+        table = re.search(r"^\[", text, re.M)   # top-level keys go before the first [table]
+        at = table.start() if table else len(text)
+        text = text[:at] + line + text[at:]
+    return text
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--native", required=True, help="path of the built sdnative module (.so)")
+    parser.add_argument("--native", required=True, action="append",
+                        help="path of a built sdnative module (.so); once per CPython version")
     parser.add_argument("--output", required=True, help="zip to write")
     args = parser.parse_args()
 
     package = os.path.join(ROOT, "addon", "sd_lighting")
     shaders = os.path.join(ROOT, "shaders")
-    if not os.path.isfile(args.native):
-        sys.exit("package_addon: native module not found: %s" % args.native)
+    natives = [n for n in args.native if n]
+    for native in natives:
+        if not os.path.isfile(native):
+            sys.exit("package_addon: native module not found: %s" % native)
+    if len({python_version(n) for n in natives}) != len(natives):
+        sys.exit("package_addon: two native modules for the same CPython: %s" % ", ".join(natives))
 
-    entries = []
+    entries, texts = [], []
     for directory, subdirectories, names in os.walk(package):
         subdirectories[:] = sorted(d for d in subdirectories if d != "__pycache__")
         for name in sorted(names):
-            if name.endswith(".py") or name == "blender_manifest.toml":
+            if name.endswith(".py"):
                 path = os.path.join(directory, name)
                 entries.append((path, "sd_lighting/" + os.path.relpath(path, package).replace(os.sep, "/")))
+    texts.append((manifest_text(os.path.join(package, "blender_manifest.toml"), natives),
+                  "sd_lighting/blender_manifest.toml"))
     for name in sorted(os.listdir(shaders)):
         if name.endswith(".glsl"):
             entries.append((os.path.join(shaders, name), "sd_lighting/shaders/" + name))
-    entries.append((args.native, "sd_lighting/" + os.path.basename(args.native)))
+    for native in natives:
+        entries.append((native, "sd_lighting/" + os.path.basename(native)))
 
     os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
     temporary = args.output + ".tmp"
     with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
         for path, arcname in entries:
             archive.write(path, arcname)
+        for text, arcname in texts:
+            archive.writestr(arcname, text)
     os.replace(temporary, args.output)
-    print("package_addon: wrote %s (%d files)" % (args.output, len(entries)))
+    print("package_addon: wrote %s (%d files; sdnative for CPython %s)" % (
+        args.output, len(entries) + len(texts),
+        ", ".join("%d.%d" % python_version(n) for n in natives)))
 
 
 if __name__ == "__main__":

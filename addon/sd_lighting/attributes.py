@@ -5,6 +5,7 @@ geometry as arrays. What is stored and how is the table in utils/bake_data.py; R
 
 import numpy as np
 
+from . import compat
 from .utils import bake_data
 from .utils.bake_data import BAKE, NORMAL, PREFIX
 
@@ -94,9 +95,8 @@ def new_mesh(name, vertices, loop_vertices, loop_starts, loop_totals):
     mesh.loops.add(len(loop_vertices))
     mesh.loops.foreach_set('vertex_index', np.asarray(loop_vertices, dtype=np.int32))
     mesh.polygons.add(len(loop_starts))
-    mesh.polygons.foreach_set('loop_start', np.asarray(loop_starts, dtype=np.int32))
-    if bpy.app.version < (4, 0, 0):  # read-only (derived from loop_start) since 4.0
-        mesh.polygons.foreach_set('loop_total', np.asarray(loop_totals, dtype=np.int32))
+    compat.set_polygon_loops(mesh, np.asarray(loop_starts, dtype=np.int32),
+                             np.asarray(loop_totals, dtype=np.int32))
     mesh.update(calc_edges=True)
     return mesh
 

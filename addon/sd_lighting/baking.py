@@ -23,7 +23,7 @@ import uuid
 
 import numpy as np
 
-from . import attributes, environment, materials, native
+from . import attributes, compat, environment, materials, native
 from .utils import methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH
 
@@ -39,13 +39,7 @@ class BakeError(Exception):
 # Geometry
 
 def _vertex_normals(mesh):
-    n = len(mesh.vertices)
-    normals = np.empty(n * 3, dtype=np.float32)
-    if hasattr(mesh, "vertex_normals"):          # Blender 3.5+
-        mesh.vertex_normals.foreach_get('vector', normals)
-    else:
-        mesh.vertices.foreach_get('normal', normals)
-    normals = normals.reshape(n, 3).astype(np.float64)
+    normals = compat.vertex_normals(mesh).astype(np.float64)
     length = np.linalg.norm(normals, axis=1)
     bad = ~(length > 1e-12)
     normals[bad] = (0.0, 0.0, 1.0)

@@ -19,7 +19,7 @@ import os
 
 import numpy as np
 
-from . import native
+from . import compat, native
 from .utils import transforms
 
 _cache = {}          # source key -> sdnative.Environment
@@ -50,7 +50,7 @@ def _linked_node(socket):
 
 def world_nodes(world):
     """(environment texture node, background node, mapping node), each None when absent."""
-    if world is None or not world.use_nodes or world.node_tree is None:
+    if not compat.uses_nodes(world):
         return None, None, None
     tree = world.node_tree
     background = None

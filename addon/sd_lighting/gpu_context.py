@@ -1,9 +1,12 @@
 """A GPU context when Blender runs without a window (`blender -b`).
 
-Blender 3.4 creates no GPU context in background mode; rendering one small frame with the
-Workbench engine creates one, after which the `gpu` module works (Blender 4.x has `gpu.init()`
-for this, used when present). The render leaves depth testing enabled, so every draw of this
-add-on sets the GPU state it needs itself.
+Blender creates no GPU context in background mode (`blender -b`, and Blender as a Python module,
+bpy): `gpu` raises "not available in background mode". Rendering one small frame with the
+Workbench engine creates one (OpenGL through EGL, or Vulkan where that is the default backend -
+5.3 -; Mesa's llvmpipe/lavapipe without a GPU), after which the `gpu` module works - seen on 3.4.1
+and on bpy 4.2.23, 4.5.15, 5.0.1 and 5.3.0, none of which has a `gpu.init()` (used if a later
+version brings one). The render leaves depth testing enabled, so every draw of
+this add-on sets the GPU state it needs itself.
 """
 
 _ready = False

@@ -165,13 +165,17 @@ def lobe_design(lobe, exponent, degree):
 def make_batch(primitive, content, indices=None):
     """A GPUBatch of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
     here: gpu_extras' batch_for_shader asks the shader for its attributes, which Blender 3.4
-    reports wrongly for some programs (names and types out of order)."""
+    reports wrongly for some programs (names and types out of order). Only F32 x 1-4 with fetch
+    mode FLOAT: 4.5 deprecates formats that are not 4-byte aligned, wider than 4 components or
+    INT_TO_FLOAT, and 5.0 rejects the last two."""
     import gpu
     vertex_format = gpu.types.GPUVertFormat()
     arrays = {}
     for name, values in content.items():
         values = np.ascontiguousarray(values, dtype=np.float32)
         values = values.reshape(len(values), -1)
+        if not 1 <= values.shape[1] <= 4:
+            raise ValueError("vertex attribute %s has %d components (1-4 allowed)" % (name, values.shape[1]))
         arrays[name] = values
         vertex_format.attr_add(id=name, comp_type='F32', len=values.shape[1], fetch_mode='FLOAT')
     count = len(next(iter(arrays.values())))

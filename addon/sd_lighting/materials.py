@@ -2,11 +2,12 @@
 utils/lobes.py), or forced by the panel's settings. An object without such a material is Lambert.
 """
 
+from . import compat
 from .utils import lobes
 
 
 def _principled(material):
-    if material is None or not material.use_nodes or material.node_tree is None:
+    if not compat.uses_nodes(material):
         return None
     for node in material.node_tree.nodes:
         if node.type == 'BSDF_PRINCIPLED':

@@ -15,23 +15,15 @@ import zlib
 
 import numpy as np
 
-from . import baking, drawing, gpu_context
+from . import baking, compat, drawing, gpu_context
 
 OTHER_MESH_GREY = 0.18
-
-
-def uniform_color_shader():
-    """Blender's built-in uniform-colour shader (renamed in 3.5)."""
-    import bpy
-    import gpu
-    return gpu.shader.from_builtin('3D_UNIFORM_COLOR' if bpy.app.version < (3, 5, 0)
-                                   else 'UNIFORM_COLOR')
 
 
 def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
     """(shader, batch) of the other visible meshes, for a grey depth-tested draw."""
     from gpu_extras.batch import batch_for_shader
-    shader = uniform_color_shader()
+    shader = compat.uniform_color_shader()
     out = []
     for obj in scene.objects:
         if obj.name in exclude:

@@ -33,11 +33,15 @@ def _redraw(self, context):
                 area.tag_redraw()
 
 
+# The rotation's getter and setter keep the value in the hidden property `stored_rotation` when
+# there is no Mapping node, by attribute access, not dict-style self["..."]: Blender 5.0 stores
+# bpy.props values apart from custom (dict) properties - on IDs, id["prop"] no longer reaches a
+# bpy.props property there (5.0.1 still lets a PropertyGroup's self["prop"] through).
 def _get_rotation(self):
     mapping = environment.mapping_node(self.id_data)
     if mapping is not None:
         return tuple(mapping.inputs["Rotation"].default_value)
-    return tuple(self.get("stored_rotation", (0.0, 0.0, 0.0)))
+    return tuple(self.stored_rotation)
 
 
 def _set_rotation(self, value):
@@ -45,7 +49,7 @@ def _set_rotation(self, value):
     if mapping is not None:
         mapping.inputs["Rotation"].default_value = value
     else:
-        self["stored_rotation"] = tuple(value)
+        self.stored_rotation = tuple(value)
 
 
 class SceneSettings(bpy.types.PropertyGroup):
@@ -61,6 +65,9 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Rotation", subtype='EULER', size=3, get=_get_rotation, set=_set_rotation,
         description="Rotation g of the environment (XYZ Euler). Drives the world's Mapping node "
                     "in front of the Environment Texture when there is one")
+    stored_rotation: FloatVectorProperty(
+        name="Stored Rotation", subtype='EULER', size=3, options={'HIDDEN'},
+        description="The environment rotation when no Mapping node holds it")
 
     automatic_orders: BoolProperty(
         name="Automatic s", default=True,

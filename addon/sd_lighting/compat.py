@@ -1,0 +1,78 @@
+"""Everything that differs between the Blender versions the add-on supports (3.4 - 5.0), in one
+place. The rest of the add-on calls these and never tests bpy.app.version itself.
+
+Tested by the Blender suite on Debian's Blender 3.4.1 and on bpy 4.2.23, 4.5.15 and 5.0.1:
+
+| API                               | versions     | here                                        |
+|-----------------------------------|--------------|---------------------------------------------|
+| Mesh.vertex_normals               | 3.5+         | vertex_normals(); MeshVertex.normal before  |
+| Mesh.corner_normals               | 4.1+         | corner_normals(); calc_normals_split() and  |
+|   (calc_normals_split, auto smooth removed)     |   MeshLoop.normal before                    |
+| MeshPolygon.loop_total read-only  | 4.0+         | set_polygon_loops()                         |
+| built-in shader '3D_UNIFORM_COLOR'| 'UNIFORM_COLOR' since 3.5, the 3D_ name gone in 4.0: uniform_color_shader() |
+| World/Material.use_nodes          | deprecated in 5.0 (node trees always used, gone in 6.0): uses_nodes() |
+"""
+
+import numpy as np
+
+
+def version():
+    import bpy
+    return tuple(bpy.app.version)
+
+
+def _has_rna_property(struct_type, name):
+    return name in struct_type.bl_rna.properties
+
+
+def vertex_normals(mesh):
+    """float32 [V, 3]: the mesh's vertex normals (Mesh.vertex_normals on 3.5+, MeshVertex.normal
+    before)."""
+    n = len(mesh.vertices)
+    normals = np.empty(n * 3, dtype=np.float32)
+    if _has_rna_property(type(mesh), "vertex_normals"):
+        mesh.vertex_normals.foreach_get('vector', normals)
+    else:
+        mesh.vertices.foreach_get('normal', normals)
+    return normals.reshape(n, 3)
+
+
+def corner_normals(mesh):
+    """float32 [L, 3]: the mesh's corner (split) normals, one per loop - what the mesh is shaded
+    with (flat faces, sharp edges, custom normals). Mesh.corner_normals on 4.1+ (a cache,
+    computed on access); before 4.1 Mesh.calc_normals_split() fills MeshLoop.normal (with
+    auto smooth off that gives face normals for flat faces and vertex normals for smooth ones,
+    as 4.1+ does)."""
+    n = len(mesh.loops)
+    normals = np.empty(n * 3, dtype=np.float32)
+    if _has_rna_property(type(mesh), "corner_normals"):
+        mesh.corner_normals.foreach_get('vector', normals)
+    else:
+        mesh.calc_normals_split()
+        mesh.loops.foreach_get('normal', normals)
+    return normals.reshape(n, 3)
+
+
+def set_polygon_loops(mesh, loop_starts, loop_totals):
+    """Sets the polygons' loop_start (and loop_total, which 4.0+ derives from the starts and
+    makes read-only)."""
+    import bpy
+    mesh.polygons.foreach_set('loop_start', loop_starts)
+    if not bpy.types.MeshPolygon.bl_rna.properties['loop_total'].is_readonly:
+        mesh.polygons.foreach_set('loop_total', loop_totals)
+
+
+def uniform_color_shader():
+    """Blender's built-in uniform-colour shader for 3D positions ('pos', uniform 'color')."""
+    import gpu
+    return gpu.shader.from_builtin('3D_UNIFORM_COLOR' if version() < (3, 5, 0) else 'UNIFORM_COLOR')
+
+
+def uses_nodes(idblock):
+    """Whether a world or material is shaded by its node tree. 5.0 always uses the node tree and
+    deprecates `use_nodes` (reading it warns; it goes in 6.0)."""
+    if idblock is None or idblock.node_tree is None:
+        return False
+    if version() >= (5, 0, 0):
+        return True
+    return bool(idblock.use_nodes)

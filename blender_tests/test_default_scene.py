@@ -1,0 +1,106 @@
+"""The main job's default scene from a script, checked: Suzanne (Subdivision modifier, smooth
+shading, a rough Principled material) on a ground plane under the forest HDRI; bake both with the
+operator, check the baked meshes' attributes, render the preview, save, reload, render again (the
+same picture from the reloaded file), clear. Smaller than the main job (Suzanne without
+subdivision, 507 vertices; a 24 x 24 ground; 128 rays; a 320 x 180 preview), to keep it short on
+every Blender version (the main job's 9.3k vertices take minutes on 2 cores).
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_default_scene.py -- --zip Z --out DIR
+"""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+import run_default_scene  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+OPTIONS = {"rays": 128, "hdri": "forest.exr", "width": 320, "height": 180, "exposure": -1.0,
+           "cuts": 24, "subdivisions": 0}
+
+
+def preview(path):
+    assert bpy.ops.sd_lighting.render_preview(filepath=path) == {'FINISHED'}, path
+    image = bpy.data.images.load(path)
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(height, width, 4)
+
+
+def main():
+    checks = sdtest.Checks("test_default_scene")
+    args = sdtest.arguments()
+    package = sdtest.install_addon(args.zip)
+    attributes = package.attributes
+    scene, mapping, monkey, ground = run_default_scene.build_scene(OPTIONS)
+
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the default scene from a script")
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    data = {}
+    for obj in (monkey, ground):
+        baked = package.baking.baked_mesh(obj)
+        evaluated = obj.evaluated_get(depsgraph).to_mesh()
+        count = len(evaluated.vertices)
+        obj.evaluated_get(depsgraph).to_mesh_clear()
+        checks.check(baked is not None and len(baked.vertices) == count,
+                     "%s: baked mesh of the evaluated geometry" % obj.name,
+                     "%d vertices" % (len(baked.vertices) if baked else -1))
+        info = dict(obj["sd_bake"])
+        checks.check(info["method"] == "msd_visibility" and info["lobe"] == "lambert" and
+                     info["light_order"] == 4 and info["visibility_order"] == 2,
+                     "%s: MSD 2.2, Lambert from the rough material, s = 4, s' = 2" % obj.name, str(info))
+        names = {a.name for a in baked.attributes}
+        design_names = sorted(n for n in names if n.startswith("sd_design_"))
+        checks.check({"sd_normal", "sd_ambient_occlusion"} <= names and design_names,
+                     "%s: normal, AO and design attributes" % obj.name, ", ".join(design_names))
+        for name in ["sd_normal", "sd_ambient_occlusion"] + design_names:
+            attribute = baked.attributes[name]
+            checks.check(attribute.domain == 'POINT' and attribute.data_type in
+                         {'FLOAT', 'FLOAT_VECTOR', 'FLOAT_COLOR'}, "%s: %s is POINT float" % (obj.name, name))
+        values = attributes.read(baked)
+        ao = values["ambient_occlusion"]
+        normals = attributes.read_normals(baked)
+        offsets = values["design_offsets"]
+        sums = np.add.reduceat(values["design_weights"], offsets[:-1])
+        nonempty = np.diff(offsets) > 0
+        checks.check(np.all((ao >= 0) & (ao <= 1)) and
+                     np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-4) and
+                     np.allclose(sums[nonempty], ao[nonempty], atol=1e-5),
+                     "%s: AO in [0, 1], unit normals, design weights sum to AO" % obj.name,
+                     "AO mean %.3f" % ao.mean())
+        data[obj.name] = {k: np.array(v) for k, v in values.items() if v is not None}
+    checks.check(data["Suzanne"]["ambient_occlusion"].min() < 0.6,
+                 "Suzanne shadows herself", "min AO %.3f" % data["Suzanne"]["ambient_occlusion"].min())
+
+    before = preview(os.path.join(args.out, "default_scene.exr"))
+    covered = before[..., 3] > 0.5
+    checks.check(before.shape == (OPTIONS["height"], OPTIONS["width"], 4) and 0.2 < covered.mean() < 0.99 and
+                 np.isfinite(before).all() and before[covered][:, :3].max() > 0.05,
+                 "preview of the default scene", "%.0f %% covered" % (100 * covered.mean()))
+
+    path = os.path.join(args.out, "default_scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    monkey, ground = bpy.data.objects["Suzanne"], bpy.data.objects["Ground"]
+    same = True
+    for obj in (monkey, ground):
+        values = attributes.read(package.baking.baked_mesh(obj))
+        same &= all(np.array_equal(np.asarray(values[k]), v) for k, v in data[obj.name].items())
+    checks.check(same, "bake and attributes survive save and reload")
+    after = preview(os.path.join(args.out, "default_scene_reloaded.exr"))
+    difference = float(np.abs(after - before).max())
+    checks.check(difference < 1e-5, "the reloaded file renders the same preview", "max diff %.2e" % difference)
+
+    sdtest.select_only([monkey, ground])
+    checks.check(bpy.ops.sd_lighting.clear_bake() == {'FINISHED'} and
+                 not any("sd_bake" in o for o in (monkey, ground)) and
+                 not any(m.name.startswith("SD ") for m in bpy.data.meshes),
+                 "clear removes both bakes")
+    return checks.summary()
+
+
+sdtest.run(main)

@@ -1,0 +1,192 @@
+"""Every shader variant compiles: on this Blender's GPU backend, and under glslang's strict front
+ends.
+
+Variants: every method x lobe (Lambert, Phong; PRT (2) Lambert only) x orders (s, s') in ORDERS
+(0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn / vertex-target, and the
+band-limited-texture variants of MSD (12), (13): 204 programs, each built by gpu_shading exactly as the
+live shading builds it (defines, frame block, samplers, interface).
+
+1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
+   when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
+   compiler accepts implicit int -> float conversions, as GLSL 4.x allows); bpy 5.3 defaults to
+   Vulkan (Mesa's lavapipe): Blender's own GLSL -> SPIR-V front end. run.py gives every run fresh
+   shader caches, so nothing comes from an earlier run.
+2. Strict GLSL (on the Blender 5.0 run only - the sources do not depend on the Blender that runs
+   the check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
+   assembled the way Blender declares the create-info (version line, defines, the frame block,
+   samplers, vertex inputs, interface, fragment output) before the add-on's GLSL, compiled by
+   glslang twice:
+   - as GLSL ES 3.20: no implicit conversions at all (an int where a float is expected, a float
+     literal without a decimal point in float context, mixed int/float arithmetic are errors) -
+     the rules the Metal backend's translation and the strictest drivers hold code to;
+   - as Vulkan GLSL 4.50 to SPIR-V (-V): the front end of Blender's Vulkan backend (glslang, via
+     shaderc), with gl_VertexID mapped to gl_VertexIndex as that backend does. (GLSL 4.50 itself
+     allows implicit int -> float conversions; the ES pass is the one that forbids them.)
+   5.0's Vulkan backend cannot be chosen headless: bpy ignores the gpu_backend preference in
+   background mode and creates an OpenGL context (seen on 5.0.1; 5.3 picks Vulkan itself).
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_shader_variants.py -- --zip Z --out DIR
+"""
+
+import importlib
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+ORDERS = [(0, 0), (1, 1), (6, 3)]
+DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
+PHONG_EXPONENT = 8.0
+
+
+def _module(package, name):
+    return importlib.import_module(package.__name__ + "." + name)
+
+
+def variants(package):
+    """Every variant the live shading can build at ORDERS."""
+    gs = package.gpu_shading
+    shader_variant = _module(package, "utils.shader_variant")
+    sd = package.native.get()
+    for method in _module(package, "utils.methods").METHODS:
+        for glossy in ((False,) if method.lambert_only else (False, True)):
+            for s, sv in ORDERS:
+                stride = 0
+                if method.data is not None:
+                    stride = {"scalar": 1, "design": DESIGN_TEXELS}.get(
+                        method.data.packing, (int(np.prod(method.data.shape(s, sv))) + 3) // 4)
+                design = 0
+                if method.lobe_design:
+                    design = len(gs.lobe_design("phong" if glossy else "lambert", PHONG_EXPONENT, s + sv))
+                gaunt = len(sd.gaunt_coefficients(s, sv, s + sv)[1]) if method.gaunt_table else 0
+                textures = [()]
+                if method.band_limited_texture:
+                    textures.append(shader_variant.band_limited_texture_size(s))
+                for per_pixel in (False, True):
+                    for vertex_target in (False, True):
+                        for texture in textures:
+                            yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt,
+                                                         per_pixel, vertex_target, texture)
+
+
+def name(variant):
+    return "%s%s s=%d s'=%d%s%s%s" % (
+        variant.method.id, " phong" if variant.glossy else "", variant.light_order,
+        variant.visibility_order, " per-pixel" if variant.per_pixel else "",
+        " vertex-target" if variant.vertex_target else "",
+        " texture" if variant.band_limited_texture else "")
+
+
+# ----------------------------------------------------------------------------------------------
+# The stage sources as Blender assembles them from the create-info (gpu_shading._compile).
+
+def _interface(variant):
+    """(vertex inputs, interface (qualifier, type, name)) as gpu_shading._compile declares them."""
+    inputs = [("vec3", "pos"), ("vec3", "nrm")]
+    if variant.per_pixel:
+        inputs += [("vec3", "corners"), ("vec3", "bary")]
+        interface = [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
+                     ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
+    else:
+        interface = [("smooth", "vec3", "sd_color")]
+    return inputs, interface
+
+
+def stage_source(package, variant, stage, dialect):
+    gs = package.gpu_shading
+    lines = []
+    if dialect == "es":
+        lines += ["#version 320 es", "precision highp float;", "precision highp int;",
+                  "precision highp sampler2D;"]
+    else:
+        lines += ["#version 450", "#define gl_VertexID gl_VertexIndex"]
+    for key, value in variant.defines(package.native.get().sh_recurrence_constants).items():
+        lines.append("#define %s %s" % (key, value))
+    lines.append(variant.frame_struct())
+    lines.append("layout(std140, binding = 0) uniform sd_block { SdFrameData sd; };")
+    for slot, sampler in variant.samplers():
+        lines.append("layout(binding = %d) uniform highp sampler2D %s;" % (slot, sampler))
+    inputs, interface = _interface(variant)
+    if stage == "vert":
+        for location, (kind, attribute) in enumerate(inputs):
+            lines.append("layout(location = %d) in %s %s;" % (location, kind, attribute))
+    direction = "out" if stage == "vert" else "in"
+    for location, (qualifier, kind, member) in enumerate(interface):
+        lines.append("layout(location = %d) %s %s %s %s;" % (location, qualifier, direction, kind, member))
+    if stage == "frag":
+        lines.append("layout(location = 0) out vec4 fragColor;")
+    library, vertex, fragment = (gs._read_shader(f) for f in gs.SHADER_FILES)
+    return "\n".join(lines) + "\n" + library + "\n" + (vertex if stage == "vert" else fragment)
+
+
+def glslang_errors(validator, source, stage, dialect, directory):
+    directory = tempfile.mkdtemp(dir=directory)
+    path = os.path.join(directory, "variant." + stage)
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(source)
+    command = [validator]
+    if dialect == "vulkan":
+        command += ["-V", "--target-env", "vulkan1.2", "-o", os.path.join(directory, "variant.spv")]
+    command.append(path)
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    if done.returncode == 0:
+        return []
+    return [l for l in (done.stdout + done.stderr).splitlines()
+            if "ERROR" in l and "compilation terminated" not in l] or [done.stdout + done.stderr]
+
+
+def main():
+    checks = sdtest.Checks("test_shader_variants")
+    args = sdtest.arguments()
+    package = sdtest.install_addon(args.zip)
+    package.gpu_context.ensure()
+    import gpu
+    print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
+                                else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
+    all_variants = list(variants(package))
+    checks.check(len(all_variants) == 204, "variants enumerated", "%d" % len(all_variants))
+
+    # 1. This Blender's GPU backend.
+    failed, start = [], time.perf_counter()
+    for variant in all_variants:
+        try:
+            package.gpu_shading.shader_program(variant)
+        except Exception as exc:  # create_from_info raises with the compiler's log printed
+            failed.append("%s: %s" % (name(variant), str(exc).splitlines()[0] if str(exc) else type(exc).__name__))
+    checks.check(not failed, "every variant compiles on this Blender's GPU backend (%d programs, %.1f s)"
+                 % (len(all_variants), time.perf_counter() - start), "; ".join(failed[:5]))
+    package.gpu_shading.clear_cache()
+
+    # 2. glslang, strict.
+    validator = shutil.which("glslangValidator")
+    if tuple(bpy.app.version[:2]) != (5, 0):
+        print("strict GLSL checks run on the Blender 5.0 run only")
+        return checks.summary()
+    if validator is None:
+        print("glslangValidator not found (Debian's glslang-tools): strict GLSL checks not run")
+        return checks.summary()
+    for dialect, label in (("es", "GLSL ES 3.20 (no implicit conversions)"),
+                           ("vulkan", "Vulkan GLSL 4.50 to SPIR-V")):
+        start = time.perf_counter()
+        jobs = [(variant, stage) for variant in all_variants for stage in ("vert", "frag")]
+        with tempfile.TemporaryDirectory() as directory, ThreadPoolExecutor(os.cpu_count() or 2) as pool:
+            results = pool.map(lambda job: glslang_errors(
+                validator, stage_source(package, job[0], job[1], dialect), job[1], dialect, directory), jobs)
+            failed = ["%s %s: %s" % (name(variant), stage, " | ".join(errors[:3]))
+                      for (variant, stage), errors in zip(jobs, results) if errors]
+        for line in failed[:10]:
+            print("  " + line)
+        checks.check(not failed, "glslang accepts every variant as %s (%.1f s)" % (label, time.perf_counter() - start),
+                     "%d of %d stages fail; first: %s" % (len(failed), 2 * len(all_variants), failed[0] if failed else ""))
+    return checks.summary()
+
+
+sdtest.run(main)

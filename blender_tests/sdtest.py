@@ -98,6 +98,21 @@ warnings.showwarning = _record_warning
 warnings.simplefilter("always")
 
 
+def registration_state():
+    """What registering the add-on adds to Blender: unregistering must take all of it back."""
+    def operator_exists(name):
+        try:
+            getattr(bpy.ops.sd_lighting, name).get_rna_type()
+            return True
+        except (AttributeError, KeyError):
+            return False
+    return {"scene_property": hasattr(bpy.types.Scene, "sd_lighting"),
+            "panel": hasattr(bpy.types, "SD_PT_lighting"),
+            "bake_operator": operator_exists("bake"),
+            "preview_operator": operator_exists("render_preview"),
+            "load_post": len(bpy.app.handlers.load_post)}
+
+
 class Checks:
     """Collects named checks; `summary()` prints one line and returns the exit code."""
 

@@ -136,6 +136,7 @@ def main():
     # Environment sources: the world's file, the same image packed (read from its pixels), a file
     # from the panel, and a world without an Environment Texture (uniform colour).
     environment = package.environment
+    transforms = sys.modules[package.__name__ + ".utils.transforms"]
     source = environment.source(scene)
     file_light = environment.light_coefficients(source, 2)
     checks.check(source.kind == "file" and source.path.endswith("forest.exr"), "world HDRI found", source.description)
@@ -179,7 +180,7 @@ def main():
     scene.sd_lighting.environment_rotation = (0.25, -0.5, 1.0)
     checks.check(np.allclose(scene.sd_lighting.environment_rotation, (0.25, -0.5, 1.0)) and
                  np.allclose(environment.rotation_matrix(scene),
-                             environment.euler_xyz((0.25, -0.5, 1.0))) and
+                             transforms.euler_xyz((0.25, -0.5, 1.0))) and
                  tuple(mapping.inputs["Rotation"].default_value) == (0.0, 0.0, 0.0),
                  "the rotation slider without a Mapping node turns the environment")
 

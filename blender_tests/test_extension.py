@@ -41,20 +41,6 @@ def bl_info_of(path):
     return ast.literal_eval(node.value)
 
 
-def state():
-    def operator_exists(name):
-        try:
-            getattr(bpy.ops.sd_lighting, name).get_rna_type()
-            return True
-        except (AttributeError, KeyError):
-            return False
-    return {"scene_property": hasattr(bpy.types.Scene, "sd_lighting"),
-            "panel": hasattr(bpy.types, "SD_PT_lighting"),
-            "bake_operator": operator_exists("bake"),
-            "preview_operator": operator_exists("render_preview"),
-            "load_post": len(bpy.app.handlers.load_post)}
-
-
 def main():
     import addon_utils
     import tomllib
@@ -65,7 +51,7 @@ def main():
     checks.check(code == 0, "Blender's extension validator accepts the zip", output.splitlines()[-1]
                  if output else "exit %d" % code)
 
-    before = state()
+    before = sdtest.registration_state()
     package = sdtest.install_extension(args.zip)
     module = sdtest.addon_module
     root = os.path.dirname(package.__file__)
@@ -86,7 +72,7 @@ def main():
                                                          else "5.1.0"),
                  "blender_version_max matches the native modules' Pythons",
                  "%s: %s" % (", ".join(pythons), manifest.get("blender_version_max")))
-    on = state()
+    on = sdtest.registration_state()
     for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
         checks.check(on[key], "registered: " + key)
     checks.check(package.native.available() and
@@ -97,11 +83,11 @@ def main():
 
     for cycle in range(2):
         addon_utils.disable(module)
-        off = state()
+        off = sdtest.registration_state()
         checks.check(off == before, "disable leaves nothing behind (cycle %d)" % cycle,
                      "%s vs %s" % (off, before))
         addon_utils.enable(module)
-        checks.check(state() == on, "enables again (cycle %d)" % cycle)
+        checks.check(sdtest.registration_state() == on, "enables again (cycle %d)" % cycle)
 
     # Bake and preview from the extension.
     scene = sdtest.empty_scene()
@@ -128,9 +114,9 @@ def main():
     repo_index = next(i for i, repo in enumerate(bpy.context.preferences.extensions.repos)
                       if repo.module == sdtest.EXTENSION_REPOSITORY)
     result = bpy.ops.extensions.package_uninstall(repo_index=repo_index, pkg_id="sd_lighting")
-    checks.check(result == {'FINISHED'} and not os.path.exists(root) and state() == before and
+    checks.check(result == {'FINISHED'} and not os.path.exists(root) and sdtest.registration_state() == before and
                  module not in bpy.context.preferences.addons,
-                 "uninstall removes the extension", "%s, %s" % (result, state()))
+                 "uninstall removes the extension", "%s, %s" % (result, sdtest.registration_state()))
     sdtest.addon_module = None
     return checks.summary()
 

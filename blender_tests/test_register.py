@@ -11,33 +11,15 @@ import sdtest  # noqa: E402
 import bpy  # noqa: E402
 
 
-def operator_exists(name):
-    try:
-        getattr(bpy.ops.sd_lighting, name).get_rna_type()
-        return True
-    except (AttributeError, KeyError):
-        return False
-
-
-def state():
-    return {
-        "scene_property": hasattr(bpy.types.Scene, "sd_lighting"),
-        "panel": hasattr(bpy.types, "SD_PT_lighting"),
-        "bake_operator": operator_exists("bake"),
-        "preview_operator": operator_exists("render_preview"),
-        "load_post": len(bpy.app.handlers.load_post),
-    }
-
-
 def main():
     checks = sdtest.Checks("test_register")
     args = sdtest.arguments()
-    before = state()
+    before = sdtest.registration_state()
     package = sdtest.install_addon(args.zip)
     checks.check(os.path.dirname(package.__file__).endswith("sd_lighting") and
                  "scripts" in package.__file__, "imported from the installed zip", package.__file__)
     checks.check(package.bl_info["blender"] <= (3, 4, 0), "bl_info targets Blender 3.4")
-    on = state()
+    on = sdtest.registration_state()
     for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
         checks.check(on[key], "registered: " + key)
     checks.check(on["load_post"] == before["load_post"] + 1, "one load_post handler added")
@@ -58,12 +40,12 @@ def main():
     import addon_utils
     for cycle in range(2):
         addon_utils.disable("sd_lighting")
-        off = state()
+        off = sdtest.registration_state()
         checks.check(off == before, "unregister leaves nothing behind (cycle %d)" % cycle,
                      "%s vs %s" % (off, before))
         checks.check(drawing._handler is None, "draw handler removed (cycle %d)" % cycle)
         addon_utils.enable("sd_lighting")
-        checks.check(state() == on, "registers again (cycle %d)" % cycle)
+        checks.check(sdtest.registration_state() == on, "registers again (cycle %d)" % cycle)
     return checks.summary()
 
 

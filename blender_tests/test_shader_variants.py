@@ -59,10 +59,13 @@ def variants(package):
     for method in _module(package, "utils.methods").METHODS:
         for glossy in ((False,) if method.lambert_only else (False, True)):
             for s, sv in ORDERS:
-                stride = 0
-                if method.data is not None:
-                    stride = {"scalar": 1, "design": DESIGN_TEXELS}.get(
-                        method.data.packing, (int(np.prod(method.data.shape(s, sv))) + 3) // 4)
+                data = method.data
+                if data is None:
+                    stride = 0
+                elif data.packing == "coefficients":
+                    stride = (int(np.prod(data.shape(s, sv))) + 3) // 4
+                else:
+                    stride = {"scalar": 1, "design": DESIGN_TEXELS}[data.packing]
                 design = 0
                 if method.lobe_design:
                     design = len(gs.lobe_design("phong" if glossy else "lambert", PHONG_EXPONENT, s + sv))

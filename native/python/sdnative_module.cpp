@@ -8,6 +8,8 @@
 #include "bindings.h"
 #include "sdlighting/limits.h"
 
+#include <string>
+
 namespace {
 
 constexpr const char* kModuleDoc = R"doc(
@@ -60,9 +62,26 @@ needed) and returned as float64 numpy arrays. Bad shapes, NaN or infinity, negat
 out-of-range orders or degrees raise ValueError.
 )doc";
 
+// pybind11 before 2.12 reads NumPy 2's dtype descriptors with the NumPy 1 layout: every array the
+// module returns gets strides of 0 and silently repeats its first element (seen with Debian's
+// pybind11 2.10 under NumPy 2.4). Refuse to load there rather than return wrong results.
+namespace py = pybind11;
+
+void check_numpy_abi() {
+#if PYBIND11_VERSION_HEX < 0x020C0000
+  const std::string version = py::module_::import("numpy").attr("__version__").cast<std::string>();
+  if (std::stoi(version) >= 2) {  // the major version: stoi stops at the first '.'
+    throw py::import_error("sdnative was built with pybind11 " PYBIND11_TOSTRING(PYBIND11_VERSION_MAJOR) "." PYBIND11_TOSTRING(
+        PYBIND11_VERSION_MINOR) ", which does not support NumPy " + version +
+                           " (its arrays would come back wrong): use NumPy 1.x, or rebuild sdnative with pybind11 >= 2.12");
+  }
+#endif
+}
+
 }  // namespace
 
 PYBIND11_MODULE(sdnative, m) {
+  check_numpy_abi();
   m.doc() = kModuleDoc;
   // sdlighting/limits.h, each limit once.
   m.attr("MAX_SH_ORDER") = sd::kMaxShOrder;

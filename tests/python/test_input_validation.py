@@ -1,5 +1,9 @@
 """Bad input raises ValueError (messages checked loosely)."""
 import math
+import os
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -183,3 +187,20 @@ def test_limits_are_exported_and_enforced(sd):
     assert sd.MAX_PHONG_EXPONENT == 1e4
     with pytest.raises(ValueError, match="Phong exponent"):
         sd.zonal_coefficients("phong", sd.MAX_PHONG_EXPONENT * 1.5, 2)
+
+
+def test_module_refuses_numpy_2_when_its_pybind11_cannot_read_it(sd, tmp_path):
+    # pybind11 < 2.12 returns NumPy 2 arrays with zero strides (every element the first): the
+    # module must refuse to load there instead. A stand-in numpy that only says it is 2.0.0 is
+    # enough: the check runs before any array is made.
+    header = os.path.join("/usr/include/pybind11/detail/common.h")
+    version = dict(re.findall(r"#define PYBIND11_VERSION_(MAJOR|MINOR) (\d+)", open(header).read()))
+    if (int(version["MAJOR"]), int(version["MINOR"])) >= (2, 12):
+        pytest.skip("built with pybind11 >= 2.12, which reads NumPy 2")
+    (tmp_path / "numpy").mkdir()
+    (tmp_path / "numpy" / "__init__.py").write_text("__version__ = '2.0.0'\n")
+    module_dir = os.path.dirname(sd.__file__)
+    done = subprocess.run([sys.executable, "-c", "import sdnative"], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), module_dir])))
+    assert done.returncode != 0
+    assert "ImportError" in done.stderr and "NumPy 2.0.0" in done.stderr and "pybind11 >= 2.12" in done.stderr

@@ -97,7 +97,7 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Phong exponent sigma")
 
     method: EnumProperty(name="Method", items=methods.enum_items(), default='msd_visibility')
-    rays: IntProperty(name="Rays", default=256, min=16, soft_max=65536,
+    rays: IntProperty(name="Rays", default=256, min=16,
                       **limits.maximum(LIMITS.rays),
                       description="Rays traced per vertex for the visibility")
     seed: IntProperty(name="Seed", default=0, min=0, description="Seed of the ray directions")

@@ -72,7 +72,7 @@ views (N, 3): unit vectors to the eye (phong only); rotation g (3, 3) as in shad
 samples: sample pairs per vertex, one from the environment (∝ luminance) and one from the lobe,
 combined by the balance heuristic; seed makes it deterministic (independent of threads).
 Returns (radiance, standard_error), both (N, 3): the estimate and its Monte Carlo standard
-error. Rays start at p + ε n with the bake's ε. Releases the GIL.)doc");
+error. Rays start at the bake's ray origins. Releases the GIL.)doc");
 }
 
 }  // namespace sdpy

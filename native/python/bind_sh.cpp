@@ -167,8 +167,8 @@ Returns a dict of float64 arrays: "diagonal" (order+1,), "a" and "b" ((order+1)(
 coeffs: shape (K,) or (K, C) (C channels, e.g. RGB); K = (lmax+1)**2 with lmax <= MAX_SH_ORDER.
 rotation: proper rotation matrix R of shape (3, 3), numpy row-major (R[i, j] = row i, column j),
           orthogonal with det +1 to about 1e-9; otherwise ValueError.
-Returns an array of the same shape as coeffs. The environment seen through a rotation g,
-L(g x), has coefficients rotate_sh(L, g.T).)doc");
+Returns an array of the same shape as coeffs. For the environment seen through a rotation g,
+L(g x), use rotated_environment_sh(L, g).)doc");
 
   m.def("rotated_environment_sh", &py_rotated_environment_sh, py::arg("coeffs"), py::arg("g"),
         R"doc(Coefficients of x -> L(g x), the environment seen through the rotation g of eq. (1):

@@ -7,7 +7,7 @@ from sd_lighting.utils import limits
 
 def test_limits_of_the_built_module(sdnative):
     got = limits.from_module(sdnative)
-    assert got == limits.Limits(light_order=16, visibility_order=8, rays=1 << 24,
+    assert got == limits.Limits(light_order=16, visibility_order=8, rays=65536,
                                 phong_exponent=1e4)
 
 

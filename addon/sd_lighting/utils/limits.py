@@ -6,6 +6,10 @@ baked or shaded then, and the panel says why.
 from dataclasses import dataclass
 from typing import Optional
 
+# The panel's own cap on rays per vertex, below sdnative's: a bake thread holds the SH basis at its
+# escaping rays, rays x (s+1)^2 doubles (65536 rays at s = 16: 150 MB; sdnative's 2^24: 38 GB).
+PANEL_MAX_RAYS = 65536
+
 
 @dataclass(frozen=True)
 class Limits:
@@ -24,7 +28,7 @@ def from_module(sdnative):
     visibility = int(sdnative.MAX_VISIBILITY_ORDER)
     light = min(int(sdnative.MAX_SHADING_ORDER), int(sdnative.MAX_TRANSFER_ORDER),
                 int(sdnative.MAX_PROJECTION_ORDER), int(sdnative.MAX_DESIGN_DEGREE) - visibility)
-    return Limits(light, visibility, int(sdnative.MAX_RAYS_PER_VERTEX),
+    return Limits(light, visibility, min(int(sdnative.MAX_RAYS_PER_VERTEX), PANEL_MAX_RAYS),
                   float(sdnative.MAX_PHONG_EXPONENT))
 
 

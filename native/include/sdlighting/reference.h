@@ -32,8 +32,8 @@ struct ReferenceResult {
 /// direction from the environment (EnvironmentSampler, texels ∝ luminance) and one from the lobe
 /// (exactly: t = u^(1/(σ+1))), combined by the balance heuristic (multiple importance sampling),
 /// so that both a sun and a narrow highlight converge. V is traced with Embree against the
-/// object's triangles and the occluders from p + ε n, as the bake does. L is the map's texels
-/// (piecewise constant), unfiltered. `views` (unit, vertex → eye) are read for Phong only.
+/// object's triangles and the occluders from the bake's ray origins (src/bake/traced_scene.h). L
+/// is the map's texels (piecewise constant), unfiltered. `views` (unit, vertex → eye) are read for Phong only.
 /// Throws std::invalid_argument on bad input (as bake_transfer does, and samples < 1).
 ReferenceResult shade_reference(const Environment& environment, const glm::dmat3& rotation,
                                 const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,

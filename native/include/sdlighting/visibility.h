@@ -3,7 +3,7 @@
 //
 // For every vertex p with unit normal n, R rays x_1 .. x_R cover the WHOLE sphere (rays into the
 // surface are blocked by the surface itself) and start at an origin q next to p in free space
-// (off the walls at concave edges, above a floor the object stands on: src/traced_scene.h), tnear
+// (off the walls at concave edges, above a floor the object stands on: src/bake/traced_scene.h), tnear
 // = 0, tfar = ∞. V_r = 1 when
 // ray r escapes the scene, else 0. The scene is one Embree scene of the object's triangles plus
 // optional occluder triangles (two-sided, float32, RTC_SCENE_FLAG_ROBUST, high build quality),

@@ -62,6 +62,13 @@ EmbreeScene::EmbreeScene() {
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw std::runtime_error("Embree: cannot create a device (" + error_name(rtcGetDeviceError(nullptr)) + ")");
   rtcSetDeviceErrorFunction(device_, &EmbreeScene::on_error, this);
+  // first_side needs every hit on both sides: an Embree built without filter functions or with
+  // back-face culling would let every ray-origin candidate pass unseen.
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) == 0 ||
+      rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_BACKFACE_CULLING_ENABLED) != 0) {
+    rtcReleaseDevice(device_);
+    throw std::runtime_error("Embree: this build lacks filter functions or culls back faces; the bake needs both sides");
+  }
   scene_ = rtcNewScene(device_);
   check("rtcNewScene");
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);

@@ -67,7 +67,8 @@ struct Fans {
 }  // namespace
 
 TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
-                         const std::vector<Triangle>& triangles, const OccluderMesh& occluders, int threads)
+                         const std::vector<Triangle>& triangles, const OccluderMesh& occluders,
+                         const ParallelOptions& parallel)
     : centre_(BoundingBox(vertices).centre()) {
   const std::vector<glm::dvec3> points = shifted(vertices, centre_);
   const OccluderMesh shifted_occluders{shifted(occluders.vertices, centre_), occluders.triangles};
@@ -88,7 +89,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
   const std::vector<glm::dvec3> fibonacci = spherical_fibonacci(kCandidateDirections);
 
   origins_.resize(points.size());
-  parallel_for(points.size(), 64, [&](std::size_t begin, std::size_t end) {
+  const ParallelOutcome outcome = parallel_for(points.size(), 64, [&](std::size_t begin, std::size_t end) {
     std::vector<unsigned> fan, probed;
     std::vector<std::size_t> order(fibonacci.size());
     for (std::size_t v = begin; v < end; ++v) {
@@ -114,7 +115,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       const double eta = std::max(kOriginOffset * shortest, floor);
       glm::dvec3 into_faces = (centre / area - p) / shortest;
       const double reach = glm::length(into_faces);
-      if (reach > 1.0) into_faces /= reach;  // at most 45° off the normal, so q stays clear of the faces
+      if (reach > 1.0) into_faces /= reach;  // never dominates the normal, so q stays clear of the faces
 
       probed = fan;
       std::sort(probed.begin(), probed.end(), [&](unsigned a, unsigned b) { return areas[a] > areas[b]; });
@@ -159,7 +160,11 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       }
       origins_[v] = chosen;
     }
-  }, ParallelOptions(threads));
+  }, parallel);
+  if (!outcome.completed) {
+    throw BakeCancelled("cancelled while finding the ray origins (" + std::to_string(outcome.done) + " of " +
+                        std::to_string(points.size()) + " vertices)");
+  }
 }
 
 std::vector<glm::dvec3> TracedScene::object_frame_origins() const { return shifted(origins_, -centre_); }

@@ -30,6 +30,7 @@
 #include "sdlighting/visibility.h"
 
 #include "bake/embree_scene.h"
+#include "util/parallel_for.h"
 
 #include <glm/vec3.hpp>
 
@@ -54,9 +55,11 @@ constexpr int kCandidateDirections = 64;
 class TracedScene {
  public:
   /// vertices/unit_normals/triangles: the object (checked by the caller); occluders: other
-  /// blocking triangles; threads: as parallel_for (the origins are found in parallel).
+  /// blocking triangles; parallel: how the origins are found (threads, progress over the vertices,
+  /// cancel). Throws BakeCancelled when cancelled.
   TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
-              const std::vector<Triangle>& triangles, const OccluderMesh& occluders, int threads);
+              const std::vector<Triangle>& triangles, const OccluderMesh& occluders,
+              const ParallelOptions& parallel);
 
   const EmbreeScene& scene() const { return scene_; }
   /// Vertex v's ray origin in the traced frame (the one scene() is built in).

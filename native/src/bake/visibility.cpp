@@ -275,14 +275,15 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   std::vector<SphericalDesign> designs(plan.design_degree >= 0 ? n : 0);
   const Outputs outputs{&bake, &designs};
 
-  // ---- the scene and the ray origins ----
-  const TracedScene traced(vertices, units, triangles, occluders, options.threads);
+  // ---- the scene and the ray origins: a short first phase, shown as no vertex done yet ----
+  ParallelOptions parallel(options.threads);
+  parallel.cancel = options.cancel;
+  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, n); };
+  const TracedScene traced(vertices, units, triangles, occluders, parallel);
   bake.ray_origins = traced.object_frame_origins();
 
   // ---- the workers; with a progress callback the calling thread only reports ----
-  ParallelOptions parallel(options.threads);
   parallel.progress = options.progress;
-  parallel.cancel = options.cancel;
   // Chunks of about kChunkRays rays (at most kChunk vertices) keep a cancel prompt for any ray count.
   const std::size_t chunk = std::clamp<std::size_t>(kChunkRays / options.rays, 1, kChunk);
   const ParallelOutcome outcome = parallel_for(

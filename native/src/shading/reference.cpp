@@ -31,7 +31,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   const ZonalLobe lobe = material.lobe();
 
-  const TracedScene traced(vertices, unit, triangles, occluders, options.threads);  // the bake's origins
+  const TracedScene traced(vertices, unit, triangles, occluders, ParallelOptions(options.threads));  // the bake's origins
   const EnvironmentSampler sampler(environment);
   // The integrand reads L at g x (rotated_sh, sh_rotation.h, states the convention); a direction y
   // drawn from the map is therefore the object-frame direction x = gᵀ y.

@@ -93,6 +93,7 @@ ParallelOutcome parallel_for(std::size_t count, std::size_t chunk, Body&& body,
   };
 
   const bool reporting = static_cast<bool>(options.progress);
+  chunk = std::max<std::size_t>(chunk, 1);
   const std::size_t chunks = (count + chunk - 1) / chunk;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const int workers = static_cast<int>(std::min<std::size_t>(threads, chunks));

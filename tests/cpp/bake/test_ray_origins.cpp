@@ -1,4 +1,4 @@
-// Tests of where the bake's rays start (src/traced_scene.h): through bake_transfer's ambient
+// Tests of where the bake's rays start (src/bake/traced_scene.h): through bake_transfer's ambient
 // occlusion at vertices whose exact visible fraction is known. 4096 rays of the rotated spherical
 // Fibonacci rule resolve these piecewise-constant fractions to about 3e-3; the origin offset
 // (1e-3 of the shortest edge) moves them by less.
@@ -99,6 +99,21 @@ TEST(RayOrigins, EnclosedVertexSeesNothing) {
   const Mesh inner = test::square_fan(0.1, 0.0);
   const std::vector<double> ao = ambient_occlusion(inner, test::box(1.0));
   for (double value : ao) EXPECT_EQ(value, 0.0);
+}
+
+TEST(RayOrigins, CancellingWhileTheyAreFoundStopsTheBake) {
+  // Finding the origins is the bake's first phase: progress reports no vertex done yet, and
+  // returning false there cancels before any ray is traced.
+  const test::Mesh m = test::icosphere(4);
+  TransferOptions options;
+  options.rays = 64;
+  std::vector<std::size_t> reported;
+  options.progress = [&](std::size_t done, std::size_t) {
+    reported.push_back(done);
+    return reported.size() < 2;
+  };
+  EXPECT_THROW(bake_transfer(m.vertices, m.normals, m.triangles, options), BakeCancelled);
+  EXPECT_EQ(reported, (std::vector<std::size_t>{0, 0}));
 }
 
 TEST(RayOrigins, OriginsAreReturnedCloseToTheirVertices) {

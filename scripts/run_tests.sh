@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test: installs what is missing (Debian packages; the pinned Blender-as-a-module wheels
 # in their cached venvs), builds, then the C++ (GoogleTest), Python (pytest) and Blender (the
-# add-on, headless, on Debian's Blender 3.4.1 and on bpy 4.2, 4.5 and 5.0) suites through CTest.
+# add-on, headless, on Debian's Blender 3.4.1 and on the bpy modules of
+# blender_tests/bpy_versions.txt) suites through CTest.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/scripts/install_dependencies.sh"

@@ -1,7 +1,8 @@
-"""Everything that differs between the Blender versions the add-on supports (3.4 - 5.0), in one
+"""Everything that differs between the Blender versions the add-on supports (3.4 - 5.x), in one
 place. The rest of the add-on calls these and never tests bpy.app.version itself.
 
-Tested by the Blender suite on Debian's Blender 3.4.1 and on bpy 4.2.23, 4.5.15 and 5.0.1:
+Tested by the Blender suite on Debian's Blender 3.4.1 and on the bpy modules pinned in
+blender_tests/bpy_versions.txt:
 
 | API                               | versions     | here                                        |
 |-----------------------------------|--------------|---------------------------------------------|

@@ -176,7 +176,7 @@ def _draw_handler():
 
 
 # --------------------------------------------------------------------------------------------
-# Checks against the CPU evaluator (tests, and the panel's accuracy check)
+# Checks against the CPU evaluator (for the tests)
 
 def cpu_reference(scene, obj, view):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,

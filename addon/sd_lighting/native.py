@@ -1,7 +1,7 @@
 """The native module `sdnative` (C++, pybind11): found inside the add-on, or in a development build.
 
-The add-on zip carries `sdnative.cpython-311-*.so` next to this file, so `from . import sdnative`
-finds it (an extension module's init function is named after the last part of the module name).
+The add-on zip carries `sdnative.cpython-3XX-*.so` next to this file, one per CPython it was built
+for (3.11; 3.13 for Blender 5.1+); the loader picks the one of the running Python by its ABI tag.
 For development without a zip, the directory in the environment variable `SDNATIVE_PATH`, or the
 repository's `build/native/`, is searched instead.
 """

@@ -31,6 +31,19 @@ using sd::check_range;
 
 [[noreturn]] inline void value_error(const std::string& message) { throw py::value_error(message); }
 
+/// Points as a fresh (N, 3) float64 array.
+inline py::array_t<double> points_array(const std::vector<glm::dvec3>& points) {
+  py::array_t<double> out({static_cast<py::ssize_t>(points.size()), py::ssize_t(3)});
+  double* data = out.mutable_data();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const glm::dvec3& p = points[i];
+    data[3 * i + 0] = p.x;
+    data[3 * i + 1] = p.y;
+    data[3 * i + 2] = p.z;
+  }
+  return out;
+}
+
 inline std::string shape_string(const py::array& a) {
   std::ostringstream out;
   out << '(';

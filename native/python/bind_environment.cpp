@@ -1,5 +1,5 @@
-// Bindings of environment maps (sdlighting/environment.h): loading, SH projection and rotation,
-// band-limited textures, band energies and error measures, designs of a channel, sampling.
+// Bindings of environment maps (sdlighting/environment.h): loading, SH projection, band-limited
+// textures, band energies and error measures, designs of a channel.
 //
 // Errors: bad arguments and bad image data (NaN or infinite pixels, empty images, wrong shapes,
 // orders out of range) raise ValueError; files that cannot be opened or decoded raise OSError

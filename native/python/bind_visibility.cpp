@@ -18,7 +18,6 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
-#include <cstring>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -102,15 +101,8 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
   }
   if (bake.design_degree >= 0) {
     const auto total = static_cast<py::ssize_t>(bake.design_nodes.size());
-    py::array_t<double> nodes({total, py::ssize_t(3)});
-    double* data = nodes.mutable_data();
-    for (py::ssize_t i = 0; i < total; ++i) {
-      data[3 * i + 0] = bake.design_nodes[i].x;
-      data[3 * i + 1] = bake.design_nodes[i].y;
-      data[3 * i + 2] = bake.design_nodes[i].z;
-    }
     out["design_offsets"] = adopt(std::move(bake.design_offsets), {n + 1});
-    out["design_nodes"] = std::move(nodes);
+    out["design_nodes"] = points_array(bake.design_nodes);
     out["design_weights"] = adopt(std::move(bake.design_weights), {total});
     out["design_residuals"] = adopt(std::move(bake.design_residuals), {n});
     out["design_degree"] = bake.design_degree;
@@ -121,9 +113,7 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
   }
   out["rays"] = bake.rays;
   out["seed"] = bake.seed;
-  py::array_t<double> origins({n, py::ssize_t(3)});
-  std::memcpy(origins.mutable_data(), bake.ray_origins.data(), bake.ray_origins.size() * sizeof(glm::dvec3));
-  out["ray_origins"] = std::move(origins);
+  out["ray_origins"] = points_array(bake.ray_origins);
   out["seconds"] = bake.seconds;
   return out;
 }
@@ -165,15 +155,7 @@ py::array py_bake_visibility(const DoubleArray& vertices, const DoubleArray& nor
 py::array_t<double> py_vertex_ray_directions(int rays, std::uint64_t seed, py::ssize_t vertex) {
   check_range("rays", rays, 1, sd::kMaxRaysPerVertex);
   if (vertex < 0) value_error("vertex must be >= 0, got " + std::to_string(vertex));
-  const std::vector<glm::dvec3> dirs = sd::vertex_ray_directions(rays, seed, static_cast<size_t>(vertex));
-  py::array_t<double> out({py::ssize_t(rays), py::ssize_t(3)});
-  double* data = out.mutable_data();
-  for (int i = 0; i < rays; ++i) {
-    data[3 * i + 0] = dirs[i].x;
-    data[3 * i + 1] = dirs[i].y;
-    data[3 * i + 2] = dirs[i].z;
-  }
-  return out;
+  return points_array(sd::vertex_ray_directions(rays, seed, static_cast<size_t>(vertex)));
 }
 
 }  // namespace

@@ -7,24 +7,16 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <utility>
 
 namespace sdpy {
 
 // The one conversion of a design: nodes [N, 3] and weights [N].
 inline std::pair<py::array_t<double>, py::array_t<double>> design_arrays(const sd::SphericalDesign& design) {
-  const py::ssize_t n = design.size();
-  py::array_t<double> nodes({n, py::ssize_t(3)});
-  py::array_t<double> weights(n);
-  double* node_data = nodes.mutable_data();
-  double* weight_data = weights.mutable_data();
-  for (py::ssize_t i = 0; i < n; ++i) {
-    node_data[3 * i + 0] = design.nodes[i].x;
-    node_data[3 * i + 1] = design.nodes[i].y;
-    node_data[3 * i + 2] = design.nodes[i].z;
-    weight_data[i] = design.weights[i];
-  }
-  return {std::move(nodes), std::move(weights)};
+  py::array_t<double> weights(static_cast<py::ssize_t>(design.size()));
+  std::copy(design.weights.begin(), design.weights.end(), weights.mutable_data());
+  return {points_array(design.nodes), std::move(weights)};
 }
 
 inline py::tuple design_tuple(const sd::SphericalDesign& design) {

@@ -93,8 +93,8 @@ def test_rotate_sh_channels(sd, rng):
 
 
 def recurrence_formula(order):
-    """The recurrence constants by their closed forms (the formula gpu_shading.sh_recurrence_defines
-    evaluated in Python before sdnative exported them): Q_mm = (2m-1)!! sqrt(2 (2m+1) / (2m)!) for
+    """The recurrence constants by their closed forms (the formula the add-on evaluated in Python
+    before sdnative.sh_recurrence_constants exported them): Q_mm = (2m-1)!! sqrt(2 (2m+1) / (2m)!) for
     m > 0, Q_00 = 1; for m < l, a_lm = sqrt((2l-1)(2l+1) / ((l-m)(l+m))) (sqrt(2m+3) at l = m+1) and
     b_lm = sqrt((2l+1)(l+m-1)(l-m-1) / ((l-m)(l+m)(2l-3))) (0 at l = m+1), at l (l+1) / 2 + m."""
     diagonal = np.array([1.0] + [math.prod(range(1, 2 * m, 2)) * math.sqrt(2.0 * (2 * m + 1) / math.factorial(2 * m))

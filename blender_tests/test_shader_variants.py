@@ -91,18 +91,6 @@ def name(variant):
 # ----------------------------------------------------------------------------------------------
 # The stage sources as Blender assembles them from the create-info (gpu_shading._compile).
 
-def _interface(variant):
-    """(vertex inputs, interface (qualifier, type, name)) as gpu_shading._compile declares them."""
-    inputs = [("vec3", "pos"), ("vec3", "nrm")]
-    if variant.per_pixel:
-        inputs += [("vec3", "corners"), ("vec3", "bary")]
-        interface = [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
-                     ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
-    else:
-        interface = [("smooth", "vec3", "sd_color")]
-    return inputs, interface
-
-
 def stage_source(package, variant, stage, dialect):
     gs = package.gpu_shading
     lines = []
@@ -117,12 +105,11 @@ def stage_source(package, variant, stage, dialect):
     lines.append("layout(std140, binding = 0) uniform sd_block { SdFrameData sd; };")
     for slot, sampler in variant.samplers():
         lines.append("layout(binding = %d) uniform highp sampler2D %s;" % (slot, sampler))
-    inputs, interface = _interface(variant)
     if stage == "vert":
-        for location, (kind, attribute) in enumerate(inputs):
+        for location, (kind, attribute) in enumerate(variant.vertex_inputs()):
             lines.append("layout(location = %d) in %s %s;" % (location, kind, attribute))
     direction = "out" if stage == "vert" else "in"
-    for location, (qualifier, kind, member) in enumerate(interface):
+    for location, (qualifier, kind, member) in enumerate(variant.interface()):
         lines.append("layout(location = %d) %s %s %s %s;" % (location, qualifier, direction, kind, member))
     if stage == "frag":
         lines.append("layout(location = 0) out vec4 fragColor;")

@@ -73,18 +73,11 @@ def _compile(variant):
     info.uniform_buf(0, "SdFrameData", "sd")
     for slot, name in variant.samplers():
         info.sampler(slot, 'FLOAT_2D', name)
-    info.vertex_in(0, 'VEC3', "pos")
-    info.vertex_in(1, 'VEC3', "nrm")
+    for location, (glsl_type, name) in enumerate(variant.vertex_inputs()):
+        info.vertex_in(location, glsl_type.upper(), name)
     interface = gpu.types.GPUStageInterfaceInfo("sd_interface")
-    if variant.per_pixel:
-        info.vertex_in(2, 'VEC3', "corners")
-        info.vertex_in(3, 'VEC3', "bary")
-        interface.smooth('VEC3', "sd_world_position")
-        interface.smooth('VEC3', "sd_normal")
-        interface.smooth('VEC3', "sd_bary")
-        interface.flat('VEC3', "sd_corners")
-    else:
-        interface.smooth('VEC3', "sd_color")
+    for qualifier, glsl_type, name in variant.interface():
+        getattr(interface, qualifier)(glsl_type.upper(), name)
     info.vertex_out(interface)
     info.fragment_out(0, 'VEC4', "fragColor")
     lib, vert, frag = (_read_shader(name) for name in SHADER_FILES)

@@ -64,6 +64,21 @@ def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source,
     assert glsl_samplers == samplers
 
 
+def test_every_input_and_interface_member_is_one_the_glsl_reads(glsl_source):
+    # The vertex inputs and the stage interface are declared from the variant (gpu_shading and the
+    # strict-GLSL test alike): each name must be one the GLSL reads, and per pixel adds the
+    # triangle's corners and barycentric coordinates.
+    for per_pixel in (False, True):
+        variant = Variant(methods.get("prt_diffuse"), False, 2, 0, 3, per_pixel=per_pixel)
+        names = [name for _, name in variant.vertex_inputs()] + [name for _, _, name in variant.interface()]
+        for name in names:
+            assert re.search(r"\b%s\b" % name, glsl_source), name
+    assert [n for _, n in Variant(methods.get("unshadowed"), False, 1, 0).vertex_inputs()] == ["pos", "nrm"]
+    per_pixel = Variant(methods.get("unshadowed"), False, 1, 0, per_pixel=True)
+    assert [n for _, n in per_pixel.vertex_inputs()] == ["pos", "nrm", "corners", "bary"]
+    assert ("flat", "vec3", "sd_corners") in per_pixel.interface()
+
+
 STD140 = {"float": (4, 4), "vec2": (8, 8), "vec3": (16, 12), "vec4": (16, 16), "mat4": (16, 64)}
 
 

@@ -137,6 +137,20 @@ class Variant:
             d["SD_BAND_LIMITED_TEXTURE_HEIGHT"] = str(self.band_limited_texture[1])
         return d
 
+    def vertex_inputs(self):
+        """The vertex attributes, in location order: (GLSL type, name)."""
+        inputs = [("vec3", "pos"), ("vec3", "nrm")]
+        if self.per_pixel:
+            inputs += [("vec3", "corners"), ("vec3", "bary")]
+        return inputs
+
+    def interface(self):
+        """What the vertex stage passes on, in location order: (qualifier, GLSL type, name)."""
+        if self.per_pixel:
+            return [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
+                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
+        return [("smooth", "vec3", "sd_color")]
+
     def samplers(self):
         """(slot, name) of the samplers the variant reads."""
         out = []

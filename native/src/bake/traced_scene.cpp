@@ -117,9 +117,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       const double reach = glm::length(into_faces);
       if (reach > 1.0) into_faces /= reach;  // never dominates the normal, so q stays clear of the faces
 
-      probed = fan;
-      std::sort(probed.begin(), probed.end(), [&](unsigned a, unsigned b) { return areas[a] > areas[b]; });
-      if (probed.size() > static_cast<std::size_t>(kProbedFaces)) probed.resize(kProbedFaces);
+      probed.clear();  // the largest faces, chosen only when a candidate needs them
       auto passes = [&](const glm::dvec3& q) {
         const glm::dvec3 to_p = p - q;
         const double distance = glm::length(to_p);
@@ -130,6 +128,11 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
         // faces only from the front: the probes towards them can fail only at concave vertices.
         if (std::all_of(fan.begin(), fan.end(), [&](unsigned t) { return glm::dot(q - p, area_normals[t]) > 0.0; })) {
           return true;
+        }
+        if (probed.empty()) {
+          probed = fan;
+          std::sort(probed.begin(), probed.end(), [&](unsigned a, unsigned b) { return areas[a] > areas[b]; });
+          if (probed.size() > static_cast<std::size_t>(kProbedFaces)) probed.resize(kProbedFaces);
         }
         for (unsigned t : probed) {
           const glm::dvec3 to_face = centroids[t] - q;

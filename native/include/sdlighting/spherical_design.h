@@ -21,7 +21,8 @@ struct SphericalDesign {
   int degree = 0;
   /// ‖Σ_ν λ_ν y(x_ν) − ∫ y w dμ‖₂ / mass over all real SH y_lm with l <= degree.
   double residual = 0.0;
-  /// How it was built: "gauss", "gauss-radau", "gradient" or "tchakaloff".
+  /// How it was built: "gauss", "gauss-radau", "gradient", "tchakaloff" or "refit" (from a
+  /// nearby measure's design, weighted_design.h).
   std::string method;
   int size() const { return static_cast<int>(nodes.size()); }
 };

@@ -20,7 +20,9 @@
 //
 // The design is a positive rule for the discrete measure of V: Σ_ν λ_ν f(x_ν) = (1/R) Σ_r V_r f(x_r)
 // for every polynomial f of degree <= s + s', its weights summing to AO. A vertex none of whose rays
-// escapes gets an EMPTY design (0 nodes): its B of (13) is 0.
+// escapes gets an EMPTY design (0 nodes): its B of (13) is 0. Each design is refitted from an
+// earlier neighbour's in the same group of the bake's vertex walk (src/bake/vertex_walk.h) where
+// that certifies, so a design depends on the mesh's connectivity as well — still not on the threads.
 //
 #pragma once
 
@@ -57,6 +59,11 @@ struct TransferOptions {
   int design_visibility_order = -1;  ///< s' of the design, in [0, kMaxVisibilityOrder]
   int threads = 0;            ///< worker threads; 0 = every hardware thread
   bool record_rays = false;   ///< test hook: keep every V_r in TransferBake::ray_visibility
+  /// Refit each vertex's design from an already-built neighbour's (weighted_design's `start`)
+  /// instead of compressing every one from scratch: the same certification at a fraction of the
+  /// time. false is the benchmarks' baseline. Either way the result depends on the mesh, the
+  /// options and the seed only, not on the thread count.
+  bool warm_start_designs = true;
   /// Called from the calling thread only (which then bakes no vertex itself), once before the
   /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
   /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws

@@ -18,10 +18,16 @@ namespace sd {
 /// rank-many of the sample directions with positive weights and the same moments. Gradient
 /// projection (eq. 14) then removes nodes while the design still certifies.
 ///
+/// With `start`, a certified design of the same degree for a nearby measure (a neighbouring
+/// vertex's visibility), it first refits that design's nodes and weights to this measure by
+/// gradient projection, in a basis orthonormalised through the measure's Gram matrix — a fraction
+/// of the compression's cost, with start's node count — and compresses from scratch only when the
+/// refit does not certify or the measure is too ill-conditioned for the Gram matrix.
+///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum. Throws std::invalid_argument otherwise,
 /// std::runtime_error if no certified design is found.
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree);
+                                int degree, const SphericalDesign* start = nullptr);
 
 }  // namespace sd

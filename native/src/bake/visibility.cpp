@@ -7,6 +7,7 @@
 
 #include "bake/embree_scene.h"
 #include "bake/traced_scene.h"
+#include "bake/vertex_walk.h"
 
 #include <embree3/rtcore.h>
 
@@ -31,6 +32,9 @@ constexpr std::size_t kChunk = 8;
 constexpr std::size_t kChunkRays = 8 * 1024;
 // Rays per rtcOccluded1M call (bounds the scratch memory for huge ray counts).
 constexpr int kStreamBlock = 1024;
+// Vertices per group of a bake with designs (bake/vertex_walk.h): one cold design per group, so
+// larger groups refit more, at the price of coarser progress and load balance.
+constexpr std::size_t kDesignGroup = 32;
 
 // ---- random rotations ----
 
@@ -91,8 +95,9 @@ struct Outputs {
   std::vector<SphericalDesign>* designs;
 };
 
+// `start`: a neighbour's design to refit for this vertex's (Theorem 2.2), or null.
 void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
-                 Scratch& s, const Outputs& out) {
+                 const SphericalDesign* start, Scratch& s, const Outputs& out) {
   const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, v);
   const std::vector<glm::dvec3>& base = *plan.fibonacci;
   const int rays = plan.rays;
@@ -154,7 +159,7 @@ void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   if (plan.design_degree >= 0 && e > 0) {
     s.weights.assign(e, inv_rays);
     try {
-      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree);
+      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree, start);
     } catch (const std::exception& error) {
       throw std::runtime_error("the visibility design of degree " + std::to_string(plan.design_degree) +
                                " for vertex " + std::to_string(v) + " (" + std::to_string(e) + " of " +
@@ -284,12 +289,26 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
 
   // ---- the workers; with a progress callback the calling thread only reports ----
   parallel.progress = options.progress;
-  // Chunks of about kChunkRays rays (at most kChunk vertices) keep a cancel prompt for any ray count.
-  const std::size_t chunk = std::clamp<std::size_t>(kChunkRays / options.rays, 1, kChunk);
+  // Without designs, chunks of about kChunkRays rays (at most kChunk vertices) in index order keep a
+  // cancel prompt for any ray count. With designs, a chunk is a group of the vertex walk, so that
+  // each design can start from a neighbour's built by the same worker; the workers poll for a
+  // cancel between vertices.
+  VertexWalk walk;
+  if (plan.design_degree >= 0) {
+    walk = vertex_walk(n, triangles, options.warm_start_designs ? kDesignGroup : 1);
+  } else {
+    walk.group = std::clamp<std::size_t>(kChunkRays / options.rays, 1, kChunk);
+  }
   const ParallelOutcome outcome = parallel_for(
-      n, chunk,
-      [&, scratch = Scratch()](std::size_t begin, std::size_t end) mutable {
-        for (std::size_t v = begin; v < end; ++v) bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, scratch, outputs);
+      n, walk.group,
+      [&, scratch = Scratch()](std::size_t begin, std::size_t end, const StopQuery& stopping) mutable {
+        for (std::size_t i = begin; i < end && !stopping(); ++i) {
+          const std::size_t v = walk.order.empty() ? i : walk.order[i];
+          const SphericalDesign* start = walk.source.empty() || walk.source[i] < 0
+                                             ? nullptr
+                                             : &designs[walk.order[static_cast<std::size_t>(walk.source[i])]];
+          bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, start, scratch, outputs);
+        }
       },
       parallel);
   if (!outcome.completed) {

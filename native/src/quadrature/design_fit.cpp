@@ -95,7 +95,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
         nodes.clear();
         weights.clear();
         for (int i = 0; i < n; ++i) {
-          if (trial_weights[i] > 0.0) {
+          if (trial_weights[i] > 0.0 || options.keep_zero_weights) {
             nodes.push_back(trial_nodes[i]);
             weights.push_back(trial_weights[i]);
           }

@@ -34,6 +34,8 @@ struct FitOptions {
   /// Give up once E stops halving over 10 iterations: cheap for the many small per-vertex
   /// designs of a bake, while one-off lobe designs are worth the slow phases some fits go through.
   bool stop_when_stalled = false;
+  /// Keep nodes whose weight reaches 0 (they may regain weight later) instead of removing them.
+  bool keep_zero_weights = false;
 };
 
 /// Minimises E = ‖Σ_ν λ_ν F(x_ν) − target‖² over x_ν ∈ S², λ_ν >= 0 (eq. 14) by projected

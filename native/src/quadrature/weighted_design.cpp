@@ -6,10 +6,13 @@
 
 #include <glm/geometric.hpp>
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <numeric>
 #include <stdexcept>
 
 namespace sd {
@@ -17,6 +20,29 @@ namespace {
 
 // Rank threshold of the weighted Vandermonde's QR, relative to its largest diagonal entry.
 constexpr double kRankThreshold = 1e-11;
+// A warm start needs the Gram matrix's LDLT to be trustworthy: its smallest pivot at least this
+// fraction of the largest (condition 1e12 of the Gram matrix, 1e6 of the basis it gives). Below
+// it the measure is (nearly) rank deficient and the QR of the cold builder decides the rank.
+constexpr double kGramPivotFloor = 1e-12;
+// Levenberg–Marquardt steps per refit: from a neighbour's design a fit that will certify does so
+// in a few dozen; one that has not is cheaper to redo from scratch.
+constexpr int kWarmIterations = 40;
+// When a refit stalls, up to kExchangeRounds times kExchangeNodes sample directions join it.
+constexpr int kExchangeRounds = 2;
+constexpr int kExchangeNodes = 3;
+
+// A refit keeps nodes whose weight reaches 0 (they may regain it); they leave the design here.
+void drop_zero_weights(SphericalDesign& design) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < design.nodes.size(); ++i) {
+    if (design.weights[i] > 0.0) {
+      design.nodes[kept] = design.nodes[i];
+      design.weights[kept++] = design.weights[i];
+    }
+  }
+  design.nodes.resize(kept);
+  design.weights.resize(kept);
+}
 
 struct CleanMeasure {
   std::vector<glm::dvec3> dirs;
@@ -44,16 +70,38 @@ CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<dou
   return measure;
 }
 
-// φ(x) = R11⁻ᵀ y_P(x): the SH columns the pivoted QR kept, made orthonormal for the measure.
+// The SH of degree `degree` at the measure's points, and its moments ∫ y dμ_w.
+struct Samples {
+  int degree = 0;
+  Eigen::MatrixXd vandermonde;  // [points][sh_count(degree)]
+  Eigen::VectorXd weights;
+  Eigen::VectorXd moments;
+
+  Samples(const CleanMeasure& measure, int degree) : degree(degree) {
+    const int points = static_cast<int>(measure.dirs.size());
+    const int k = sh_count(degree);
+    vandermonde.resize(points, k);
+    std::vector<double> y(k);
+    for (int i = 0; i < points; ++i) {
+      sh_basis(degree, measure.dirs[i], y.data());
+      vandermonde.row(i) = Eigen::Map<const Eigen::RowVectorXd>(y.data(), k);
+    }
+    weights = Eigen::Map<const Eigen::VectorXd>(measure.weights.data(), points);
+    moments = vandermonde.transpose() * weights;
+  }
+
+  std::vector<double> moment_vector() const { return {moments.data(), moments.data() + moments.size()}; }
+};
+
+// φ(x) = T y(x): functions of degree <= `degree` orthonormal for the measure (rank-many of them).
 struct OrthonormalBasis {
   int degree = 0;
-  std::vector<int> columns;  // SH indices kept, in pivot order
-  Eigen::MatrixXd inverse_r;  // R11⁻¹, upper triangular
+  Eigen::MatrixXd transform;  // T, [rank][sh_count(degree)]
 
-  MomentSystem system(const Eigen::VectorXd& target) const {
+  MomentSystem system(const Eigen::VectorXd& moments) const {
     MomentSystem s;
-    s.size = static_cast<int>(columns.size());
-    s.target = target;
+    s.size = static_cast<int>(transform.rows());
+    s.target = transform * moments;
     s.evaluate = [this](const glm::dvec3& d, double* values, double* gradients) {
       const int k = sh_count(degree);
       thread_local std::vector<double> y, dy;
@@ -64,59 +112,118 @@ struct OrthonormalBasis {
       } else {
         sh_basis(degree, d, y.data());
       }
-      const int r = static_cast<int>(columns.size());
-      Eigen::VectorXd kept(r);
-      Eigen::Matrix<double, 3, Eigen::Dynamic> kept_gradient(3, r);
-      for (int j = 0; j < r; ++j) {
-        kept(j) = y[columns[j]];
-        if (gradients) kept_gradient.col(j) = Eigen::Map<const Eigen::Vector3d>(&dy[3 * columns[j]]);
+      const int r = static_cast<int>(transform.rows());
+      Eigen::Map<Eigen::VectorXd>(values, r).noalias() = transform * Eigen::Map<const Eigen::VectorXd>(y.data(), k);
+      if (gradients) {
+        Eigen::Map<Eigen::MatrixXd>(gradients, 3, r).noalias() =
+            Eigen::Map<const Eigen::MatrixXd>(dy.data(), 3, k) * transform.transpose();
       }
-      Eigen::Map<Eigen::VectorXd>(values, r) = inverse_r.transpose() * kept;
-      if (gradients) Eigen::Map<Eigen::MatrixXd>(gradients, 3, r) = kept_gradient * inverse_r;
     };
     return s;
   }
 };
 
-}  // namespace
-
-SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree) {
-  const CleanMeasure measure = validate(dirs, weights, degree);
-  const int points = static_cast<int>(measure.dirs.size());
-  const int k = sh_count(degree);
-
-  std::vector<double> moments(k, 0.0), y(k);
-  Eigen::MatrixXd vandermonde(points, k);
-  for (int i = 0; i < points; ++i) {
-    sh_basis(degree, measure.dirs[i], y.data());
-    for (int j = 0; j < k; ++j) {
-      vandermonde(i, j) = y[j];
-      moments[j] += measure.weights[i] * y[j];
-    }
-  }
-  const Eigen::Map<const Eigen::VectorXd> w(measure.weights.data(), points);
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
-  qr.setThreshold(kRankThreshold);
-  qr.compute(w.cwiseSqrt().asDiagonal() * vandermonde);
-  const int rank = static_cast<int>(qr.rank());
-
+// The basis from the Gram matrix G = Σ w y yᵀ: with P G Pᵀ = L D Lᵀ (pivoted LDLT),
+// T = D^{-1/2} L⁻¹ P gives T G Tᵀ = I. k³ work after e k² for G, against e k² with a much larger
+// constant for the QR of the e × k Vandermonde — but only where G is well conditioned.
+std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
+  const int k = static_cast<int>(samples.vandermonde.cols());
+  const Eigen::MatrixXd weighted = samples.weights.cwiseSqrt().asDiagonal() * samples.vandermonde;
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
+  gram.selfadjointView<Eigen::Lower>().rankUpdate(weighted.transpose());
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(gram);
+  if (ldlt.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXd pivots = ldlt.vectorD();
+  if (!(pivots.minCoeff() > kGramPivotFloor * pivots.maxCoeff())) return std::nullopt;
   OrthonormalBasis basis;
-  basis.degree = degree;
-  for (int j = 0; j < rank; ++j) basis.columns.push_back(qr.colsPermutation().indices()(j));
-  basis.inverse_r = qr.matrixR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solve(
-      Eigen::MatrixXd::Identity(rank, rank));
-  Eigen::MatrixXd kept(points, rank);
-  for (int j = 0; j < rank; ++j) kept.col(j) = vandermonde.col(basis.columns[j]);
-  const Eigen::MatrixXd phi = kept * basis.inverse_r;  // φ at the samples, orthonormal for the measure
-  const Eigen::VectorXd target = phi.transpose() * w;
+  basis.degree = samples.degree;
+  basis.transform = ldlt.transpositionsP() * Eigen::MatrixXd::Identity(k, k);
+  ldlt.matrixL().solveInPlace(basis.transform);
+  basis.transform = pivots.cwiseSqrt().cwiseInverse().asDiagonal() * basis.transform;
+  return basis;
+}
 
+// Theorem 2.2 from `start`, a design of a nearby measure (a neighbouring vertex's): its weights
+// scaled to this mass, then nodes and weights refitted by gradient projection (eq. 14). Neighbours
+// see nearly the same sky, so most refits certify with start's node count. A refit that stalls
+// gains the sample directions along which added weight lowers E fastest (the entering variables
+// of an active-set step), and is pruned back to the generic count (rank + 2)/3 after it
+// certifies. Returns nothing when it does not certify, or certifies with more nodes than start.
+std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const SphericalDesign& start) {
+  const std::optional<OrthonormalBasis> basis = gram_basis(samples);
+  if (!basis) return std::nullopt;
+  const MomentSystem system = basis->system(samples.moments);
+  const FitOptions options{1e-15 * std::sqrt(measure.mass), kWarmIterations, true, true};
+  const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
 
-  // Carathéodory–Tchakaloff: a basic NNLS solution keeps at most `rank` samples.
+  double start_mass = 0.0;
+  for (double w : start.weights) start_mass += w;
+  SphericalDesign design;
+  design.degree = samples.degree;
+  design.method = "refit";
+  design.nodes = start.nodes;
+  design.weights = start.weights;
+  for (double& w : design.weights) w *= measure.mass / start_mass;
+  fit_design(system, design.nodes, design.weights, options);
+  drop_zero_weights(design);
+  for (int round = 0; !certified(design) && round < kExchangeRounds; ++round) {
+    Eigen::VectorXd residual = -system.target;
+    Eigen::VectorXd values(system.size);
+    for (int i = 0; i < design.size(); ++i) {
+      system.evaluate(design.nodes[i], values.data(), nullptr);
+      residual += design.weights[i] * values;
+    }
+    // dE/dλ at a new node x is 2 φ(x)·residual: the most negative ones enter.
+    const Eigen::VectorXd slope = samples.vandermonde * (basis->transform.transpose() * residual);
+    std::vector<int> order(static_cast<std::size_t>(slope.size()));
+    std::iota(order.begin(), order.end(), 0);
+    const int entering = std::min<int>(kExchangeNodes, static_cast<int>(order.size()));
+    std::partial_sort(order.begin(), order.begin() + entering, order.end(),
+                      [&](int a, int b) { return slope(a) < slope(b); });
+    for (int j = 0; j < entering && slope(order[j]) < 0.0; ++j) {
+      design.nodes.push_back(measure.dirs[order[j]]);
+      design.weights.push_back(-slope(order[j]) / system.size);
+    }
+    fit_design(system, design.nodes, design.weights, options);
+    drop_zero_weights(design);
+  }
+  if (!certified(design)) return std::nullopt;
+  const int generic = (system.size + 2) / 3;
+  if (design.size() > generic) {
+    design = prune_design(system, std::move(design), generic, certified,
+                          FitOptions{options.tolerance, kWarmIterations, true});
+  }
+  if (design.size() > start.size()) return std::nullopt;
+  design.method = "refit";
+  return design;
+}
+
+// Carathéodory–Tchakaloff compression, then pruning by gradient projection.
+SphericalDesign compress(const CleanMeasure& measure, const Samples& samples) {
+  const int points = static_cast<int>(measure.dirs.size());
+  const int k = static_cast<int>(samples.vandermonde.cols());
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+  qr.setThreshold(kRankThreshold);
+  qr.compute(samples.weights.cwiseSqrt().asDiagonal() * samples.vandermonde);
+  const int rank = static_cast<int>(qr.rank());
+
+  // Only the kept columns enter T = R11⁻ᵀ (the pivoted columns' selection).
+  const Eigen::MatrixXd inverse_r = qr.matrixR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solve(
+      Eigen::MatrixXd::Identity(rank, rank));
+  OrthonormalBasis basis;
+  basis.degree = samples.degree;
+  basis.transform = Eigen::MatrixXd::Zero(rank, k);
+  for (int j = 0; j < rank; ++j) basis.transform.col(qr.colsPermutation().indices()(j)) = inverse_r.row(j).transpose();
+  const Eigen::MatrixXd phi = samples.vandermonde * basis.transform.transpose();  // orthonormal for the measure
+  const Eigen::VectorXd target = phi.transpose() * samples.weights;
+  const std::vector<double> moments = samples.moment_vector();
+  auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
+
+  // A basic NNLS solution keeps at most `rank` samples.
   const Eigen::VectorXd u = nnls(phi.transpose(), target, 4 * rank + 10);
   SphericalDesign best;
-  best.degree = degree;
+  best.degree = samples.degree;
   best.method = "tchakaloff";
   for (int i = 0; i < points; ++i) {
     if (u(i) > 0.0) {
@@ -125,13 +232,25 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
     }
   }
   if (!certified(best)) {
-    throw std::runtime_error("Tchakaloff compression of degree " + std::to_string(degree) +
+    throw std::runtime_error("Tchakaloff compression of degree " + std::to_string(samples.degree) +
                              " failed certification: residual " + std::to_string(best.residual));
   }
 
   const int generic = std::max(1, (rank + 2) / 3);
-  return prune_design(basis.system(target), std::move(best), generic, certified,
+  return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
                       FitOptions{1e-15 * std::sqrt(measure.mass), 100, true});
+}
+
+}  // namespace
+
+SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
+                                int degree, const SphericalDesign* start) {
+  const CleanMeasure measure = validate(dirs, weights, degree);
+  const Samples samples(measure, degree);
+  if (start != nullptr && start->degree == degree && start->size() > 0) {
+    if (std::optional<SphericalDesign> design = refit(measure, samples, *start)) return std::move(*design);
+  }
+  return compress(measure, samples);
 }
 
 }  // namespace sd

@@ -43,13 +43,28 @@ struct ParallelOutcome {
   std::size_t done = 0;
 };
 
+/// Polled by a body whose chunks run long (see parallel_for): true once the loop is stopping.
+class StopQuery {
+ public:
+  StopQuery(const std::atomic<bool>& stop, const std::atomic<bool>* cancel) : stop_(stop), cancel_(cancel) {}
+  bool operator()() const {
+    return stop_.load(std::memory_order_relaxed) || (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed));
+  }
+
+ private:
+  const std::atomic<bool>& stop_;
+  const std::atomic<bool>* cancel_;
+};
+
 /// Calls body(begin, end) on disjoint chunks [begin, end) of [0, count), at most `chunk` >= 1 items
 /// each, handed out dynamically. Each worker calls its own copy of `body` (made when the worker
 /// starts), so a mutable body may keep per-worker scratch buffers. Results written per item do not
 /// depend on the thread count. When cancelled (options.cancel, or progress returning false) the
 /// workers stop before their next chunk and the outcome says how many items were done. The first
 /// exception thrown by a body or by the progress callback is rethrown once every worker has
-/// stopped; the remaining chunks are skipped.
+/// stopped; the remaining chunks are skipped. A body taking a third argument, body(begin, end,
+/// stopping) with a StopQuery, may poll it to leave a long chunk early: the loop is then reported
+/// cancelled (or its exception rethrown) whatever it counted as done.
 template <typename Body>
 ParallelOutcome parallel_for(std::size_t count, std::size_t chunk, Body&& body,
                              const ParallelOptions& options = ParallelOptions()) {
@@ -70,7 +85,11 @@ ParallelOutcome parallel_for(std::size_t count, std::size_t chunk, Body&& body,
         const std::size_t begin = next.fetch_add(chunk);
         if (begin >= count) break;
         const std::size_t end = std::min(count, begin + chunk);
-        own(begin, end);
+        if constexpr (std::is_invocable_v<std::decay_t<Body>&, std::size_t, std::size_t, const StopQuery&>) {
+          own(begin, end, StopQuery(stop, options.cancel));
+        } else {
+          own(begin, end);
+        }
         done.fetch_add(end - begin, std::memory_order_relaxed);
       }
     } catch (...) {

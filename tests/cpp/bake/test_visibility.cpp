@@ -355,12 +355,15 @@ TEST(VisibilityDeterminism, ScalingByAPowerOfTwoChangesNothing) {
 
 // ---- designs ----
 
-TEST(VisibilityDesign, DesignsReproduceTheRayMeasure) {
+class VisibilityDesign : public ::testing::TestWithParam<bool> {};
+
+TEST_P(VisibilityDesign, DesignsReproduceTheRayMeasure) {
   const Mesh m = bumpy_sphere(1);
   constexpr int kRays = 400, kDegree = 6;
   TransferOptions options = recorded_rays(kRays, 9);
   options.design_order = 4;
   options.design_visibility_order = 2;
+  options.warm_start_designs = GetParam();
   const TransferBake b = bake(m, options);
   ASSERT_EQ(b.design_degree, kDegree);
   ASSERT_EQ(b.design_offsets.size(), m.vertices.size() + 1);
@@ -388,6 +391,27 @@ TEST(VisibilityDesign, DesignsReproduceTheRayMeasure) {
       EXPECT_NEAR(moments[i], target[i], 2 * kDesignTolerance * b.ambient_occlusion[v]) << "vertex " << v;
     }
   }
+}
+
+INSTANTIATE_TEST_SUITE_P(WarmAndCold, VisibilityDesign, ::testing::Bool());
+
+TEST(VisibilityDesignWarmStart, NoMoreNodesThanFromScratch) {
+  const Mesh m = bumpy_sphere(2);
+  TransferOptions options = recorded_rays(512, 3);
+  options.design_order = 3;
+  options.design_visibility_order = 2;
+  const TransferBake warm = bake(m, options);
+  options.warm_start_designs = false;
+  const TransferBake cold = bake(m, options);
+  long warm_max = 0, cold_max = 0;
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    warm_max = std::max<long>(warm_max, warm.design_offsets[v + 1] - warm.design_offsets[v]);
+    cold_max = std::max<long>(cold_max, cold.design_offsets[v + 1] - cold.design_offsets[v]);
+    EXPECT_LE(warm.design_residuals[v], kDesignTolerance);
+  }
+  EXPECT_LE(warm.design_nodes.size(), cold.design_nodes.size());
+  EXPECT_LE(warm_max, cold_max);
+  EXPECT_NE(warm.design_nodes, cold.design_nodes) << "no design was refitted";
 }
 
 // ---- progress and cancellation ----

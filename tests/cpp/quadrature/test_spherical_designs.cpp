@@ -179,6 +179,47 @@ TEST(WeightedDesign, VisibilityLikeHemisphere) {
   EXPECT_LE(design.size(), 30);
 }
 
+// Equal weights 1/1024 on the directions of `count` random rays that are above the plane with
+// normal (sin tilt, 0, cos tilt): a vertex's visibility, tilted.
+std::vector<glm::dvec3> tilted_hemisphere(std::uint64_t seed, double tilt) {
+  std::mt19937_64 rng(seed);
+  const glm::dvec3 normal(std::sin(tilt), 0.0, std::cos(tilt));
+  std::vector<glm::dvec3> dirs;
+  for (const auto& d : random_directions(1024, rng))
+    if (glm::dot(d, normal) > 0.0) dirs.push_back(d);
+  return dirs;
+}
+
+TEST(WeightedDesign, RefitsANeighboursDesign) {
+  const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05);
+  const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024);
+  for (int degree : {4, 6}) {
+    const SphericalDesign start = weighted_design(here, here_weights, degree);
+    const SphericalDesign design = weighted_design(next, next_weights, degree, &start);
+    EXPECT_EQ(design.method, "refit") << "degree " << degree;
+    EXPECT_LE(design.size(), start.size());
+    const auto expected = design_moments(next, next_weights, degree);
+    const auto got = design_moments(design.nodes, design.weights, degree);
+    const double mass = next.size() / 1024.0;
+    for (size_t j = 0; j < got.size(); ++j) EXPECT_NEAR(got[j], expected[j], kDesignTolerance * mass);
+    EXPECT_LE(design.residual, kDesignTolerance);
+    for (double w : design.weights) EXPECT_GT(w, 0.0);
+  }
+}
+
+TEST(WeightedDesign, AnUnusableStartFallsBackToCompression) {
+  const auto up = tilted_hemisphere(5, 0.0), down = tilted_hemisphere(6, 3.1);
+  const std::vector<double> up_weights(up.size(), 1.0 / 1024), down_weights(down.size(), 1.0 / 1024);
+  const SphericalDesign start = weighted_design(up, up_weights, 6);
+  const SphericalDesign other_degree = weighted_design(up, up_weights, 4);
+  for (const SphericalDesign* given : {&start, &other_degree}) {
+    const SphericalDesign design = weighted_design(down, down_weights, 6, given);
+    EXPECT_LE(design.residual, kDesignTolerance);
+    for (double w : design.weights) EXPECT_GT(w, 0.0);
+    if (given == &other_degree) EXPECT_NE(design.method, "refit");
+  }
+}
+
 TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {
   const std::vector<glm::dvec3> dirs = {{0, 0, 1}, {1, 0, 0}, {0, 2, 0}};
   const SphericalDesign design = weighted_design(dirs, {0.5, 0.25, 0.25}, 6);

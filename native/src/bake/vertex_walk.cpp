@@ -1,0 +1,83 @@
+#include "bake/vertex_walk.h"
+
+#include <algorithm>
+#include <utility>
+
+namespace sd {
+namespace {
+
+// Compressed adjacency: the neighbours of v are neighbours[first[v] .. first[v + 1]), ascending.
+struct Adjacency {
+  std::vector<std::size_t> first;
+  std::vector<std::size_t> neighbours;
+
+  Adjacency(std::size_t n, const std::vector<Triangle>& triangles) : first(n + 1, 0) {
+    std::vector<std::pair<std::size_t, std::size_t>> edges;
+    edges.reserve(6 * triangles.size());
+    for (const Triangle& t : triangles) {
+      for (int i = 0; i < 3; ++i) {
+        const auto a = static_cast<std::size_t>(t[i]), b = static_cast<std::size_t>(t[(i + 1) % 3]);
+        if (a == b) continue;
+        edges.emplace_back(a, b);
+        edges.emplace_back(b, a);
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    neighbours.reserve(edges.size());
+    for (const auto& [a, b] : edges) {
+      ++first[a + 1];
+      neighbours.push_back(b);
+    }
+    for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  }
+};
+
+constexpr std::size_t kUnvisited = static_cast<std::size_t>(-1);
+
+}  // namespace
+
+VertexWalk vertex_walk(std::size_t vertex_count, const std::vector<Triangle>& triangles, std::size_t group) {
+  const Adjacency adjacency(vertex_count, triangles);
+  VertexWalk walk;
+  walk.group = std::max<std::size_t>(group, 1);
+  walk.order.reserve(vertex_count);
+  std::vector<std::size_t> position(vertex_count, kUnvisited);
+
+  // Iterative depth-first search; each stack entry is a vertex and its next neighbour to try.
+  std::vector<std::pair<std::size_t, std::size_t>> stack;
+  for (std::size_t root = 0; root < vertex_count; ++root) {
+    if (position[root] != kUnvisited) continue;
+    position[root] = walk.order.size();
+    walk.order.push_back(root);
+    stack.emplace_back(root, adjacency.first[root]);
+    while (!stack.empty()) {
+      auto& [v, next] = stack.back();
+      if (next == adjacency.first[v + 1]) {
+        stack.pop_back();
+        continue;
+      }
+      const std::size_t w = adjacency.neighbours[next++];
+      if (position[w] != kUnvisited) continue;
+      position[w] = walk.order.size();
+      walk.order.push_back(w);
+      stack.emplace_back(w, adjacency.first[w]);
+    }
+  }
+
+  walk.source.assign(vertex_count, -1);
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    const std::size_t v = walk.order[i];
+    const std::size_t group_start = i - i % walk.group;
+    std::int64_t best = -1;
+    for (std::size_t j = adjacency.first[v]; j < adjacency.first[v + 1]; ++j) {
+      const std::size_t p = position[adjacency.neighbours[j]];
+      if (p >= group_start && p < i) best = std::max(best, static_cast<std::int64_t>(p));
+    }
+    if (adjacency.first[v] == adjacency.first[v + 1] && i > group_start) best = static_cast<std::int64_t>(i - 1);
+    walk.source[i] = best;
+  }
+  return walk;
+}
+
+}  // namespace sd

@@ -17,30 +17,47 @@ void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2) {
 namespace {
 
 constexpr int kStallWindow = 10;
+constexpr double kPolishZone = 1e3;
 
 struct Linearisation {
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2)
   std::vector<glm::dvec3> e1, e2;
+  Eigen::MatrixXd raw_jacobian;
 };
+
+int raw_size(const MomentSystem& system) { return system.transform.size() == 0 ? system.size : system.raw_size; }
+
+// The basis from the raw functions: `raw` itself, or transform × raw.
+template <typename Raw, typename Out>
+void to_basis(const MomentSystem& system, const Raw& raw, Out& out) {
+  if (system.transform.size() == 0) {
+    out = raw;
+  } else {
+    out.noalias() = system.transform * raw;
+  }
+}
 
 Eigen::VectorXd residual_of(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
                             const std::vector<double>& weights) {
-  Eigen::VectorXd r = -system.target;
-  Eigen::VectorXd values(system.size);
+  Eigen::VectorXd raw = Eigen::VectorXd::Zero(raw_size(system));
+  Eigen::VectorXd values(raw.size());
   for (size_t i = 0; i < nodes.size(); ++i) {
     system.evaluate(nodes[i], values.data(), nullptr);
-    r += weights[i] * values;
+    raw += weights[i] * values;
   }
+  raw -= system.target;
+  Eigen::VectorXd r;
+  to_basis(system, raw, r);
   return r;
 }
 
 void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
                const std::vector<double>& weights, Linearisation& lin) {
-  const int k = system.size;
+  const int k = raw_size(system);
   const int n = static_cast<int>(nodes.size());
-  lin.residual = -system.target;
-  lin.jacobian.resize(k, 3 * n);
+  Eigen::VectorXd raw_sum = Eigen::VectorXd::Zero(k);
+  lin.raw_jacobian.resize(k, 3 * n);
   lin.e1.resize(n);
   lin.e2.resize(n);
   Eigen::VectorXd values(k);
@@ -50,11 +67,14 @@ void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
     tangent_frame(nodes[i], lin.e1[i], lin.e2[i]);
     const Eigen::Vector3d e1(lin.e1[i].x, lin.e1[i].y, lin.e1[i].z);
     const Eigen::Vector3d e2(lin.e2[i].x, lin.e2[i].y, lin.e2[i].z);
-    lin.residual += weights[i] * values;
-    lin.jacobian.col(3 * i) = values;
-    lin.jacobian.col(3 * i + 1) = weights[i] * (gradients.transpose() * e1);
-    lin.jacobian.col(3 * i + 2) = weights[i] * (gradients.transpose() * e2);
+    raw_sum += weights[i] * values;
+    lin.raw_jacobian.col(3 * i) = values;
+    lin.raw_jacobian.col(3 * i + 1) = weights[i] * (gradients.transpose() * e1);
+    lin.raw_jacobian.col(3 * i + 2) = weights[i] * (gradients.transpose() * e2);
   }
+  to_basis(system, lin.raw_jacobian, lin.jacobian);
+  raw_sum -= system.target;
+  to_basis(system, raw_sum, lin.residual);
 }
 
 }  // namespace
@@ -66,10 +86,11 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
   linearise(system, nodes, weights, lin);
   double cost = lin.residual.norm();
   double damping = 1e-3;
+  double growth = 2.0;  // of μ after a rejected step, doubling while steps keep failing
   double cost_before = cost;  // kStallWindow iterations ago
   for (int iteration = 0; iteration < options.max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
     if (options.stop_when_stalled && iteration > 0 && iteration % kStallWindow == 0) {
-      if (cost > 0.5 * cost_before && cost > 1e3 * tolerance) break;
+      if (cost > 0.5 * cost_before && cost > kPolishZone * tolerance) break;
       cost_before = cost;
     }
     const int n = static_cast<int>(nodes.size());
@@ -77,11 +98,16 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
     Eigen::MatrixXd normal = lin.jacobian.transpose() * lin.jacobian;
     const Eigen::VectorXd scale = normal.diagonal().cwiseMax(1e-300);
     const Eigen::VectorXd gradient = lin.jacobian.transpose() * lin.residual;
-    bool accepted = false;
+    // Within kPolishZone of the tolerance, rounding starts to dominate E: a stallable fit stops at
+    // the first step that fails or does not halve it, rather than growing μ for nothing.
+    const bool polishing = options.stop_when_stalled && cost < kPolishZone * tolerance;
+    bool accepted = false, converged = false;
     while (!accepted && damping < 1e12) {
       Eigen::MatrixXd damped = normal;
       damped.diagonal() += damping * scale;
       const Eigen::VectorXd step = -damped.ldlt().solve(gradient);
+      // The decrease of ½E the linear model predicts: ½ hᵀ(μ D h − g).
+      const double predicted = 0.5 * step.dot(damping * scale.cwiseProduct(step) - gradient);
       std::vector<glm::dvec3> trial_nodes(n);
       std::vector<double> trial_weights(n);
       for (int i = 0; i < n; ++i) {
@@ -100,14 +126,22 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
             weights.push_back(trial_weights[i]);
           }
         }
-        damping = std::max(damping / 5.0, 1e-15);
+        // Nielsen's update: shrink μ the more the model predicted the actual decrease.
+        const double gain = 0.5 * (cost * cost - trial_cost * trial_cost) / std::max(predicted, 1e-300);
+        damping = std::max(damping * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * gain - 1.0, 3)), 1e-15);
+        growth = 2.0;
+        converged = polishing && trial_cost > 0.5 * cost;
+      } else if (polishing) {
+        break;
       } else {
-        damping *= 4.0;
+        damping *= growth;
+        growth *= 2.0;
       }
     }
     if (!accepted) break;  // no descent at any damping: a local minimum with E > 0
     linearise(system, nodes, weights, lin);
     cost = lin.residual.norm();
+    if (converged) break;
   }
   return cost;
 }

@@ -18,10 +18,17 @@ namespace sd {
 /// (msd-notes: the raw SH Vandermonde reaches condition 1e15).
 struct MomentSystem {
   int size = 0;
-  /// Writes the `size` basis values at a unit direction and, when `gradients` is not null, their
-  /// ambient gradients (3 doubles per function; only the tangential part is used).
+  /// Writes `raw_size` function values at a unit direction and, when `gradients` is not null,
+  /// their ambient gradients (3 doubles per function; only the tangential part is used). The
+  /// basis is those functions themselves, or `transform` times them.
   std::function<void(const glm::dvec3& dir, double* values, double* gradients)> evaluate;
-  Eigen::VectorXd target;  // ∫ basis · w dμ
+  int raw_size = 0;
+  /// [size][raw_size], or empty for the identity (raw_size = size). Applied once per step to the
+  /// whole Jacobian rather than per node: one matrix product instead of one per node.
+  Eigen::MatrixXd transform;
+  /// ∫ raw functions · w dμ: the residual is taken against it before the transform, where the
+  /// certification measures it, so a large transform does not amplify the rounding of the sums.
+  Eigen::VectorXd target;
   /// Optional projection of a unit direction onto the weight's support, applied after every step
   /// so that nodes stay where the weight lives (a lobe's nodes above its horizon).
   std::function<glm::dvec3(const glm::dvec3& dir)> project_to_support;

@@ -30,6 +30,12 @@ constexpr int kWarmIterations = 40;
 // When a refit stalls, up to kExchangeRounds times kExchangeNodes sample directions join it.
 constexpr int kExchangeRounds = 2;
 constexpr int kExchangeNodes = 3;
+// The moment residual at which a fit stops, relative to √mass (the norm of the target in a basis
+// orthonormal for the measure): four orders below kDesignTolerance, and near the rounding of the
+// sums, where design_fit's polishing stops a fit that no longer gains.
+constexpr double kFitRelativeTolerance = 1e-14;
+
+double fit_tolerance_for(double mass) { return kFitRelativeTolerance * std::sqrt(mass); }
 
 // A refit keeps nodes whose weight reaches 0 (they may regain it); they leave the design here.
 void drop_zero_weights(SphericalDesign& design) {
@@ -101,22 +107,14 @@ struct OrthonormalBasis {
   MomentSystem system(const Eigen::VectorXd& moments) const {
     MomentSystem s;
     s.size = static_cast<int>(transform.rows());
-    s.target = transform * moments;
-    s.evaluate = [this](const glm::dvec3& d, double* values, double* gradients) {
-      const int k = sh_count(degree);
-      thread_local std::vector<double> y, dy;
-      y.resize(k);
-      dy.resize(3 * k);
+    s.raw_size = static_cast<int>(transform.cols());
+    s.transform = transform;
+    s.target = moments;
+    s.evaluate = [d = degree](const glm::dvec3& x, double* values, double* gradients) {
       if (gradients) {
-        sh_basis_with_gradient(degree, d, y.data(), dy.data());
+        sh_basis_with_gradient(d, x, values, gradients);
       } else {
-        sh_basis(degree, d, y.data());
-      }
-      const int r = static_cast<int>(transform.rows());
-      Eigen::Map<Eigen::VectorXd>(values, r).noalias() = transform * Eigen::Map<const Eigen::VectorXd>(y.data(), k);
-      if (gradients) {
-        Eigen::Map<Eigen::MatrixXd>(gradients, 3, r).noalias() =
-            Eigen::Map<const Eigen::MatrixXd>(dy.data(), 3, k) * transform.transpose();
+        sh_basis(d, x, values);
       }
     };
     return s;
@@ -153,7 +151,7 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   const std::optional<OrthonormalBasis> basis = gram_basis(samples);
   if (!basis) return std::nullopt;
   const MomentSystem system = basis->system(samples.moments);
-  const FitOptions options{1e-15 * std::sqrt(measure.mass), kWarmIterations, true, true};
+  const FitOptions options{fit_tolerance_for(measure.mass), kWarmIterations, true, true};
   const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
 
@@ -168,12 +166,9 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   fit_design(system, design.nodes, design.weights, options);
   drop_zero_weights(design);
   for (int round = 0; !certified(design) && round < kExchangeRounds; ++round) {
-    Eigen::VectorXd residual = -system.target;
-    Eigen::VectorXd values(system.size);
-    for (int i = 0; i < design.size(); ++i) {
-      system.evaluate(design.nodes[i], values.data(), nullptr);
-      residual += design.weights[i] * values;
-    }
+    const std::vector<double> now = design_moments(design.nodes, design.weights, samples.degree);
+    const Eigen::VectorXd residual =
+        basis->transform * (Eigen::Map<const Eigen::VectorXd>(now.data(), samples.moments.size()) - system.target);
     // dE/dλ at a new node x is 2 φ(x)·residual: the most negative ones enter.
     const Eigen::VectorXd slope = samples.vandermonde * (basis->transform.transpose() * residual);
     std::vector<int> order(static_cast<std::size_t>(slope.size()));
@@ -238,7 +233,7 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples) {
 
   const int generic = std::max(1, (rank + 2) / 3);
   return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
-                      FitOptions{1e-15 * std::sqrt(measure.mass), 100, true});
+                      FitOptions{fit_tolerance_for(measure.mass), 100, true});
 }
 
 }  // namespace

@@ -6,10 +6,17 @@
 
 #include <glm/vec3.hpp>
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace sd {
+
+/// Thrown by a design builder whose `stop` callback returned true: nothing is returned.
+class DesignCancelled : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 /// A design is certified when its moment residual is at most this fraction of the mass.
 constexpr double kDesignTolerance = 1e-10;

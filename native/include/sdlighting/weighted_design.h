@@ -6,6 +6,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <functional>
 #include <vector>
 
 namespace sd {
@@ -26,8 +27,10 @@ namespace sd {
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum. Throws std::invalid_argument otherwise,
-/// std::runtime_error if no certified design is found.
+/// std::runtime_error if no certified design is found. `stop` is polled between the steps of the
+/// fits (at high degree one design takes seconds); returning true throws DesignCancelled.
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree, const SphericalDesign* start = nullptr);
+                                int degree, const SphericalDesign* start = nullptr,
+                                const std::function<bool()>& stop = {});
 
 }  // namespace sd

@@ -95,9 +95,10 @@ struct Outputs {
   std::vector<SphericalDesign>* designs;
 };
 
-// `start`: a neighbour's design to refit for this vertex's (Theorem 2.2), or null.
-void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
-                 const SphericalDesign* start, Scratch& s, const Outputs& out) {
+// `start`: a neighbour's design to refit for this vertex's (Theorem 2.2), or null. Returns false,
+// the vertex unfinished, when `stopping` interrupted its design.
+bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
+                 const SphericalDesign* start, const StopQuery& stopping, Scratch& s, const Outputs& out) {
   const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, v);
   const std::vector<glm::dvec3>& base = *plan.fibonacci;
   const int rays = plan.rays;
@@ -159,13 +160,16 @@ void bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   if (plan.design_degree >= 0 && e > 0) {
     s.weights.assign(e, inv_rays);
     try {
-      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree, start);
+      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree, start, stopping);
+    } catch (const DesignCancelled&) {
+      return false;
     } catch (const std::exception& error) {
       throw std::runtime_error("the visibility design of degree " + std::to_string(plan.design_degree) +
                                " for vertex " + std::to_string(v) + " (" + std::to_string(e) + " of " +
                                std::to_string(rays) + " rays escaping) failed: " + error.what());
     }
   }
+  return true;
 }
 
 }  // namespace
@@ -307,7 +311,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
           const SphericalDesign* start = walk.source.empty() || walk.source[i] < 0
                                              ? nullptr
                                              : &designs[walk.order[static_cast<std::size_t>(walk.source[i])]];
-          bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, start, scratch, outputs);
+          if (!bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, start, stopping, scratch, outputs)) return;
         }
       },
       parallel);

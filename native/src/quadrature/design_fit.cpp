@@ -89,6 +89,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
   double growth = 2.0;  // of μ after a rejected step, doubling while steps keep failing
   double cost_before = cost;  // kStallWindow iterations ago
   for (int iteration = 0; iteration < options.max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
+    if (options.stop && options.stop()) throw DesignCancelled("the design fit was cancelled");
     if (options.stop_when_stalled && iteration > 0 && iteration % kStallWindow == 0) {
       if (cost > 0.5 * cost_before && cost > kPolishZone * tolerance) break;
       cost_before = cost;

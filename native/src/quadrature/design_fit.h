@@ -43,6 +43,8 @@ struct FitOptions {
   bool stop_when_stalled = false;
   /// Keep nodes whose weight reaches 0 (they may regain weight later) instead of removing them.
   bool keep_zero_weights = false;
+  /// Polled before every step; returning true throws DesignCancelled.
+  std::function<bool()> stop;
 };
 
 /// Minimises E = ‖Σ_ν λ_ν F(x_ν) − target‖² over x_ν ∈ S², λ_ν >= 0 (eq. 14) by projected

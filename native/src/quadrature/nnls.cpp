@@ -1,5 +1,7 @@
 #include "quadrature/nnls.h"
 
+#include "sdlighting/spherical_design.h"
+
 #include <limits>
 #include <vector>
 
@@ -15,13 +17,15 @@ Eigen::VectorXd solve_passive(const Eigen::MatrixXd& a, const Eigen::VectorXd& b
 
 }  // namespace
 
-Eigen::VectorXd nnls(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, int max_iterations) {
+Eigen::VectorXd nnls(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, int max_iterations,
+                     const std::function<bool()>& stop) {
   const int n = static_cast<int>(a.cols());
   Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
   std::vector<bool> in_passive(n, false);
   std::vector<int> passive;
   const double tolerance = 10.0 * std::numeric_limits<double>::epsilon() * a.norm() * std::max<int>(n, a.rows());
   for (int outer = 0; outer < max_iterations; ++outer) {
+    if (stop && stop()) throw DesignCancelled("the design's NNLS was cancelled");
     const Eigen::VectorXd gradient = a.transpose() * (b - a * u);
     int entering = -1;
     double best = tolerance;

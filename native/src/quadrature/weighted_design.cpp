@@ -147,11 +147,12 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
 // gains the sample directions along which added weight lowers E fastest (the entering variables
 // of an active-set step), and is pruned back to the generic count (rank + 2)/3 after it
 // certifies. Returns nothing when it does not certify, or certifies with more nodes than start.
-std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const SphericalDesign& start) {
+std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const SphericalDesign& start,
+                                     const std::function<bool()>& stop) {
   const std::optional<OrthonormalBasis> basis = gram_basis(samples);
   if (!basis) return std::nullopt;
   const MomentSystem system = basis->system(samples.moments);
-  const FitOptions options{fit_tolerance_for(measure.mass), kWarmIterations, true, true};
+  const FitOptions options{fit_tolerance_for(measure.mass), kWarmIterations, true, true, stop};
   const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
 
@@ -187,7 +188,7 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   const int generic = (system.size + 2) / 3;
   if (design.size() > generic) {
     design = prune_design(system, std::move(design), generic, certified,
-                          FitOptions{options.tolerance, kWarmIterations, true});
+                          FitOptions{options.tolerance, kWarmIterations, true, false, stop});
   }
   if (design.size() > start.size()) return std::nullopt;
   design.method = "refit";
@@ -195,7 +196,7 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
 }
 
 // Carathéodory–Tchakaloff compression, then pruning by gradient projection.
-SphericalDesign compress(const CleanMeasure& measure, const Samples& samples) {
+SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, const std::function<bool()>& stop) {
   const int points = static_cast<int>(measure.dirs.size());
   const int k = static_cast<int>(samples.vandermonde.cols());
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
@@ -216,7 +217,7 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples) {
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
 
   // A basic NNLS solution keeps at most `rank` samples.
-  const Eigen::VectorXd u = nnls(phi.transpose(), target, 4 * rank + 10);
+  const Eigen::VectorXd u = nnls(phi.transpose(), target, 4 * rank + 10, stop);
   SphericalDesign best;
   best.degree = samples.degree;
   best.method = "tchakaloff";
@@ -233,19 +234,19 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples) {
 
   const int generic = std::max(1, (rank + 2) / 3);
   return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
-                      FitOptions{fit_tolerance_for(measure.mass), 100, true});
+                      FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop});
 }
 
 }  // namespace
 
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree, const SphericalDesign* start) {
+                                int degree, const SphericalDesign* start, const std::function<bool()>& stop) {
   const CleanMeasure measure = validate(dirs, weights, degree);
   const Samples samples(measure, degree);
   if (start != nullptr && start->degree == degree && start->size() > 0) {
-    if (std::optional<SphericalDesign> design = refit(measure, samples, *start)) return std::move(*design);
+    if (std::optional<SphericalDesign> design = refit(measure, samples, *start, stop)) return std::move(*design);
   }
-  return compress(measure, samples);
+  return compress(measure, samples, stop);
 }
 
 }  // namespace sd

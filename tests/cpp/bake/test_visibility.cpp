@@ -14,6 +14,7 @@
 #include <glm/mat3x3.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -448,6 +449,27 @@ TEST(VisibilityCancel, ProgressIsMonotoneAndEndsAtTheTotal) {
     if (i > 0) EXPECT_GE(reports[i].first, reports[i - 1].first);
   }
   EXPECT_GT(b.seconds, 0.0);
+}
+
+TEST(VisibilityCancel, ACancelInterruptsADesignInTheMiddle) {
+  // One design of degree 16 from 4096 rays takes many seconds; a cancel must not wait for it.
+  const Mesh m = test::square_fan(1.0, 0.0);
+  TransferOptions options;
+  options.rays = 4096;
+  options.threads = 1;
+  options.design_order = 14;
+  options.design_visibility_order = 2;
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point start = Clock::now();
+  Clock::time_point cancelled_at{};
+  options.progress = [&](std::size_t, std::size_t) {
+    if (Clock::now() - start < std::chrono::milliseconds(300)) return true;
+    if (cancelled_at == Clock::time_point{}) cancelled_at = Clock::now();
+    return false;
+  };
+  EXPECT_THROW(bake(m, options), BakeCancelled);
+  ASSERT_NE(cancelled_at, Clock::time_point{});
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - cancelled_at).count(), 1.0);
 }
 
 TEST(VisibilityCancel, CancelFlagAndThrowingProgressStopTheBake) {

@@ -10,7 +10,8 @@ that says what happened, and a refused bake changes nothing.
   of either leaves the other's bake intact, and the last one to let go removes the baked mesh;
 - library-linked data (a library written by the test): a linked object and a library override
   are skipped with a reason (their properties are not saved), a local object with a linked mesh
-  is baked and its bake survives save and reload;
+  is baked and its bake survives save and reload; an object baked in its library shows that bake
+  and Clear Bake refuses it with the reason;
 - a .blend with baked data reopens and saves without the add-on, and the bake still shades the
   same after the add-on is enabled again;
 - undo and redo of a bake and of Clear Bake (where Blender has an undo stack: a window, i.e. the
@@ -213,32 +214,36 @@ def check_duplicates(checks, package, scene, ball):
     remove(copy)
 
 
-def write_library(out):
-    """A .blend holding two objects, LibBall and LibOverride, with their meshes."""
+def write_library(scene, out):
+    """A .blend holding the objects LibBall, LibOverride, LibMeshOnly and LibBaked (baked here,
+    its baked mesh written with it), each with its mesh."""
     import bmesh
     path = os.path.join(out, "test_robustness_library.blend")
     written = set()
-    for name in ("LibBall", "LibOverride", "LibMeshOnly"):
+    for name in ("LibBall", "LibOverride", "LibMeshOnly", "LibBaked"):
         mesh = bpy.data.meshes.new(name + "Mesh")
         bm = bmesh.new()
         bmesh.ops.create_icosphere(bm, subdivisions=1, radius=0.5)
         bm.to_mesh(mesh)
         bm.free()
-        written.add(bpy.data.objects.new(name, mesh))
+        written.add(sdtest.add_object(scene, name, mesh))
+    sdtest.select_only([bpy.data.objects["LibBaked"]])
+    assert bake()[0] == {'FINISHED'}
+    baked = bpy.data.objects["LibBaked"]["sd_baked_mesh"]
     bpy.data.libraries.write(path, written, fake_user=True)
     for obj in written:
-        mesh = obj.data
-        bpy.data.objects.remove(obj)
-        bpy.data.meshes.remove(mesh)
+        remove(obj)
+    bpy.data.meshes.remove(baked)
     return path
 
 
 def check_library(checks, package, scene, args):
-    library = write_library(args.out)
+    library = write_library(scene, args.out)
     with bpy.data.libraries.load(library, link=True) as (source, linked):
-        linked.objects = ["LibBall", "LibOverride"]
+        linked.objects = ["LibBall", "LibOverride", "LibBaked"]
         linked.meshes = ["LibMeshOnlyMesh"]
-    lib_ball, lib_override, lib_mesh = linked.objects[0], linked.objects[1], linked.meshes[0]
+    lib_ball, lib_override, lib_baked = linked.objects
+    lib_mesh = linked.meshes[0]
     scene.collection.objects.link(lib_ball)
     lib_ball.location = (3.0, 0.0, 1.0)
     scene.collection.objects.link(lib_override)
@@ -263,6 +268,17 @@ def check_library(checks, package, scene, args):
                  package.baking.baked_mesh(local) is not None,
                  "linked object and override skipped with a reason, the local object with a linked "
                  "mesh baked", text.strip())
+    scene.collection.objects.link(lib_baked)
+    state = baked_state(package, lib_baked)
+    before = sdtest.snapshot()
+    result, text = clear_bake([lib_baked])
+    checks.check(state is not None and package.baking.baked_mesh(lib_baked).library is not None and
+                 result == {'CANCELLED'} and "its bake can only be cleared there" in text and
+                 sdtest.snapshot() == before and baked_state(package, lib_baked) == state,
+                 "a linked object baked in its library: its bake is used, Clear Bake refuses with "
+                 "the reason", text.strip())
+    scene.collection.objects.unlink(lib_baked)
+
     state = baked_state(package, local)
     path = os.path.join(args.out, "test_robustness_library_user.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)

@@ -17,7 +17,6 @@ def _tag_redraw(context, region_type):
                     region.tag_redraw()
 
 
-
 class SD_OT_bake(bpy.types.Operator):
     """Bake the selected meshes against everything visible (Esc cancels)"""
     bl_idname = "sd_lighting.bake"

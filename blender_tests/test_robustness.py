@@ -2,7 +2,8 @@
 that says what happened, and a refused bake changes nothing.
 
 - a selection with objects that cannot be baked (a mesh without faces, an empty mesh, a curve, an
-  empty): those are skipped with a warning each, the rest is baked; only such objects: refused;
+  empty, a mesh scaled to zero on an axis): those are skipped with a warning each, the rest is
+  baked; only such objects: refused;
 - the environment: no world, an Environment Texture without an image, an image whose file is
   missing, a file that is no image, an HDRI file path that is empty or missing (each refused with
   a report naming it), a world without an Environment Texture (baked, with a warning);
@@ -84,15 +85,18 @@ def check_selection(checks, package, scene, ball):
     curve_data.splines.new('POLY').points.add(2)
     curve = sdtest.add_object(scene, "Curve", curve_data)
     empty = sdtest.add_object(scene, "Empty", None)
+    flat = sdtest.ico_sphere(scene, "Flat", subdivisions=1, location=(3.0, 0.0, 1.0))
+    flat.scale = (1.0, 0.0, 1.0)
 
     sdtest.bake_settings(scene, 'ambient_occlusion', 'LAMBERT', 2, 1, rays=64,
-                         select=[ball, wire, hollow, curve, empty])
+                         select=[ball, wire, hollow, curve, empty, flat])
     before = sdtest.snapshot()
     result, text = bake()
     checks.check(result == {'FINISHED'} and package.baking.baked_mesh(ball) is not None,
                  "a selection with unbakeable objects bakes the rest", text.strip())
     for name, reason in (("Wire", "has no faces"), ("Hollow", "has no faces"),
-                         ("Curve", "is not a mesh (curve)"), ("Empty", "is not a mesh (empty)")):
+                         ("Curve", "is not a mesh (curve)"), ("Empty", "is not a mesh (empty)"),
+                         ("Flat", "has a zero scale")):
         checks.check("skipped: %s %s" % (name, reason) in text and
                      sdtest.snapshot()[name, False] == before[name, False],
                      "%s is skipped with a warning, unchanged" % name)
@@ -102,7 +106,7 @@ def check_selection(checks, package, scene, ball):
     checks.check(result == {'CANCELLED'} and "nothing to bake: Wire has no faces; Hollow has no "
                  "faces; Curve is not a mesh" in text and sdtest.snapshot() == before,
                  "only unbakeable objects: refused with the reasons, nothing changed", text.strip())
-    for obj in (wire, hollow, curve, empty):
+    for obj in (wire, hollow, curve, empty, flat):
         bpy.data.objects.remove(obj)
 
 

@@ -390,6 +390,18 @@ def bake_info(obj):
     return dict(mesh[BAKE]) if mesh is not None else None
 
 
+def scale_changed(obj):
+    """Whether the object's scale (with shear and mirror) differs from the one it was baked with,
+    e.g. an animated scale at another frame: its bake then shades the shape it had, until baked
+    again. False for a bake that did not record it."""
+    info = bake_info(obj)
+    if info is None or "shape" not in info:
+        return False
+    baked = np.array(list(info["shape"]), dtype=np.float64).reshape(3, 3)
+    current = transforms.bake_frame(obj.matrix_world)[0]
+    return not np.allclose(current, baked, rtol=0.0, atol=1e-5 * np.abs(baked).max())
+
+
 def _release(mesh):
     """Removes a baked mesh that no object links any more. Shift+D and Alt+D copies of a baked
     object link the same baked mesh: it stays while one of them does."""

@@ -283,6 +283,42 @@ def bake_settings(scene, method, material, light_order, visibility_order=None, r
     return settings
 
 
+def operator_reports(operator, **kwargs):
+    """Runs an operator from the script: (its result, the text of its reports). Blender prints the
+    reports of an operator a script runs to sys.stdout, and raises RuntimeError (with the error
+    reports) when one is an error; the text is echoed to the log. With a window (Blender under
+    Xvfb) a file opened by the script leaves the context without one: the operator gets the
+    first window back."""
+    import contextlib
+    import io
+    text = io.StringIO()
+    windows = bpy.context.window_manager.windows
+    override = (bpy.context.temp_override(window=windows[0])
+                if bpy.context.window is None and len(windows) else contextlib.nullcontext())
+    with contextlib.redirect_stdout(text), override:
+        try:
+            result = operator(**kwargs)
+        except RuntimeError as exc:
+            result = {'CANCELLED'}
+            print(exc)
+    sys.stdout.write(text.getvalue())
+    return result, text.getvalue()
+
+
+def snapshot():
+    """What a failed or cancelled bake must leave unchanged: the meshes, and per object its baked
+    mesh, bake id, vertex count and attribute names."""
+    out = {"meshes": sorted(m.name for m in bpy.data.meshes)}
+    for obj in bpy.data.objects:
+        mesh = obj.get("sd_baked_mesh")
+        out[obj.name, obj.library is not None] = (
+            mesh.name if mesh else None,
+            dict(obj["sd_bake"]).get("bake_id") if "sd_bake" in obj else None,
+            len(obj.data.vertices) if obj.type == 'MESH' else None,
+            sorted(a.name for a in obj.data.attributes) if obj.type == 'MESH' else None)
+    return out
+
+
 def bilinear(image, x, y):
     """RGB at sub-pixel positions (pixel centres at i + 0.5): Gouraud shading is linear inside a
     triangle, so this recovers a vertex's value up to the triangles' kinks."""

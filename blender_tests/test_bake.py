@@ -13,18 +13,6 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def snapshot():
-    """What a failed or cancelled bake must leave unchanged."""
-    out = {"meshes": sorted(m.name for m in bpy.data.meshes)}
-    for obj in bpy.data.objects:
-        mesh = obj.get("sd_baked_mesh")
-        out[obj.name] = (mesh.name if mesh else None,
-                         dict(obj["sd_bake"]).get("bake_id") if "sd_bake" in obj else None,
-                         len(obj.data.vertices) if obj.type == 'MESH' else None,
-                         sorted(a.name for a in obj.data.attributes) if obj.type == 'MESH' else None)
-    return out
-
-
 def main():
     checks = sdtest.Checks("test_bake")
     args = sdtest.arguments()
@@ -89,19 +77,19 @@ def main():
                  "%.3f vs %.3f" % (under, far))
 
     # Cancelled bake: nothing changes.
-    before = snapshot()
+    before = sdtest.snapshot()
     settings.method = 'prt_matrix'
-    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
     job.cancel()
     job.run()
     checks.check(job.cancelled and not job.error, "cancel stops the bake", str(job.error))
-    checks.check(snapshot() == before, "a cancelled bake changes nothing")
-    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    checks.check(sdtest.snapshot() == before, "a cancelled bake changes nothing")
+    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
     job.start()
     job.cancel()
     job.join(60)
     checks.check(job.finished and job.cancelled, "cancel from another thread stops the worker")
-    checks.check(snapshot() == before, "a cancelled threaded bake changes nothing")
+    checks.check(sdtest.snapshot() == before, "a cancelled threaded bake changes nothing")
 
     # Failed bakes: nothing changes, with a reason.
     settings.method = 'prt_diffuse'
@@ -110,16 +98,16 @@ def main():
         result = str(bpy.ops.sd_lighting.bake())
     except RuntimeError as exc:  # the operator's error report surfaces as an exception in scripts
         result = str(exc)
-    checks.check("needs a Lambert material" in result and snapshot() == before,
+    checks.check("needs a Lambert material" in result and sdtest.snapshot() == before,
                  "PRT (2) on a Phong material is refused, nothing changed", result.strip())
     settings.material_source = 'LAMBERT'
     settings.method = 'msd_lobe'
-    job = package.baking.BakeJob(package.baking.prepare(bpy.context, [ball, ground]))
+    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
     job.tasks[1].geometry.vertices[0, 0] = float("nan")
     job.run()
     checks.check(job.error is not None and "ValueError" in job.error, "a failing native bake reports why",
                  str(job.error))
-    checks.check(snapshot() == before, "a failed bake changes nothing")
+    checks.check(sdtest.snapshot() == before, "a failed bake changes nothing")
 
     # Rebake with another method replaces the baked mesh.
     old_names = {m.name for m in bpy.data.meshes}

@@ -3,8 +3,9 @@
 Each vertex of a baked test scene is drawn as one pixel of an RGBA32F target by the live-shading
 shader (per-vertex path, and the per-pixel path evaluated at the vertex), read back, and compared
 with sdnative.shade on the same stored (float32) data, the same view, environment and rotation
-g R (a rotated world Mapping node and a rotated, scaled object). Passes when
-max |gpu - cpu| / max |cpu| <= 1e-3 for every method (float32 on the GPU vs float64 on the CPU).
+g R (a rotated world Mapping node and a rotated object with a mirrored, non-uniform scale).
+Passes when max |gpu - cpu| / max |cpu| <= 1e-3 for every method (float32 on the GPU vs float64 on
+the CPU).
 
 The methods that can read it (MSD 12, 13) are also checked with the band-limited texture option
 (L~ looked up in the band-limited equirect texture, bilinear, instead of its SH sum) against the
@@ -62,7 +63,7 @@ def main():
     mapping.inputs["Rotation"].default_value = (0.3, -0.2, 1.1)
     ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.2, 0.1, 0.9))
     ball.rotation_euler = (0.4, 0.1, -0.7)
-    ball.scale = (0.8, 0.8, 0.8)
+    ball.scale = (0.8, -0.9, 0.7)
     ground = sdtest.grid(scene, cuts=8, size=4.0)
     sdtest.camera(scene)
     settings = scene.sd_lighting

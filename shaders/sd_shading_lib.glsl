@@ -4,10 +4,11 @@
  * follows the CPU evaluator step by step, so that the viewport agrees with it to float32 rounding.
  * Equation numbers are the seed's (msd-notes.md).
  *
- * Everything happens in the baked object's local frame: the per-vertex data (normals, visibility,
- * designs) were baked there, and the environment coefficients in sd.light[] are those of
- * x -> L(g R x), with g the environment rotation and R the rotation part of the object's matrix
- * (rotated on the CPU once per frame and per object).
+ * Everything happens in the baked object's bake frame (its local frame with its scale applied:
+ * baking.py): the per-vertex data (normals, visibility, designs) were baked there, and the
+ * environment coefficients in sd.light[] are those of x -> L(g R x), with g the environment
+ * rotation and R the rotation part of the object's matrix (rotated on the CPU once per frame and
+ * per object).
  *
  * The shader is specialised with defines (addon/sd_lighting/utils/shader_variant.py, from the
  * method table utils/methods.py); exactly one SD_METHOD_* is defined:

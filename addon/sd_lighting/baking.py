@@ -1,10 +1,12 @@
 """Baking: from the scene's evaluated geometry to a baked mesh with the results as attributes.
 
 A bake runs in three steps:
-1. `prepare` (main thread): for every selected mesh object, the evaluated mesh (modifiers
-   applied) as arrays, its vertex normals, the triangles of every other visible object as
-   occluders in the object's local frame, the lobe, the orders s and s' and what the method needs.
-   Nothing in the .blend changes.
+1. `prepare` (main thread): for every selected mesh object that can be baked (the others are
+   left out with a warning: not meshes, no faces, linked from a library), the evaluated mesh
+   (modifiers applied) as arrays, its vertex normals, the triangles of every other visible object
+   as occluders, all in the object's bake frame (its local frame with its scale applied:
+   transforms.bake_frame), the lobe, the orders s and s' and what the method needs. Nothing in
+   the .blend changes.
 2. `BakeJob.run` (a worker thread in the UI, or the caller's thread): sdnative.bake_transfer for
    each object, with progress and cancellation; it only reads the arrays of step 1 (bpy is never
    touched off the main thread), and the native bake releases the GIL.
@@ -12,11 +14,11 @@ A bake runs in three steps:
    datablock "SD <object>", a copy of the evaluated geometry carrying the results as `sd_`
    attributes (attributes.py), with a fake user so it persists; the object links it in the custom
    property `sd_baked_mesh` and records the settings in `sd_bake` (README.md, "Where the results
-   live", lists its keys). A previous baked mesh is removed only then. The object's own mesh is
-   never modified: a cancelled or failed bake leaves the file as it was.
+   live", lists its keys). A previous baked mesh is removed only then, and only when no other
+   object (a Shift+D or Alt+D copy) still links it. The object's own mesh is never modified: a
+   cancelled or failed bake leaves the file as it was.
 """
 
-import os
 import threading
 import time
 import uuid
@@ -38,8 +40,8 @@ class BakeError(Exception):
 # --------------------------------------------------------------------------------------------
 # Geometry
 
-def _vertex_normals(mesh):
-    normals = compat.vertex_normals(mesh).astype(np.float64)
+def _unit(normals):
+    """Unit rows; a zero or broken normal becomes +Z."""
     length = np.linalg.norm(normals, axis=1)
     bad = ~(length > 1e-12)
     normals[bad] = (0.0, 0.0, 1.0)
@@ -48,40 +50,51 @@ def _vertex_normals(mesh):
 
 
 class Geometry:
-    """A mesh as arrays: vertices, normals, triangles and its polygons (to rebuild it)."""
+    """A mesh as arrays: its positions and polygons in the object's local frame (to rebuild it as
+    the baked mesh), and the vertices, unit normals and triangles that are baked, in the bake frame
+    (transforms.bake_frame: the local frame with the object's scale K applied)."""
 
-    def __init__(self, mesh):
-        self.vertices = attributes.read_positions(mesh).astype(np.float64)
-        self.triangles = attributes.read_triangles(mesh)
-        self.normals = _vertex_normals(mesh)
+    def __init__(self, mesh, shape):
+        """mesh: a temporary mesh (Object.to_mesh()), which this scales by K."""
+        self.positions = attributes.read_positions(mesh)
         self.loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
         mesh.loops.foreach_get('vertex_index', self.loop_vertices)
         self.loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_start', self.loop_starts)
         self.loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_total', self.loop_totals)
+        # The scale applied as Object > Apply > Scale does (normals recomputed from the scaled
+        # faces), and a mirror's faces flipped outside out (the bake reads their winding).
+        matrix = np.eye(4)
+        matrix[:3, :3] = shape
+        mesh.transform([list(row) for row in matrix])
+        if np.linalg.det(shape) < 0:
+            mesh.flip_normals()
+        self.vertices = attributes.read_positions(mesh).astype(np.float64)
+        self.normals = _unit(compat.vertex_normals(mesh).astype(np.float64))
+        self.triangles = attributes.read_triangles(mesh)
 
     def build_mesh(self, name):
-        """A new mesh datablock with this geometry, vertices in the same order."""
-        return attributes.new_mesh(name, self.vertices, self.loop_vertices, self.loop_starts,
+        """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
+        return attributes.new_mesh(name, self.positions, self.loop_vertices, self.loop_starts,
                                    self.loop_totals)
 
 
-def _evaluated_arrays(obj, depsgraph):
+def _evaluated_arrays(obj, depsgraph, shape):
     """Geometry of the object's evaluated mesh (modifiers applied)."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
         if mesh is None:
             return None
-        return Geometry(mesh)
+        return Geometry(mesh, shape)
     finally:
         evaluated.to_mesh_clear()
 
 
 def world_triangles(obj, depsgraph, view_layer):
     """World-space triangles of a visible object with geometry: (vertices float64 [V, 3],
-    triangles [T, 3]) or None."""
+    triangles [T, 3], wound outside-out also for a mirrored object) or None."""
     if obj.type not in GEOMETRY_TYPES or not obj.visible_get(view_layer=view_layer):
         return None
     evaluated = obj.evaluated_get(depsgraph)
@@ -92,8 +105,10 @@ def world_triangles(obj, depsgraph, view_layer):
         triangles = attributes.read_triangles(mesh)
         if len(triangles) == 0:
             return None
-        return (transforms.transform_points(evaluated.matrix_world, attributes.read_positions(mesh)),
-                triangles)
+        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
+        if np.linalg.det(matrix[:3, :3]) < 0:
+            triangles = triangles[:, ::-1].copy()
+        return transforms.transform_points(matrix, attributes.read_positions(mesh)), triangles
     finally:
         evaluated.to_mesh_clear()
 
@@ -147,43 +162,80 @@ def bake_settings(scene, obj, env_source):
     }
 
 
+def _refusal(obj):
+    """Why the object cannot be baked (a message for the user), or None."""
+    if obj.type != 'MESH':
+        return "%s is not a mesh (%s)" % (obj.name, obj.type.lower())
+    if obj.library is not None:
+        return ("%s is linked from %s, which keeps no change made here: make it local (Object > "
+                "Relations > Make Local) to bake it" % (obj.name, obj.library.filepath))
+    if obj.override_library is not None:
+        return ("%s is a library override, whose bake Blender would drop when the file is "
+                "reopened: make it local to bake it" % obj.name)
+    return None
+
+
+def _occluders(others, to_frame):
+    """The other objects' world triangles in a bake frame, as one mesh: (vertices, triangles) or
+    (None, None)."""
+    verts, tris, base = [], [], 0
+    for world, triangles in others:
+        verts.append(transforms.transform_points(to_frame, world))
+        tris.append(triangles + base)
+        base += len(world)
+    if not verts:
+        return None, None
+    return np.concatenate(verts), np.concatenate(tris).astype(np.int32)
+
+
 def prepare(context, objects):
-    """BakeTasks for the objects (main thread). Raises BakeError when a bake cannot start."""
+    """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
+    meshes, without faces, linked from a library) are left out, each with a warning; raises
+    BakeError when none is left or the bake cannot start (no sdnative, no environment)."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
     if not native.available():
         raise BakeError(native.error_message())
-    objects = [o for o in objects if o.type == 'MESH']
-    if not objects:
-        raise BakeError("select one or more mesh objects to bake")
-    env_source = environment.source(scene)
-    if env_source.kind == "file":
-        if not os.path.isfile(env_source.path):
-            raise BakeError("environment file not found: %s" % env_source.path)
+    try:
+        env_source = environment.source(scene)
+        if env_source.kind != "uniform":
+            environment.environment(env_source)  # an unreadable file fails now, not at every frame
+    except environment.Unavailable as exc:
+        raise BakeError(str(exc)) from exc
 
-    world_occluders = {}
+    visible = []
     for other in scene.objects:
         tris = world_triangles(other, depsgraph, view_layer)
         if tris is not None:
-            world_occluders[other.name] = tris
+            visible.append((other, tris))
 
-    tasks = []
+    tasks, skipped = [], []
     for obj in objects:
-        geometry = _evaluated_arrays(obj, depsgraph)
-        if geometry is None or len(geometry.vertices) == 0 or len(geometry.triangles) == 0:
-            raise BakeError("%s has no faces to bake" % obj.name)
-        to_local = np.linalg.inv(np.array(obj.evaluated_get(depsgraph).matrix_world, dtype=np.float64))
-        verts, tris, base = [], [], 0
-        for name, (world, triangles) in world_occluders.items():
-            if name == obj.name:
-                continue
-            verts.append(transforms.transform_points(to_local, world))
-            tris.append(triangles + base)
-            base += len(world)
-        occluders = (np.concatenate(verts), np.concatenate(tris).astype(np.int32)) if verts else (None, None)
-        tasks.append(BakeTask(obj.name, geometry, occluders, bake_settings(scene, obj, env_source)))
-    return tasks
+        reason = _refusal(obj)
+        if reason is None:
+            shape, to_frame = transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
+            if np.linalg.matrix_rank(shape) < 3:
+                reason = "%s has a zero scale" % obj.name
+        if reason is None:
+            geometry = _evaluated_arrays(obj, depsgraph, shape)
+            if geometry is None or len(geometry.triangles) == 0:
+                reason = "%s has no faces" % obj.name
+        if reason is not None:
+            skipped.append(reason)
+            continue
+        occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
+        settings = bake_settings(scene, obj, env_source)
+        settings["shape"] = [float(x) for x in shape.ravel()]
+        tasks.append(BakeTask(obj.name, geometry, occluders, settings))
+    if not tasks:
+        raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
+                        "select one or more mesh objects to bake")
+    warnings = ["skipped: " + reason for reason in skipped]
+    if env_source.kind == "uniform":
+        warnings.append("world '%s' has no Environment Texture: lit by its %s"
+                        % (scene.world.name, env_source.description))
+    return tasks, warnings
 
 
 # --------------------------------------------------------------------------------------------
@@ -192,8 +244,9 @@ def prepare(context, objects):
 class BakeJob:
     """Bakes a list of BakeTasks; run() in any thread, apply() on the main thread afterwards."""
 
-    def __init__(self, tasks):
+    def __init__(self, tasks, warnings=()):
         self.tasks = tasks
+        self.warnings = list(warnings)   # for the user, with the result (prepare's)
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
@@ -271,7 +324,7 @@ class BakeJob:
         built = []
         try:
             for task in self.tasks:
-                obj = bpy.data.objects.get(task.object_name)
+                obj = bpy.data.objects.get((task.object_name, None))   # the local one
                 if obj is None:
                     raise BakeError("%s was deleted during the bake" % task.object_name)
                 mesh = task.geometry.build_mesh(MESH_PREFIX + task.object_name)
@@ -285,13 +338,19 @@ class BakeJob:
             for _, mesh, _ in built:
                 bpy.data.meshes.remove(mesh)
             raise
+        released = {}
         for obj, mesh, task in built:
-            old = obj.get(BAKED_MESH)
+            old = baked_mesh(obj)
             obj[BAKED_MESH] = mesh
             obj[BAKE] = dict(mesh[BAKE])
-            if old is not None and old != mesh and isinstance(old, bpy.types.Mesh) and BAKE in old:
-                bpy.data.meshes.remove(old)
-            mesh.name = MESH_PREFIX + obj.name
+            if old is not None:
+                released[old.as_pointer()] = old
+        for old in released.values():
+            _release(old)
+        for obj, mesh, _ in built:
+            name = MESH_PREFIX + obj.name
+            if mesh.name != name and name not in bpy.data.meshes:  # free now that the old one went
+                mesh.name = name
         return [obj.name for obj, _, _ in built]
 
 
@@ -331,12 +390,35 @@ def bake_info(obj):
     return dict(mesh[BAKE]) if mesh is not None else None
 
 
-def clear(obj):
-    """Removes the object's bake (its baked mesh and custom properties)."""
+def scale_changed(obj):
+    """Whether the object's scale (with shear and mirror) differs from the one it was baked with,
+    e.g. an animated scale at another frame: its bake then shades the shape it had, until baked
+    again. False for a bake that did not record it."""
+    info = bake_info(obj)
+    if info is None or "shape" not in info:
+        return False
+    baked = np.array(list(info["shape"]), dtype=np.float64).reshape(3, 3)
+    current = transforms.bake_frame(obj.matrix_world)[0]
+    return not np.allclose(current, baked, rtol=0.0, atol=1e-5 * np.abs(baked).max())
+
+
+def _release(mesh):
+    """Removes a baked mesh that no object links any more. Shift+D and Alt+D copies of a baked
+    object link the same baked mesh: it stays while one of them does."""
     import bpy
+    if mesh.library is None and not any(o.get(BAKED_MESH) == mesh for o in bpy.data.objects):
+        bpy.data.meshes.remove(mesh)
+
+
+def clear(obj):
+    """Removes the object's bake: its custom properties, and its baked mesh unless another object
+    still links it. Raises BakeError for an object linked from a library."""
+    if obj.library is not None:
+        raise BakeError("%s is linked from %s: its bake can only be cleared there"
+                        % (obj.name, obj.library.filepath))
     mesh = baked_mesh(obj)
     for key in (BAKED_MESH, BAKE):
         if key in obj:
             del obj[key]
     if mesh is not None:
-        bpy.data.meshes.remove(mesh)
+        _release(mesh)

@@ -4,7 +4,8 @@ Every baked, visible object is drawn with its baked mesh's geometry times the ob
 matrix, with the shader variant of its bake (gpu_shading.py), depth-tested against the scene.
 Per frame and object, the environment's coefficients are rotated on the CPU to those of
 x -> L(g R x): g the environment rotation (environment.py), R the rotation of the object's matrix
-(the bake's directions are in the object's local frame). The eye is the viewport's own camera.
+(the bake's directions are in the object's bake frame: baking.py). The eye is the viewport's own
+camera.
 
 Colour: the shader writes scene-linear radiance times 2^exposure (the scene's Film/colour
 management exposure); the viewport shows what a POST_VIEW handler draws with the sRGB curve

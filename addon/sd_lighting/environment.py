@@ -5,6 +5,8 @@ Source (the scene's settings, `environment_source`):
   active World Output through a Background node, else any), times the Background's Strength.
   A world without an Environment Texture lights with its uniform Background colour.
 - 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
+What is missing or cannot be read - the world, the texture's image, its file - raises
+Unavailable, whose message names it (the bake refuses, the panel and the live shading show it).
 
 Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
 environment (utils/transforms.mapping_rotation; location and scale are ignored). Without a Mapping
@@ -115,33 +117,52 @@ def _file_key(path):
         return ("file", path, 0, 0)
 
 
+class Unavailable(Exception):
+    """The scene's environment cannot be read; the message names what is missing."""
+
+
 def source(scene):
-    """The environment Source of the scene's settings."""
+    """The environment Source of the scene's settings. Raises Unavailable when what they name is
+    missing: no world, an Environment Texture without an image, an image without its file."""
     import bpy
     settings = scene.sd_lighting
     if settings.environment_source == 'FILE':
+        if not settings.environment_path:
+            raise Unavailable("no HDRI file chosen (Environment: File)")
         path = bpy.path.abspath(settings.environment_path)
+        if not os.path.isfile(path):
+            raise Unavailable("the HDRI file %s is missing" % path)
         return Source("file", _file_key(path), path, path=path)
+    if scene.world is None:
+        raise Unavailable("the scene has no world: add one (Properties > World) or choose an "
+                          "HDRI file (Environment: File)")
     env, background, _ = world_nodes(scene.world)
     strength = 1.0
     if background is not None:
         socket = background.inputs.get("Strength")
         if socket is not None and not socket.is_linked:
             strength = float(socket.default_value)
-    if env is not None and env.image is not None:
+    if env is not None:
         image = env.image
+        if image is None:
+            raise Unavailable("the Environment Texture of world '%s' has no image" % scene.world.name)
         path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
-        if path and image.source == 'FILE' and image.packed_file is None and os.path.isfile(path):
-            return Source("file", _file_key(path), path, strength=strength, path=path)
+        if image.source == 'FILE' and image.packed_file is None:
+            if path and os.path.isfile(path):
+                return Source("file", _file_key(path), path, strength=strength, path=path)
+            raise Unavailable("the image '%s' of world '%s' is missing: %s" % (
+                image.name, scene.world.name, "file %s not found" % path if path else "no file path"))
+        if 0 in tuple(image.size):  # reading the size loads the pixels
+            raise Unavailable("the image '%s' of world '%s' has no pixels" % (image.name, scene.world.name))
         return Source("pixels", ("pixels", image.name, tuple(image.size)), "image " + image.name,
                       strength=strength, image=image)
     colour = (0.05, 0.05, 0.05)
-    if background is not None:
+    if background is None:
+        colour = tuple(scene.world.color)
+    else:
         socket = background.inputs.get("Color")
         if socket is not None and not socket.is_linked:
             colour = tuple(socket.default_value)[:3]
-    elif scene.world is not None:
-        colour = tuple(scene.world.color)
     return Source("uniform", ("uniform",) + tuple(round(c, 9) for c in colour),
                   "uniform colour (%.3g, %.3g, %.3g)" % colour, strength=strength, colour=colour)
 
@@ -162,10 +183,13 @@ def environment(src):
     env = _cache.get(src.key)
     if env is None:
         sd = native.get()
-        if src.kind == "file":
-            env = sd.load_environment(src.path)
-        else:
-            env = sd.environment_from_pixels(_image_pixels(src.image))
+        try:
+            if src.kind == "file":
+                env = sd.load_environment(src.path)
+            else:
+                env = sd.environment_from_pixels(_image_pixels(src.image))
+        except (OSError, ValueError) as exc:
+            raise Unavailable("cannot read the environment (%s): %s" % (src.description, exc)) from exc
         _cache[src.key] = env
     return env
 

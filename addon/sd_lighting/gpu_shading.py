@@ -2,10 +2,10 @@
 per-object data they read.
 
 What a draw reads:
-- vertex attributes `pos` and `nrm` (the baked mesh's positions and the `sd_normal` it was baked
-  with), both in the object's local frame; per-pixel variants also `corners` (the triangle's
-  three vertex indices, as floats: exact below 2^24 vertices) and `bary` (the corner's
-  barycentric coordinates);
+- vertex attributes `pos` (the baked mesh's positions, in the object's local frame) and `nrm`
+  (the `sd_normal` it was baked with, in its bake frame: baking.py); per-pixel variants also
+  `corners` (the triangle's three vertex indices, as floats: exact below 2^24 vertices) and
+  `bary` (the corner's barycentric coordinates);
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
   gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);

@@ -17,10 +17,6 @@ def _tag_redraw(context, region_type):
                     region.tag_redraw()
 
 
-def _selected_meshes(context):
-    return [o for o in context.selected_objects if o.type == 'MESH']
-
-
 class SD_OT_bake(bpy.types.Operator):
     """Bake the selected meshes against everything visible (Esc cancels)"""
     bl_idname = "sd_lighting.bake"
@@ -36,11 +32,15 @@ class SD_OT_bake(bpy.types.Operator):
             if hasattr(cls, "poll_message_set"):
                 cls.poll_message_set("a bake is running")
             return False
-        return any(o.type == 'MESH' for o in context.selected_objects)
+        if not any(o.type == 'MESH' for o in context.selected_objects):
+            if hasattr(cls, "poll_message_set"):
+                cls.poll_message_set("select one or more mesh objects")
+            return False
+        return True
 
     def _prepare(self, context):
         try:
-            return baking.BakeJob(baking.prepare(context, _selected_meshes(context)))
+            return baking.BakeJob(*baking.prepare(context, context.selected_objects))
         except baking.BakeError as exc:
             self.report({'ERROR'}, "Bake: %s" % exc)
         return None
@@ -58,6 +58,8 @@ class SD_OT_bake(bpy.types.Operator):
             self.report({'ERROR'}, "Bake failed while storing results, nothing was changed: %s" % exc)
             return {'CANCELLED'}
         drawing.clear_cache()
+        for warning in job.warnings:
+            self.report({'WARNING'}, "Bake: %s" % warning)
         self.report({'INFO'}, "Baked %s in %.1f s" % (", ".join(names), job.seconds))
         _tag_redraw(context, 'WINDOW')
         return {'FINISHED'}
@@ -151,10 +153,18 @@ class SD_OT_clear_bake(bpy.types.Operator):
         return active_job is None and any(baking.baked_mesh(o) for o in context.selected_objects)
 
     def execute(self, context):
+        cleared = []
         for obj in context.selected_objects:
             if baking.baked_mesh(obj) is not None:
-                baking.clear(obj)
+                try:
+                    baking.clear(obj)
+                    cleared.append(obj.name)
+                except baking.BakeError as exc:
+                    self.report({'WARNING'}, "Clear Bake: %s" % exc)
         drawing.clear_cache()
+        if not cleared:
+            return {'CANCELLED'}
+        self.report({'INFO'}, "Cleared the bake of %s" % ", ".join(cleared))
         return {'FINISHED'}
 
 

@@ -109,6 +109,8 @@ class SD_PT_lighting(bpy.types.Panel):
             col.label(text="Design nodes per vertex: %.1f mean, %d max" % (
                 info.get("design_nodes_mean", 0.0), info.get("design_nodes_max", 0)))
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
+        if baking.scale_changed(obj):
+            col.label(text="Scale changed since the bake: bake again", icon='ERROR')
         box.operator("sd_lighting.clear_bake", icon='X')
 
 

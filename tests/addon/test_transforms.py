@@ -40,6 +40,38 @@ def test_rotation_part_of_scaled_and_mirrored_matrices():
     assert np.linalg.det(part) == pytest.approx(1.0) and np.allclose(part @ part.T, np.eye(3))
 
 
+def test_rotation_part_of_a_mirror_is_blenders_decompose():
+    # Matrix.Diagonal((-1, 1, 1)).decompose() is a rotation of 180 degrees about X and scale -1.
+    assert np.allclose(transforms.rotation_part(np.diag([-1.0, 1.0, 1.0])), np.diag([1.0, -1.0, -1.0]))
+
+
+@pytest.mark.parametrize("scale", [(-1.0, 1.0, 1.0), (1.0, 2.0, 0.5), (0.7, -1.3, 0.9), (-2.0, -2.0, -2.0)])
+def test_rotation_part_turns_with_the_object(scale):
+    # What is baked in the frame R^T (world) must stay attached to the object when it turns:
+    # the rotation of Q A is Q R, also for mirrors, whose polar factor alone is no rotation.
+    a = transforms.euler_xyz((0.3, -0.2, 0.5)) @ np.diag(scale)
+    q = transforms.euler_xyz((1.1, 0.4, -2.0))
+    r = transforms.rotation_part(a)
+    assert np.linalg.det(r) == pytest.approx(1.0)
+    assert np.allclose(transforms.rotation_part(q @ a), q @ r, atol=1e-12)
+
+
+def test_bake_frame_applies_scale_but_not_rotation_or_translation():
+    matrix = np.eye(4)
+    matrix[:3, :3] = transforms.euler_xyz((0.3, -0.2, 0.5)) @ np.diag([0.7, -1.3, 0.9])
+    matrix[:3, 3] = (1.0, -2.0, 3.0)
+    shape, to_frame = transforms.bake_frame(matrix)
+    points = np.array([[0.1, 0.2, 0.3], [-1.0, 0.5, 2.0], [0.0, 0.0, 0.0]])
+    world = transforms.transform_points(matrix, points)
+    # the local points with K applied are where the world points are in the frame
+    assert np.allclose(transforms.transform_points(to_frame, world), points @ shape.T, atol=1e-12)
+    # a rigid frame: distances and angles of the world are kept
+    assert np.allclose(to_frame[:3, :3] @ to_frame[:3, :3].T, np.eye(3), atol=1e-12)
+    assert np.allclose(shape, shape.T, atol=1e-12) and np.linalg.det(shape) < 0
+    uniform = np.diag([2.0, 2.0, 2.0, 1.0])
+    assert np.allclose(transforms.bake_frame(uniform)[0], 2.0 * np.eye(3))
+
+
 def test_transform_points_rotates_scales_and_translates():
     matrix = np.eye(4)
     matrix[:3, :3] = 2.0 * transforms.euler_xyz((0, 0, math.pi / 2))

@@ -1,5 +1,7 @@
 #include "bake/embree_scene.h"
 
+#include "util/number_string.h"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -11,7 +13,7 @@ namespace sd {
 namespace {
 
 std::string vec_string(const glm::dvec3& v) {
-  return "(" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+  return "(" + number_string(v.x) + ", " + number_string(v.y) + ", " + number_string(v.z) + ")";
 }
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }

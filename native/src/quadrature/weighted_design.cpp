@@ -3,6 +3,7 @@
 #include "quadrature/design_fit.h"
 #include "quadrature/nnls.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "util/number_string.h"
 
 #include <glm/geometric.hpp>
 
@@ -126,7 +127,7 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
   }
   if (!certified(best)) {
     throw std::runtime_error("Tchakaloff compression of degree " + std::to_string(degree) +
-                             " failed certification: residual " + std::to_string(best.residual));
+                             " failed certification: residual " + number_string(best.residual));
   }
 
   const int generic = std::max(1, (rank + 2) / 3);

@@ -207,3 +207,25 @@ def test_module_refuses_numpy_2_when_its_pybind11_cannot_read_it(sd, tmp_path):
                           env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), module_dir])))
     assert done.returncode != 0
     assert "ImportError" in done.stderr and "NumPy 2.0.0" in done.stderr and "pybind11 >= 2.12" in done.stderr
+
+
+def test_calls_refuse_allocations_beyond_the_budget(sd):
+    # Each of these allocated until the kernel killed the process (or ran for minutes in ~20 GB);
+    # now they are refused before allocating, with the size in the message.
+    one = np.array([[0.0, 0.0, 1.0]])
+    no_triangles = np.zeros((0, 3), int)
+    calls = {
+        "gaunt_coefficients": lambda: sd.gaunt_coefficients(64, 64, 64),
+        "design from 2**24 rays": lambda: sd.bake_transfer(one, one, no_triangles, sd.MAX_RAYS_PER_VERTEX,
+                                                          design_orders=(4, 2)),
+        "recorded rays": lambda: sd.bake_transfer(np.zeros((1000, 3)), np.tile(one, (1000, 1)), no_triangles,
+                                                  sd.MAX_RAYS_PER_VERTEX, return_rays=True),
+        "product matrices": lambda: sd.bake_transfer(np.zeros((10**6, 3)), np.tile(one, (10**6, 1)), no_triangles, 1,
+                                                     product_orders=(16, 8)),
+        "weighted design": lambda: sd.weighted_design(np.tile(one, (3_000_000, 1)), np.ones(3_000_000), 12),
+    }
+    budget = f"{sd.MAX_CALL_BYTES / 1e9:.3g} GB"
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match=f"would need .* GB, more than the {budget}"):
+            call()
+    assert sd.gaunt_coefficients(8, 8, 16)[0].shape[1] == 3  # orders in use stay well inside

@@ -103,7 +103,8 @@ struct TransferBake {
 /// triangles: indices into vertices (may be empty: the vertices are then probes; degenerate
 /// triangles are fine). occluders: extra blocking triangles, indices into occluders.vertices.
 /// Throws std::invalid_argument on bad input (NaN/inf, zero normal, index out of range, orders out
-/// of range, rays < 1, no vertices), BakeCancelled when cancelled, std::runtime_error naming the
+/// of range, rays < 1, no vertices) and, before allocating, when the results and the workers'
+/// matrices would exceed kMaxCallBytes, BakeCancelled when cancelled, std::runtime_error naming the
 /// vertex when its design cannot be certified or Embree fails. Runs options.threads workers over
 /// chunks of vertices (parallel_for); with a progress callback the calling thread only reports.
 /// Results are returned only on success.

@@ -1,6 +1,8 @@
 // Reading environment images through OpenImageIO and checking their pixels.
 #include "environment/image_io.h"
 
+#include "sdlighting/limits.h"
+
 #include <OpenImageIO/imageio.h>
 
 #include <sys/stat.h>
@@ -89,6 +91,10 @@ LoadedImage read_image_file(const std::string& path) {
   if (spec.depth > 1) throw std::invalid_argument(origin + ": volume images are not environment maps");
   const int channels = spec.nchannels;
   if (channels < 1) throw std::invalid_argument(origin + ": the image has no channels");
+  // What OpenImageIO decodes into, and the RGB copy.
+  check_allocation(origin + ": decoding " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
+                       std::to_string(channels) + " pixels",
+                   4.0 * static_cast<double>(texels) * (channels + 3));
   std::vector<float> data(static_cast<size_t>(texels) * channels);
   // A truncated TIFF reads "successfully" with its error only recorded: has_error() catches it.
   if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data()) || in->has_error()) {

@@ -371,6 +371,9 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
   check_order("band_limited_texture: order", order, kMaxEnergyOrder);
   check_output_size("band_limited_texture", width, height);
   const int k = sh_count(order), mc = order + 1;
+  // The texture, and the azimuth tables of every column.
+  check_allocation("band_limited_texture: a " + std::to_string(width) + " x " + std::to_string(height) + " texture",
+                   12.0 * width * height + 16.0 * width * mc);
   if (sh_coefficients.size() != static_cast<size_t>(3 * k)) {
     throw std::invalid_argument("band_limited_texture: expected 3 (order+1)^2 = " + std::to_string(3 * k) +
                                 " coefficients, got " + std::to_string(sh_coefficients.size()));

@@ -18,16 +18,22 @@ namespace {
 
 // Rank threshold of the weighted Vandermonde's QR, relative to its largest diagonal entry.
 constexpr double kRankThreshold = 1e-11;
+// Weights below this fraction of the largest are left out (validate).
+constexpr double kNegligibleWeight = 1e-20;
 
 struct CleanMeasure {
   std::vector<glm::dvec3> dirs;
-  std::vector<double> weights;
-  double mass = 0.0;
+  std::vector<double> weights;  // divided by `scale`
+  double mass = 0.0;            // of the divided weights
+  double scale = 1.0;           // the largest weight
 };
 
 CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights, int degree) {
   check_order("design degree", degree, kMaxDesignDegree);
   if (dirs.size() != weights.size()) throw std::invalid_argument("dirs and weights differ in length");
+  check_allocation("a weighted design of degree " + std::to_string(degree) + " from " + std::to_string(dirs.size()) +
+                       " directions",
+                   weighted_design_bytes(dirs.size(), degree));
   CleanMeasure measure;
   for (size_t i = 0; i < dirs.size(); ++i) {
     const glm::dvec3& d = dirs[i];
@@ -39,9 +45,27 @@ CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<dou
     if (weights[i] == 0.0) continue;
     measure.dirs.push_back(d / length);
     measure.weights.push_back(weights[i]);
-    measure.mass += weights[i];
   }
-  if (!(measure.mass > 0.0)) throw std::invalid_argument("weights sum to zero: the measure is empty");
+  if (measure.weights.empty()) throw std::invalid_argument("weights sum to zero: the measure is empty");
+  // Weights near 1e300 overflow the moments' squares and denormal ones vanish under the fit's
+  // tolerances: the fit sees the weights divided by the largest, weighted_design scales back.
+  // Weights below kNegligibleWeight of the largest are left out: together they move no moment by
+  // more than kMaxRaysPerVertex × kNegligibleWeight × √(2k+1) (< 1e-11, below kDesignTolerance) of
+  // the mass, but would make the weighted Vandermonde's QR keep columns known only to 1e-30.
+  measure.scale = *std::max_element(measure.weights.begin(), measure.weights.end());
+  size_t kept = 0;
+  for (size_t i = 0; i < measure.weights.size(); ++i) {
+    const double w = measure.weights[i] / measure.scale;
+    if (w < kNegligibleWeight) continue;
+    measure.dirs[kept] = measure.dirs[i];
+    measure.weights[kept++] = w;
+    measure.mass += w;
+  }
+  measure.dirs.resize(kept);
+  measure.weights.resize(kept);
+  if (!std::isfinite(measure.mass * measure.scale)) {
+    throw std::invalid_argument("weights sum beyond the double range (largest " + number_string(measure.scale) + ")");
+  }
   return measure;
 }
 
@@ -131,8 +155,10 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
   }
 
   const int generic = std::max(1, (rank + 2) / 3);
-  return prune_design(basis.system(target), std::move(best), generic, certified,
-                      FitOptions{1e-15 * std::sqrt(measure.mass), 100, true});
+  SphericalDesign design = prune_design(basis.system(target), std::move(best), generic, certified,
+                                       FitOptions{1e-15 * std::sqrt(measure.mass), 100, true});
+  for (double& w : design.weights) w *= measure.scale;
+  return design;
 }
 
 }  // namespace sd

@@ -249,8 +249,9 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   check_allocation("a bake of " + std::to_string(vertices.size()) + " vertices x " + std::to_string(options.rays) + " rays",
                    bake_bytes(options, vertices.size()));
   check_points("vertices", vertices);
-  const std::vector<glm::dvec3> units = unit_normals(normals);
   check_triangles("triangles", triangles, vertices.size(), "vertices");
+  std::vector<std::int64_t> fallback_normals;
+  const std::vector<glm::dvec3> units = unit_normals(normals, vertices, triangles, &fallback_normals);
   check_points("occluder vertices", occluders.vertices);
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   if (vertices.size() > std::numeric_limits<unsigned>::max() ||
@@ -285,6 +286,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   bake.product_visibility_order = options.product_visibility_order;
   bake.transfer_order = options.transfer_order;
   bake.design_degree = plan.design_degree;
+  bake.fallback_normals = std::move(fallback_normals);
   bake.ambient_occlusion.assign(n, 0.0);
   bake.visibility.assign(n * plan.visibility_count, 0.0);
   bake.product_matrices.assign(n * plan.product_rows * plan.product_cols, 0.0);

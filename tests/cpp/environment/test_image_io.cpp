@@ -113,6 +113,22 @@ TEST(EnvironmentFiles, TruncatedFilesThrow) {
   }
 }
 
+TEST(EnvironmentFiles, SixteenThousandWideEightBitJpegAndPngLoad) {
+  constexpr int kWidth = 16384, kHeight = 8;
+  const std::vector<unsigned char> rgb(static_cast<size_t>(kWidth) * kHeight * 3, 188);
+  const double linear = std::pow((188.0 / 255.0 + 0.055) / 1.055, 2.4);
+  for (const char* name : {"wide.jpg", "wide.png"}) {
+    const std::string path = temp_path(name);
+    write_image(path, kWidth, kHeight, 3, rgb, OIIO::TypeDesc::UINT8);
+    const Environment env = Environment::load(path);
+    EXPECT_EQ(env.width(), kWidth);
+    EXPECT_EQ(env.height(), kHeight);
+    // A flat JPEG decodes to within one level of 188: about 1 % in linear light.
+    for (float v : env.pixels()) ASSERT_NEAR(v, linear, 0.012 * linear) << name;
+    EXPECT_NEAR(env.sh(4)[0], linear, 0.012 * linear) << name;
+  }
+}
+
 TEST(EnvironmentFiles, FloatFilesRoundTripAndNaNFilesThrow) {
   std::mt19937_64 rng(8);
   std::vector<float> rgb = random_pixels(32 * 16 * 3, 40.0f, rng);

@@ -93,7 +93,7 @@ def constant_maps(sd, c):
 
 
 def probe_constant_maps_of_any_size_light_as_the_constant(sd, scratch):
-    # Texels taken as points made a 2 x 1 constant map light like two suns (L_1m of 2.5 c).
+    # Texels taken as points made a 2 x 1 constant map light like two point lights (L_22 = -1.9 c).
     c, s, s_v = 1.75, 8, 2  # exact in float32
     rng = np.random.default_rng(1)
     normals = rng.normal(size=(64, 3))

@@ -49,7 +49,7 @@ TEST(Environment, ProjectionIntegratesTexelsAsAreas) {
 }
 
 TEST(Environment, ConstantMapsOfAnySizeProjectToTheConstant) {
-  // Texels taken as points lit a 2 × 1 map like two suns (|L_1m| ≈ 2.5 c at the midpoint rule).
+  // Texels taken as points lit a 2 × 1 map like two point lights (L_22 = −1.9 c by the midpoint rule).
   const double c = 2.5;
   std::vector<Environment> maps;
   for (auto [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {2, 1}, {1, 2}, {4, 2}, {3, 5}, {16, 8}, {64, 32}, {1024, 512}}) {

@@ -49,9 +49,10 @@ CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<dou
   if (measure.weights.empty()) throw std::invalid_argument("weights sum to zero: the measure is empty");
   // Weights near 1e300 overflow the moments' squares and denormal ones vanish under the fit's
   // tolerances: the fit sees the weights divided by the largest, weighted_design scales back.
-  // Weights below kNegligibleWeight of the largest are left out: together they move no moment by
-  // more than kMaxRaysPerVertex × kNegligibleWeight × √(2k+1) (< 1e-11, below kDesignTolerance) of
-  // the mass, but would make the weighted Vandermonde's QR keep columns known only to 1e-30.
+  // Weights below kNegligibleWeight of the largest are left out: kMaxCallBytes admits at most
+  // ~1e8 / (k+1)² points, so together they move no moment by more than 1e8 × kNegligibleWeight ×
+  // √(2k+1) / (k+1)² < 1e-11 of the mass (below kDesignTolerance), but they would make the weighted
+  // Vandermonde's QR keep columns known only to 1e-30.
   measure.scale = *std::max_element(measure.weights.begin(), measure.weights.end());
   size_t kept = 0;
   for (size_t i = 0; i < measure.weights.size(); ++i) {

@@ -267,8 +267,10 @@ shape ((lmax+1)**2, 3): row l*l + l + m, columns R, G, B.)doc");
             return rgb_coefficients(c);
           },
           py::arg("lmax"), py::arg("threads") = 0,
-          R"doc(SH coefficients L_lm = sum over texels of L y_lm(centre) * solid angle (midpoint rule of
-integral L y_lm dmu), for l <= lmax (0 .. MAX_PROJECTION_ORDER).
+          R"doc(SH coefficients L_lm = integral L y_lm dmu of the piecewise-constant map: the sum over texels
+of L times the integral of y_lm over the texel's area (a Gauss-Legendre rule per texel, within 1e-5
+of max |y_lm| times the mass), for l <= lmax (0 .. MAX_PROJECTION_ORDER). A constant map of any
+size, down to 1 x 1, gives the constant in L_00 and nothing else.
 
 threads: worker threads, 0 = all cores; the result does not depend on it (bit-identical).
 Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
@@ -405,7 +407,8 @@ Float files are linear; 8/16-bit integer files are decoded from sRGB (unless the
 linear colour space). Greyscale becomes RGB; alpha is ignored. Negative values are clamped to 0
 (counted in clamped_negative_pixels).
 Raises OSError (message with the path and OpenImageIO's reason) if the file cannot be opened or
-read, ValueError if it is empty or holds NaN or infinite values. Releases the GIL.)doc");
+read, or (without reading it) if it is a directory, a FIFO, a device file or empty; ValueError if
+the image holds NaN or infinite values. Releases the GIL.)doc");
 
   m.def(
       "load_cube_environment",

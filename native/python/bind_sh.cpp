@@ -15,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -108,6 +109,13 @@ py::array_t<double> py_legendre(int lmax, const DoubleArray& t) {
   const bool scalar = t.ndim() == 0;
   const py::ssize_t n = scalar ? 1 : t.shape(0), width = lmax + 1;
   check_finite("t", t.data(), static_cast<size_t>(n));
+  // The recurrence grows like (|t| + sqrt(t² − 1))^l outside [−1, 1] and overflows to inf.
+  for (py::ssize_t i = 0; i < n; ++i) {
+    if (std::abs(t.data()[i]) > 1.0) {
+      value_error("t must lie in [-1, 1] (Legendre polynomials of cos theta), got t[" + std::to_string(i) +
+                  "] = " + py::str(py::float_(t.data()[i])).cast<std::string>());
+    }
+  }
   py::array_t<double> out = scalar ? py::array_t<double>(width) : py::array_t<double>({n, width});
   const double* in = t.data();
   double* data = out.mutable_data();
@@ -166,7 +174,8 @@ Returns a dict of float64 arrays: "diagonal" (order+1,), "a" and "b" ((order+1)(
 
 coeffs: shape (K,) or (K, C) (C channels, e.g. RGB); K = (lmax+1)**2 with lmax <= MAX_SH_ORDER.
 rotation: proper rotation matrix R of shape (3, 3), numpy row-major (R[i, j] = row i, column j),
-          orthogonal with det +1 to about 1e-9; otherwise ValueError.
+          orthogonal to 1e-5 (float32 matrices pass; the nearest exact rotation is used) and
+          not a reflection (det -1); otherwise ValueError.
 Returns an array of the same shape as coeffs. For the environment seen through a rotation g,
 L(g x), use rotated_environment_sh(L, g).)doc");
 
@@ -188,7 +197,7 @@ integral f(x) w(a.x) dmu(x) = sum_lm w_l f_lm y_lm(a).)doc");
   m.def("legendre", &py_legendre, py::arg("lmax"), py::arg("t"),
         R"doc(Legendre polynomials P_0(t) .. P_lmax(t) by the three-term recurrence.
 
-t: finite values, shape (N,) (or a scalar). Returns shape (N, lmax+1) (or (lmax+1,)).)doc");
+t: values in [-1, 1], shape (N,) (or a scalar); others raise ValueError. Returns shape (N, lmax+1) (or (lmax+1,)).)doc");
 
   m.def("gaunt_coefficients", &py_gaunt_coefficients, py::arg("order_a"), py::arg("order_b"), py::arg("order_c"),
         R"doc(Every non-zero real Gaunt coefficient G_abc = integral y_a y_b y_c dmu with l_a <= order_a,

@@ -71,7 +71,7 @@ sd::TransferBake run_bake(const DoubleArray& vertices, const DoubleArray& normal
   }
   const std::vector<glm::dvec3> v = read_points("vertices", vertices);
   if (v.empty()) value_error("vertices is empty: the mesh needs at least one vertex");
-  const std::vector<glm::dvec3> n = read_points("normals", normals);
+  const std::vector<glm::dvec3> n = read_points("normals", normals, false);
   if (n.size() != v.size()) {
     value_error("normals must have shape (" + std::to_string(v.size()) + ", 3) to match vertices, got " +
                 shape_string(normals));
@@ -111,6 +111,8 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
     out["ray_visibility"] =
         adopt(std::move(bake.ray_visibility), {n, py::ssize_t(bake.rays)}, py::dtype("bool"));
   }
+  const auto repaired = static_cast<py::ssize_t>(bake.fallback_normals.size());
+  out["fallback_normals"] = adopt(std::move(bake.fallback_normals), {repaired});
   out["rays"] = bake.rays;
   out["seed"] = bake.seed;
   out["ray_origins"] = points_array(bake.ray_origins);
@@ -191,7 +193,9 @@ weights 1/R and the module's real SH y_lm:
                      sum to the vertex's ambient occlusion. A vertex whose rays are all blocked gets an
                      EMPTY design (0 nodes; its B is 0).
 
-vertices: (N, 3) floats, N >= 1, finite.  normals: (N, 3), finite and non-zero (normalised here).
+vertices: (N, 3) floats, N >= 1, finite.  normals: (N, 3) (normalised here); a zero or non-finite
+    normal does not fail the bake: the vertex gets the area-weighted normal of its faces (+Z without
+    faces), and its index is listed in "fallback_normals" so that the caller can warn.
 triangles: (T, 3) integer indices into vertices (T may be 0: the vertices are then just probes).
 rays: rays per vertex, in [1, MAX_RAYS_PER_VERTEX].  seed: non-negative int.
 visibility_order: s' in [0, MAX_VISIBILITY_ORDER], or -1 (not requested).
@@ -210,7 +214,9 @@ are design_nodes[design_offsets[i]:design_offsets[i+1]]), "design_nodes" (total,
 "design_weights" (total,), "design_residuals" (N,) (certified moment residual / mass, 0 for an empty
 design), "design_degree" (int); each only when requested; plus "rays", "seed", "ray_origins"
 (N, 3) (where each vertex's rays start: about 1e-3 of the shortest edge around it away from p) and
-"seconds" (wall time). Raises ValueError on bad input, BakeCancelled when
+"seconds" (wall time), and "fallback_normals" int64 (K,) (the vertices baked with a fallback normal).
+Raises ValueError on bad input (and, before allocating, when the bake would need more than
+MAX_CALL_BYTES), BakeCancelled when
 cancelled, RuntimeError naming the vertex if a design cannot be certified. Releases the GIL.)doc");
 
   m.def("bake_visibility", &py_bake_visibility, py::arg("vertices"), py::arg("normals"), py::arg("triangles"),

@@ -14,11 +14,12 @@
 
 namespace sdpy {
 
-// Points from an (N, 3) float array, finite (N may be 0).
-inline std::vector<glm::dvec3> read_points(const char* name, const DoubleArray& a) {
+// Points from an (N, 3) float array (N may be 0), finite unless `finite` is false (normals: the
+// library repairs non-finite ones).
+inline std::vector<glm::dvec3> read_points(const char* name, const DoubleArray& a, bool finite = true) {
   if (a.ndim() != 2 || a.shape(1) != 3) value_error(std::string(name) + " must have shape (N, 3), got " + shape_string(a));
   const size_t n = static_cast<size_t>(a.shape(0));
-  check_finite(name, a.data(), 3 * n);
+  if (finite) check_finite(name, a.data(), 3 * n);
   std::vector<glm::dvec3> points(n);
   const double* data = a.data();
   for (size_t i = 0; i < n; ++i) points[i] = glm::dvec3(data[3 * i], data[3 * i + 1], data[3 * i + 2]);

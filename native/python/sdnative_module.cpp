@@ -55,7 +55,9 @@ Functions:
 
 Limits (module attributes, from one C++ header): MAX_SH_ORDER, MAX_LEGENDRE_ORDER,
 MAX_DESIGN_DEGREE, MAX_PHONG_EXPONENT, MAX_PROJECTION_ORDER, MAX_ENERGY_ORDER, MAX_TEXTURE_SIDE,
-MAX_VISIBILITY_ORDER, MAX_TRANSFER_ORDER, MAX_RAYS_PER_VERTEX, MAX_SHADING_ORDER.
+MAX_VISIBILITY_ORDER, MAX_TRANSFER_ORDER, MAX_RAYS_PER_VERTEX, MAX_SHADING_ORDER, MAX_CALL_BYTES (the
+bytes one call may allocate for arrays its arguments size: a call that would need more raises
+ValueError before allocating).
 
 Arrays are accepted in any form numpy converts to float64 (C-contiguous copies are made when
 needed) and returned as float64 numpy arrays. Bad shapes, NaN or infinity, negative weights and
@@ -95,6 +97,7 @@ PYBIND11_MODULE(sdnative, m) {
   m.attr("MAX_TRANSFER_ORDER") = sd::kMaxTransferOrder;
   m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
   m.attr("MAX_SHADING_ORDER") = sd::kMaxShadingOrder;
+  m.attr("MAX_CALL_BYTES") = sd::kMaxCallBytes;
   sdpy::bind_sh(m);
   sdpy::bind_designs(m);
   sdpy::bind_environment(m);

@@ -79,9 +79,20 @@ def sun_map(width, height, sun=(0.6, 0.0, 0.8), radius_deg=6.0):
     return rgb
 
 
-def brute_sh(sd, env, lmax):
-    dirs, dmu, rgb = env.texels()
-    return sd.sh_basis(lmax, dirs).T @ (rgb * dmu[:, None])
+def brute_sh(sd, env, lmax, points=10):
+    """L_lm = sum over texels of L times the integral of y_lm over the texel (a Gauss-Legendre
+    product rule in theta and phi on each texel of an equirect map)."""
+    height, width = env.height, env.width
+    x, w = np.polynomial.legendre.leggauss(points)
+    x, w = (x + 1) / 2, w / 2
+    j, i, qt, qp = np.meshgrid(np.arange(height), np.arange(width), np.arange(points), np.arange(points),
+                               indexing="ij")
+    theta = np.pi * (j + x[qt]) / height
+    phi = np.pi - 2 * np.pi * (i + x[qp]) / width
+    dirs = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+    area = w[qt] * w[qp] * np.sin(theta) * (np.pi / height) * (2 * np.pi / width) / (4 * np.pi)
+    rgb = env.pixels()[j, i].astype(np.float64)
+    return sd.sh_basis(lmax, dirs.reshape(-1, 3)).T @ (rgb * area[..., None]).reshape(-1, 3)
 
 
 # ---- pixels, files, layouts ----
@@ -196,12 +207,17 @@ def test_cube_map_from_files_matches_pixels(sd, tmp_path, rng):
 
 # ---- projection and rotation ----
 
-def test_projection_is_the_texel_sum(sd, rng):
+def test_projection_integrates_texels_as_areas(sd, rng):
     env = sd.environment_from_pixels(rng.uniform(0, 5, size=(27, 50, 3)))
     coeffs = env.sh(4)
     assert coeffs.shape == (sh_count(4), 3) and coeffs.dtype == np.float64
     expected = brute_sh(sd, env, 4)
-    np.testing.assert_allclose(coeffs, expected, rtol=0, atol=EXACT * np.abs(expected).max())
+    # The texel rules' bound: 1e-5 of max |y_lm| = 3 times the mass.
+    np.testing.assert_allclose(coeffs, expected, rtol=0, atol=1e-5 * 3 * env.mass[:3].max())
+    # A constant map of 2 x 1 texels is the constant, not two point lights.
+    two = sd.environment_from_pixels(np.full((1, 2, 3), 3.0))
+    np.testing.assert_allclose(two.sh(4)[0], 3.0, rtol=EXACT)
+    assert np.abs(two.sh(4)[1:]).max() < 1e-5 * 9 * 3.0
     assert np.array_equal(env.sh(8, threads=1), env.sh(8, threads=2))
     with pytest.raises(ValueError, match="lmax"):
         env.sh(sd.MAX_PROJECTION_ORDER + 1)

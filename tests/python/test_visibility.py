@@ -88,7 +88,7 @@ def test_outputs_equal_direct_sums_over_the_rays(sd):
     out = sd.bake_transfer(v, n, t, rays, seed=6, visibility_order=2, product_orders=(3, 2), transfer_order=3,
                            return_rays=True)
     assert set(out) == {"ambient_occlusion", "visibility", "product_matrices", "transfer", "ray_visibility", "rays",
-                        "seed", "ray_origins", "seconds"}
+                        "seed", "ray_origins", "seconds", "fallback_normals"}
     assert out["visibility"].shape == (len(v), 9) and out["transfer"].shape == (len(v), 16)
     assert out["product_matrices"].shape == (len(v), 16, 9) and out["product_matrices"].dtype == np.float64
     assert out["ray_visibility"].dtype == np.bool_ and out["ray_visibility"].shape == (len(v), rays)
@@ -229,8 +229,6 @@ def with_value(array, index, value):
 @pytest.mark.parametrize("args,match", [
     (bad(vertices=with_value(V, (3, 1), np.nan)), "vertices"),
     (bad(vertices=with_value(V, (0, 0), np.inf)), "vertices"),
-    (bad(normals=with_value(N, 2, 0.0)), "zero"),
-    (bad(normals=with_value(N, (2, 2), -np.inf)), "normals"),
     (bad(triangles=with_value(T, (4, 1), 12)), "out of range"),
     (bad(triangles=with_value(T, (0, 2), -1)), "out of range"),
     (bad(triangles=T.astype(float)), "integers"),
@@ -266,6 +264,17 @@ def test_bad_input_to_bake_visibility(sd):
         sd.bake_visibility(V, N, T, 2, 0)
     with pytest.raises(ValueError, match="rays"):
         sd.vertex_ray_directions(0, 0, 0)
+
+
+def test_zero_and_non_finite_normals_get_a_fallback(sd):
+    # They used to fail the whole bake; now they get their faces' normal and are listed.
+    normals = with_value(with_value(N, 2, 0.0), (4, 2), -np.inf)
+    repaired = sd.bake_transfer(V, normals, T, 64, transfer_order=1)
+    assert repaired["fallback_normals"].tolist() == [2, 4]
+    assert repaired["fallback_normals"].dtype == np.int64
+    reference = sd.bake_transfer(V, N, T, 64, transfer_order=1)
+    assert reference["fallback_normals"].tolist() == []
+    np.testing.assert_allclose(repaired["transfer"], reference["transfer"], atol=0.1)
 
 
 def test_degenerate_triangles_and_probes_are_fine(sd):

@@ -25,8 +25,9 @@
 // Internally either layout is a set of texels: a centre direction, an exact solid angle in units
 // of dμ = dx/4π (the texels' solid angles sum to 1), and a linear RGB radiance. The map is the
 // piecewise-constant function that takes a texel's radiance over the whole texel; radiance(dir)
-// looks it up (nearest texel), and every sum over the map (mass, norms, SH coefficients by the
-// midpoint rule) runs over these texels.
+// looks it up (nearest texel), and every sum over the map runs over these texels: masses and norms
+// exactly, SH coefficients with the integral of y_lm over each texel's area (not its value at the
+// centre, which makes a small constant map light like a few point lights).
 //
 // SH convention: spherical_harmonics.h (y_00 = 1, orthonormal for dμ). RGB coefficient arrays
 // are coefficient-major, channel-minor: c[3 i + ch] is coefficient i = l² + l + m of channel ch,
@@ -95,8 +96,9 @@ class Environment {
   /// R, G, B; alpha and any channel after the third are ignored.
   /// Negative values are clamped to 0 and counted (clamped_negative_pixels()).
   /// Throws std::runtime_error naming the path and OpenImageIO's message if the file cannot be
-  /// opened or read, std::invalid_argument naming the path and the pixel if a value is NaN or
-  /// infinite or the image is empty.
+  /// opened or read, and before opening it (stat only: nothing blocks or reads) if it is not a
+  /// non-empty regular file — a directory, a FIFO, a device such as /dev/zero; std::invalid_argument
+  /// naming the path and the pixel if a value is NaN or infinite or the image is empty.
   static Environment load(const std::string& path);
 
   /// Loads a cube map from six square images of one size, in the order +X, −X, +Y, −Y, +Z, −Z
@@ -160,13 +162,16 @@ class Environment {
 
   // ---- spherical harmonics ----
 
-  /// L_lm = Σ_texels L(texel) y_lm(centre) Δμ for l <= order (0..kMaxProjectionOrder, else
-  /// std::invalid_argument), the midpoint rule of L_lm = ∫ L y_lm dμ. Returns sh_count(order) × 3
-  /// doubles, out[3 i + c]. Multi-threaded on `threads` threads (0: every hardware thread);
-  /// the result is bit-identical for every thread count (per-row partial sums reduced in a
-  /// fixed order). Equirect maps use the row structure: the associated-Legendre part once per
-  /// row, cos mφ / sin mφ once per column (cost ∝ W H (order+1)); cube maps evaluate y_lm per
-  /// texel (cost ∝ texels × (order+1)²).
+  /// L_lm = ∫ L y_lm dμ = Σ_texels L(texel) ∫_texel y_lm dμ for l <= order (0..kMaxProjectionOrder,
+  /// else std::invalid_argument): the exact coefficients of the piecewise-constant map, each texel
+  /// integral by a Gauss–Legendre rule sized to the texel (within 1e-5 of max |y_lm| × the mass; a
+  /// constant map of any size, down to 1 × 1, gives L_00 = the constant and every other
+  /// coefficient below that bound). Returns sh_count(order) × 3 doubles, out[3 i + c].
+  /// Multi-threaded on `threads` threads (0: every hardware thread); the result is bit-identical
+  /// for every thread count (per-row partial sums reduced in a fixed order). Equirect maps use the
+  /// row structure: the azimuthal integrals exactly (sinc factors) once per column, the θ rule
+  /// once per row (cost ∝ W H (order+1)); cube maps evaluate y_lm at each texel's rule points
+  /// (cost ∝ texels × points × (order+1)², 4 points per texel from face 128 on).
   std::vector<double> sh(int order, int threads = 0) const;
 
   /// Band-limited L̃(d) = Σ_{l<=order} σ_l L_lm y_lm(d) (the seed's partial sum of order s, windowed
@@ -245,8 +250,8 @@ class Environment {
 /// already rotated by rotated_sh): L̃(d) = Σ_{l<=order} σ_l c_lm y_lm(d) at the texel centres of
 /// a width × height equirect image in the file comment's orientation, rows top-first, 3 floats
 /// per texel; `report` (if non-null) as for band_limited. order in 0..kMaxEnergyOrder, sizes in
-/// [1, 16384], coefficients finite and sh_count(order) × 3 of them; std::invalid_argument
-/// otherwise. Multi-threaded over rows; cost ∝ width × height × (order+1).
+/// [1, 16384], coefficients finite and sh_count(order) × 3 of them, and every value within the
+/// float32 range of the texture (huge coefficients overflow it); std::invalid_argument otherwise. Multi-threaded over rows; cost ∝ width × height × (order+1).
 std::vector<float> band_limited_texture(const std::vector<double>& coefficients, int order, int width, int height,
                                         RingingWindow window = RingingWindow::None,
                                         BandLimitedReport* report = nullptr);

@@ -3,6 +3,7 @@
 // and every "out of range" message is built from these constants by check_range / check_order.
 #pragma once
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -33,12 +34,30 @@ constexpr int kMaxTransferOrder = 16;
 constexpr int kMaxRaysPerVertex = 1 << 24;
 /// Highest order of L and of V the shading evaluators accept (the product formulas grow as s⁴).
 constexpr int kMaxShadingOrder = 16;
+/// Most bytes one call may allocate for the arrays its arguments size (a bake's per-vertex results
+/// and per-thread ray matrices, a weighted design's dense matrices, Gaunt tables, band-limited
+/// textures, decoded images): 4 GiB, above every size the add-on offers (a bake of 65536 rays per
+/// vertex with a degree-24 design on two threads needs 2.6 GB). check_allocation refuses more
+/// before anything is allocated, instead of the kernel killing the process (and Blender with it).
+constexpr double kMaxCallBytes = 4.0 * (1 << 30);
 
 /// Throws std::invalid_argument "<what> must be in [lo, hi], got <value>" unless lo <= value <= hi.
 inline void check_range(const std::string& what, int value, int lo, int hi) {
   if (value < lo || value > hi) {
     throw std::invalid_argument(what + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
                                 std::to_string(value));
+  }
+}
+
+/// Throws std::invalid_argument "<what> would need <bytes> GB, more than the 4.29 GB one call may
+/// allocate" unless bytes <= kMaxCallBytes. Sizes are counted in double, so absurd ones cannot
+/// overflow the count.
+inline void check_allocation(const std::string& what, double bytes) {
+  if (!(bytes <= kMaxCallBytes)) {
+    char text[96];
+    std::snprintf(text, sizeof text, " would need %.3g GB, more than the %.3g GB one call may allocate", bytes / 1e9,
+                  kMaxCallBytes / 1e9);
+    throw std::invalid_argument(what + text);
   }
 }
 

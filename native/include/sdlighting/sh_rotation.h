@@ -16,8 +16,9 @@ namespace sd {
 class ShRotation {
  public:
   /// Builds D(R) for all bands l <= order. `rotation` (column-major glm: rotation[col][row]) must
-  /// be finite and orthogonal with determinant +1 to about 1e-9 (‖RᵀR − I‖_F and |det − 1|), and
-  /// order must lie in [0, 64]; throws std::invalid_argument otherwise. Costs O(order³).
+  /// be finite, orthogonal to 1e-5 (‖RᵀR − I‖_F: float32 rotations pass) and not a reflection
+  /// (det < 0); D is built from the nearest exact rotation (R's polar factor). order must lie in
+  /// [0, 64]. Throws std::invalid_argument otherwise. Costs O(order³).
   ShRotation(const glm::dmat3& rotation, int order);
 
   /// The highest band held.

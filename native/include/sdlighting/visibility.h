@@ -77,6 +77,9 @@ struct TransferOptions {
 /// Results of bake_transfer; arrays are per vertex, row-major, empty when not requested.
 struct TransferBake {
   std::size_t vertex_count = 0;
+  /// Vertices whose normal was zero or not finite, in increasing order: they were baked with the
+  /// area-weighted normal of their faces (+Z without faces) instead of failing the bake.
+  std::vector<std::int64_t> fallback_normals;
   int rays = 0;
   std::uint64_t seed = 0;
   std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object frame
@@ -106,11 +109,13 @@ struct TransferBake {
 
 /// Bakes the requested outputs for every vertex of a triangle mesh.
 ///
-/// vertices/normals: N >= 1 finite points and non-zero finite normals (normalised here).
+/// vertices/normals: N >= 1 finite points and their normals (normalised here; a zero or non-finite
+/// normal gets a fallback from the vertex's faces, listed in TransferBake::fallback_normals).
 /// triangles: indices into vertices (may be empty: the vertices are then probes; degenerate
 /// triangles are fine). occluders: extra blocking triangles, indices into occluders.vertices.
-/// Throws std::invalid_argument on bad input (NaN/inf, zero normal, index out of range, orders out
-/// of range, rays < 1, no vertices), BakeCancelled when cancelled, std::runtime_error naming the
+/// Throws std::invalid_argument on bad input (NaN/inf positions, index out of range, orders out
+/// of range, rays < 1, no vertices) and, before allocating, when the results and the workers'
+/// matrices would exceed kMaxCallBytes, BakeCancelled when cancelled, std::runtime_error naming the
 /// vertex when its design cannot be certified or Embree fails. Runs options.threads workers over
 /// chunks of vertices (parallel_for); with a progress callback the calling thread only reports.
 /// Results are returned only on success.

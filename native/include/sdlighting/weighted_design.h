@@ -3,9 +3,11 @@
 #pragma once
 
 #include "sdlighting/spherical_design.h"
+#include "sdlighting/spherical_harmonics.h"
 
 #include <glm/vec3.hpp>
 
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -26,11 +28,21 @@ namespace sd {
 /// refit does not certify or the measure is too ill-conditioned for the Gram matrix.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
-/// weights must be finite and >= 0 with a positive sum. Throws std::invalid_argument otherwise,
+/// weights must be finite and >= 0 with a positive sum that fits a double; any scale works
+/// (1e-300..1e300, denormals: the fit runs on the weights divided by the largest). Throws
+/// std::invalid_argument otherwise or when weighted_design_bytes exceeds kMaxCallBytes,
 /// std::runtime_error if no certified design is found. `stop` is polled between the steps of the
 /// fits (at high degree one design takes seconds); returning true throws DesignCancelled.
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
                                 int degree, const SphericalDesign* start = nullptr,
                                 const std::function<bool()>& stop = {});
+
+/// The bytes weighted_design allocates for `points` samples at `degree`: five dense points ×
+/// (degree+1)² matrices of doubles (the SH Vandermonde, its weighted QR, the kept columns, the
+/// orthonormal basis at the samples and its transpose for NNLS). weighted_design refuses measures
+/// that would need more than kMaxCallBytes.
+inline double weighted_design_bytes(std::size_t points, int degree) {
+  return 5.0 * sizeof(double) * static_cast<double>(points) * sh_count(degree);
+}
 
 }  // namespace sd

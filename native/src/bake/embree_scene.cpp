@@ -1,5 +1,7 @@
 #include "bake/embree_scene.h"
 
+#include "util/number_string.h"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -11,7 +13,7 @@ namespace sd {
 namespace {
 
 std::string vec_string(const glm::dvec3& v) {
-  return "(" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+  return "(" + number_string(v.x) + ", " + number_string(v.y) + ", " + number_string(v.z) + ")";
 }
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -46,14 +48,38 @@ void check_triangles(const char* name, const std::vector<Triangle>& triangles, s
   }
 }
 
-std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals) {
+namespace {
+
+// n / |n|, scaled by its largest component first (no overflow or underflow); zero for a zero or
+// non-finite n.
+glm::dvec3 unit_or_zero(const glm::dvec3& n) {
+  const double scale = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+  if (!finite(n) || !(scale > 0.0) || !std::isfinite(scale)) return glm::dvec3(0.0);
+  return glm::normalize(n / scale);
+}
+
+}  // namespace
+
+std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals, const std::vector<glm::dvec3>& vertices,
+                                     const std::vector<Triangle>& triangles, std::vector<std::int64_t>* fallback) {
   std::vector<glm::dvec3> out(normals.size());
+  bool repairs = false;
   for (std::size_t i = 0; i < normals.size(); ++i) {
-    const glm::dvec3& n = normals[i];
-    if (!finite(n)) throw std::invalid_argument("normals[" + std::to_string(i) + "] contains NaN or infinity");
-    const double scale = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
-    if (!(scale > 0.0)) throw std::invalid_argument("normals[" + std::to_string(i) + "] is the zero vector");
-    out[i] = glm::normalize(n / scale);
+    out[i] = unit_or_zero(normals[i]);
+    repairs = repairs || out[i] == glm::dvec3(0.0);
+  }
+  if (!repairs) return out;
+  std::vector<glm::dvec3> faces(normals.size(), glm::dvec3(0.0));  // Σ of the faces' cross products
+  for (const Triangle& t : triangles) {
+    const glm::dvec3 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    const glm::dvec3 area_normal = glm::cross(b - a, c - a);
+    for (int k = 0; k < 3; ++k) faces[t[k]] += area_normal;
+  }
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    if (out[i] != glm::dvec3(0.0)) continue;
+    out[i] = unit_or_zero(faces[i]);
+    if (out[i] == glm::dvec3(0.0)) out[i] = glm::dvec3(0.0, 0.0, 1.0);
+    if (fallback) fallback->push_back(static_cast<std::int64_t>(i));
   }
   return out;
 }

@@ -22,8 +22,14 @@ void check_points(const char* name, const std::vector<glm::dvec3>& points);
 void check_triangles(const char* name, const std::vector<Triangle>& triangles, std::size_t vertex_count,
                      const char* vertices_name);
 
-/// The normals made unit length; throws std::invalid_argument for non-finite or zero ones.
-std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals);
+/// The normals made unit length. A zero or non-finite normal (Blender's for a vertex of degenerate
+/// faces, an importer's NaN) does not fail the bake: that vertex gets the area-weighted normal of
+/// its faces (the sum of their cross products), or +Z when it has no faces or they cancel, and its
+/// index is appended to `fallback` (when given) so that the caller can warn. `triangles` must be
+/// checked against `vertices` first.
+std::vector<glm::dvec3> unit_normals(const std::vector<glm::dvec3>& normals, const std::vector<glm::dvec3>& vertices,
+                                     const std::vector<Triangle>& triangles,
+                                     std::vector<std::int64_t>* fallback = nullptr);
 
 /// An occlusion ray from `origin` along `dir`, t in [0, ∞) (Embree works in float32).
 inline RTCRay occlusion_ray(const glm::dvec3& origin, const glm::dvec3& dir) {

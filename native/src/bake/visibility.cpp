@@ -65,6 +65,22 @@ void check_pair(const char* name, int s, int s_prime) {
   }
 }
 
+// The bytes a bake allocates: per vertex its results (designs counted at their most nodes,
+// (degree+1)², held twice while flattened) and the recorded rays; per thread the SH values at the
+// escaping rays and a design's matrices (weighted_design_bytes); once the ray set.
+double bake_bytes(const TransferOptions& o, std::size_t vertices) {
+  auto count = [](int order) { return order < 0 ? 0.0 : double(sh_count(order)); };
+  const double rays = o.rays;
+  const int degree = o.design_order < 0 ? -1 : o.design_order + o.design_visibility_order;
+  const double per_vertex = 8.0 * (4 + count(o.visibility_order) + count(o.product_order) * count(o.product_visibility_order) +
+                                   count(o.transfer_order) + 2) +
+                            2.0 * 32.0 * count(degree) + (o.record_rays ? rays : 0.0);
+  const int basis = std::max({o.visibility_order, o.product_order, o.product_visibility_order, o.transfer_order});
+  const double per_thread = rays * (8.0 * count(basis) + 32.0) + (degree < 0 ? 0.0 : weighted_design_bytes(o.rays, degree));
+  const int threads = o.threads > 0 ? o.threads : default_thread_count();
+  return vertices * per_vertex + threads * per_thread + 24.0 * rays;
+}
+
 // ---- the per-vertex work ----
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -239,9 +255,12 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   if (options.design_order >= 0) {
     check_order("design degree s + s'", options.design_order + options.design_visibility_order, kMaxDesignDegree);
   }
+  check_allocation("a bake of " + std::to_string(vertices.size()) + " vertices x " + std::to_string(options.rays) + " rays",
+                   bake_bytes(options, vertices.size()));
   check_points("vertices", vertices);
-  const std::vector<glm::dvec3> units = unit_normals(normals);
   check_triangles("triangles", triangles, vertices.size(), "vertices");
+  std::vector<std::int64_t> fallback_normals;
+  const std::vector<glm::dvec3> units = unit_normals(normals, vertices, triangles, &fallback_normals);
   check_points("occluder vertices", occluders.vertices);
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   if (vertices.size() > std::numeric_limits<unsigned>::max() ||
@@ -276,6 +295,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   bake.product_visibility_order = options.product_visibility_order;
   bake.transfer_order = options.transfer_order;
   bake.design_degree = plan.design_degree;
+  bake.fallback_normals = std::move(fallback_normals);
   bake.ambient_occlusion.assign(n, 0.0);
   bake.visibility.assign(n * plan.visibility_count, 0.0);
   bake.product_matrices.assign(n * plan.product_rows * plan.product_cols, 0.0);

@@ -1,11 +1,17 @@
 // Reading environment images through OpenImageIO and checking their pixels.
 #include "environment/image_io.h"
 
+#include "sdlighting/limits.h"
+
 #include <OpenImageIO/imageio.h>
+
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace sd {
@@ -17,6 +23,26 @@ double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c 
 bool names_linear_space(std::string name) {
   std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return std::tolower(ch); });
   return name.find("linear") != std::string::npos;
+}
+
+// Refuses what is not a non-empty regular file before OpenImageIO opens it: a directory, a FIFO (opening
+// it blocks until a writer comes), a device such as /dev/zero (endless data) or a socket. stat() looks
+// without opening, so nothing here can block or read.
+void check_regular_file(const std::string& path, const std::string& origin) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) {
+    throw std::runtime_error("cannot open " + origin + ": " + std::strerror(errno));
+  }
+  if (S_ISDIR(info.st_mode)) throw std::runtime_error("cannot open " + origin + ": it is a directory, not an image file");
+  if (!S_ISREG(info.st_mode)) {
+    const char* kind = S_ISFIFO(info.st_mode)                                 ? "a FIFO (named pipe)"
+                       : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode)       ? "a device file"
+                       : S_ISSOCK(info.st_mode)                               ? "a socket"
+                                                                              : "not a regular file";
+    throw std::runtime_error("cannot open " + origin + ": it is " + kind +
+                             ", not an image file (refused without reading: it could block or never end)");
+  }
+  if (info.st_size == 0) throw std::runtime_error("cannot open " + origin + ": the file is empty (0 bytes)");
 }
 
 }  // namespace
@@ -49,6 +75,7 @@ void check_finite_pixels(const std::vector<float>& rgb, int width, int height, c
 
 LoadedImage read_image_file(const std::string& path) {
   const std::string origin = "environment map '" + path + "'";
+  check_regular_file(path, origin);
   // Alpha is ignored: ask for the stored (unassociated) colour, never colour × alpha.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
@@ -64,8 +91,13 @@ LoadedImage read_image_file(const std::string& path) {
   if (spec.depth > 1) throw std::invalid_argument(origin + ": volume images are not environment maps");
   const int channels = spec.nchannels;
   if (channels < 1) throw std::invalid_argument(origin + ": the image has no channels");
+  // What OpenImageIO decodes into, and the RGB copy.
+  check_allocation(origin + ": decoding " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
+                       std::to_string(channels) + " pixels",
+                   4.0 * static_cast<double>(texels) * (channels + 3));
   std::vector<float> data(static_cast<size_t>(texels) * channels);
-  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data())) {
+  // A truncated TIFF reads "successfully" with its error only recorded: has_error() catches it.
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data()) || in->has_error()) {
     std::string message = in->geterror();
     if (message.empty()) message = OIIO::geterror();
     if (message.empty()) message = "unknown OpenImageIO error";

@@ -30,7 +30,8 @@ struct LoadedImage {
 /// Reads subimage 0 of a file with OpenImageIO as environment.h's Environment::load() describes:
 /// float data as linear, integer data decoded from sRGB unless the file names a linear space,
 /// grey copied to RGB, alpha ignored. Throws std::runtime_error when the file cannot be opened or
-/// read, std::invalid_argument for an empty image or non-finite values.
+/// read or is not a non-empty regular file (checked with stat first: a FIFO or /dev/zero is
+/// refused without reading), std::invalid_argument for an empty image or non-finite values.
 LoadedImage read_image_file(const std::string& path);
 
 }  // namespace sd

@@ -3,6 +3,7 @@
 #include "quadrature/design_fit.h"
 #include "quadrature/nnls.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "util/number_string.h"
 
 #include <glm/geometric.hpp>
 
@@ -34,6 +35,8 @@ constexpr int kExchangeNodes = 3;
 // orthonormal for the measure): four orders below kDesignTolerance, and near the rounding of the
 // sums, where design_fit's polishing stops a fit that no longer gains.
 constexpr double kFitRelativeTolerance = 1e-14;
+// Weights below this fraction of the largest are left out (validate).
+constexpr double kNegligibleWeight = 1e-20;
 
 double fit_tolerance_for(double mass) { return kFitRelativeTolerance * std::sqrt(mass); }
 
@@ -52,13 +55,17 @@ void drop_zero_weights(SphericalDesign& design) {
 
 struct CleanMeasure {
   std::vector<glm::dvec3> dirs;
-  std::vector<double> weights;
-  double mass = 0.0;
+  std::vector<double> weights;  // divided by `scale`
+  double mass = 0.0;            // of the divided weights
+  double scale = 1.0;           // the largest weight
 };
 
 CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights, int degree) {
   check_order("design degree", degree, kMaxDesignDegree);
   if (dirs.size() != weights.size()) throw std::invalid_argument("dirs and weights differ in length");
+  check_allocation("a weighted design of degree " + std::to_string(degree) + " from " + std::to_string(dirs.size()) +
+                       " directions",
+                   weighted_design_bytes(dirs.size(), degree));
   CleanMeasure measure;
   for (size_t i = 0; i < dirs.size(); ++i) {
     const glm::dvec3& d = dirs[i];
@@ -70,9 +77,28 @@ CleanMeasure validate(const std::vector<glm::dvec3>& dirs, const std::vector<dou
     if (weights[i] == 0.0) continue;
     measure.dirs.push_back(d / length);
     measure.weights.push_back(weights[i]);
-    measure.mass += weights[i];
   }
-  if (!(measure.mass > 0.0)) throw std::invalid_argument("weights sum to zero: the measure is empty");
+  if (measure.weights.empty()) throw std::invalid_argument("weights sum to zero: the measure is empty");
+  // Weights near 1e300 overflow the moments' squares and denormal ones vanish under the fit's
+  // tolerances: the fit sees the weights divided by the largest, weighted_design scales back.
+  // Weights below kNegligibleWeight of the largest are left out: kMaxCallBytes admits at most
+  // ~1e8 / (k+1)² points, so together they move no moment by more than 1e8 × kNegligibleWeight ×
+  // √(2k+1) / (k+1)² < 1e-11 of the mass (below kDesignTolerance), but they would make the weighted
+  // Vandermonde's QR keep columns known only to 1e-30.
+  measure.scale = *std::max_element(measure.weights.begin(), measure.weights.end());
+  size_t kept = 0;
+  for (size_t i = 0; i < measure.weights.size(); ++i) {
+    const double w = measure.weights[i] / measure.scale;
+    if (w < kNegligibleWeight) continue;
+    measure.dirs[kept] = measure.dirs[i];
+    measure.weights[kept++] = w;
+    measure.mass += w;
+  }
+  measure.dirs.resize(kept);
+  measure.weights.resize(kept);
+  if (!std::isfinite(measure.mass * measure.scale)) {
+    throw std::invalid_argument("weights sum beyond the double range (largest " + number_string(measure.scale) + ")");
+  }
   return measure;
 }
 
@@ -229,7 +255,7 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
   }
   if (!certified(best)) {
     throw std::runtime_error("Tchakaloff compression of degree " + std::to_string(samples.degree) +
-                             " failed certification: residual " + std::to_string(best.residual));
+                             " failed certification: residual " + number_string(best.residual));
   }
 
   const int generic = std::max(1, (rank + 2) / 3);
@@ -243,10 +269,11 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
                                 int degree, const SphericalDesign* start, const std::function<bool()>& stop) {
   const CleanMeasure measure = validate(dirs, weights, degree);
   const Samples samples(measure, degree);
-  if (start != nullptr && start->degree == degree && start->size() > 0) {
-    if (std::optional<SphericalDesign> design = refit(measure, samples, *start, stop)) return std::move(*design);
-  }
-  return compress(measure, samples, stop);
+  std::optional<SphericalDesign> design;
+  if (start != nullptr && start->degree == degree && start->size() > 0) design = refit(measure, samples, *start, stop);
+  if (!design) design = compress(measure, samples, stop);
+  for (double& w : design->weights) w *= measure.scale;
+  return std::move(*design);
 }
 
 }  // namespace sd

@@ -3,6 +3,7 @@
 #include "quadrature/design_fit.h"
 #include "sh/azimuthal_power.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "util/number_string.h"
 
 #include <glm/geometric.hpp>
 
@@ -209,7 +210,7 @@ class ZonalDesignBuilder {
   void certify(SphericalDesign& design) const {
     if (!try_certify(design)) {
       throw std::runtime_error("zonal design of degree " + std::to_string(degree_) + " by " + design.method +
-                               " failed certification: residual " + std::to_string(design.residual));
+                               " failed certification: residual " + number_string(design.residual));
     }
   }
 

@@ -1,12 +1,14 @@
 #include "sdlighting/gaunt.h"
 
 #include "sdlighting/gauss_quadrature.h"
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_harmonics.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 
 namespace sd {
 namespace {
@@ -49,6 +51,17 @@ std::vector<GauntEntry> gaunt_coefficients(int order_a, int order_b, int order_c
   if (order_a < 0 || order_b < 0 || order_c < 0) {
     throw std::invalid_argument("gaunt_coefficients: orders must be non-negative");
   }
+  // At most two m_c per (a, b, l_c) pass the m rule below (the parity of the sines fixes the sign).
+  double most_entries = 0.0;
+  for (int la = 0; la <= order_a; ++la) {
+    for (int lb = 0; lb <= order_b; ++lb) {
+      const int lc_end = std::min(la + lb, order_c);
+      if (lc_end >= std::abs(la - lb)) most_entries += 2.0 * (2 * la + 1) * (2 * lb + 1) * ((lc_end - std::abs(la - lb)) / 2 + 1);
+    }
+  }
+  check_allocation("gaunt_coefficients(" + std::to_string(order_a) + ", " + std::to_string(order_b) + ", " +
+                       std::to_string(order_c) + ")",
+                   most_entries * sizeof(GauntEntry));
   // y_lm = Θ_l|m|(z) Φ_m(φ), so the product rule (Gauss–Legendre in z × any exact rule in φ)
   // factorises: each coefficient is an exact z-sum times the azimuthal_integral. For a triple
   // allowed by the m rule, |ma| + |mb| + |mc| is even, so Θ_a Θ_b Θ_c is a polynomial in z of

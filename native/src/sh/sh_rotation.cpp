@@ -6,6 +6,11 @@
 
 #include "sdlighting/limits.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "util/number_string.h"
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include <glm/matrix.hpp>
 
@@ -17,7 +22,9 @@
 namespace sd {
 namespace {
 
-constexpr double kRotationTolerance = 1e-9;
+// ‖RᵀR − I‖_F accepted: float32 rotations (a Blender matrix_world) reach a few 1e-7; a matrix
+// 1e-5 from orthogonal is no rounding artefact but a scale or shear.
+constexpr double kRotationTolerance = 1e-5;
 
 // Ivanic & Ruedenberg index band matrices by m, n ∈ [-l, l]; storing them row-major with offset l
 // lets the recurrence be written in the paper's notation.
@@ -97,36 +104,37 @@ std::vector<double> band_from_previous(int l, const std::vector<double>& band1,
   return band;
 }
 
-void validate_rotation(const glm::dmat3& rotation) {
+// The proper rotation nearest to `rotation` (its polar factor U Vᵀ), after checking that it is one up
+// to kRotationTolerance: Blender hands over float32 matrices, orthogonal only to about 1e-7, and
+// the band recurrence would carry such a defect into every band, so the bands are built from the
+// exactly orthogonal polar factor instead.
+glm::dmat3 proper_rotation(const glm::dmat3& rotation) {
+  Eigen::Matrix3d r;
   for (int col = 0; col < 3; ++col) {
     for (int row = 0; row < 3; ++row) {
       if (!std::isfinite(rotation[col][row])) {
         throw std::invalid_argument("ShRotation: rotation matrix has a non-finite entry");
       }
+      r(row, col) = rotation[col][row];
     }
   }
-  // RᵀR − I in the Frobenius norm; columns of a glm matrix are rotation[col].
-  double defect = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      double dot = 0.0;
-      for (int k = 0; k < 3; ++k) dot += rotation[i][k] * rotation[j][k];
-      const double e = dot - (i == j ? 1.0 : 0.0);
-      defect += e * e;
-    }
-  }
-  defect = std::sqrt(defect);
+  const double defect = (r.transpose() * r - Eigen::Matrix3d::Identity()).norm();  // Frobenius
   if (!(defect <= kRotationTolerance)) {
-    throw std::invalid_argument("ShRotation: matrix is not orthogonal (||R^T R - I||_F = " +
-                                std::to_string(defect) + ")");
+    throw std::invalid_argument("ShRotation: matrix is not orthogonal (||R^T R - I||_F = " + number_string(defect) +
+                                ", tolerance " + number_string(kRotationTolerance) + ")");
   }
-  const glm::dvec3 c0 = rotation[0], c1 = rotation[1], c2 = rotation[2];
-  const double det = c0.x * (c1.y * c2.z - c1.z * c2.y) - c1.x * (c0.y * c2.z - c0.z * c2.y) +
-                     c2.x * (c0.y * c1.z - c0.z * c1.y);
-  if (!(std::abs(det - 1.0) <= kRotationTolerance)) {
-    throw std::invalid_argument("ShRotation: matrix is not a proper rotation (det = " +
-                                std::to_string(det) + ")");
+  const double det = r.determinant();
+  if (det < 0.0) {
+    throw std::invalid_argument("ShRotation: matrix is a reflection (det = " + number_string(det) +
+                                "), not a rotation");
   }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d polar = svd.matrixU() * svd.matrixV().transpose();
+  glm::dmat3 out;
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) out[col][row] = polar(row, col);
+  }
+  return out;
 }
 
 // out = D in, band by band; kChannels > 0 fixes the channel count at compile time, 0 means `channels`.
@@ -156,7 +164,7 @@ void apply_bands(const std::vector<std::vector<double>>& bands, int order, const
 
 ShRotation::ShRotation(const glm::dmat3& rotation, int order) : order_(order) {
   check_order("ShRotation: order", order, kMaxShOrder);
-  validate_rotation(rotation);
+  const glm::dmat3 r = proper_rotation(rotation);
 
   bands_.reserve(order + 1);
   bands_.push_back({1.0});
@@ -169,7 +177,7 @@ ShRotation::ShRotation(const glm::dmat3& rotation, int order) : order_(order) {
   const int axis[3] = {1, 2, 0};
   std::vector<double> band1(9);
   for (int m = 0; m < 3; ++m) {
-    for (int n = 0; n < 3; ++n) band1[m * 3 + n] = rotation[axis[n]][axis[m]];
+    for (int n = 0; n < 3; ++n) band1[m * 3 + n] = r[axis[n]][axis[m]];
   }
   bands_.push_back(band1);
   for (int l = 2; l <= order; ++l) bands_.push_back(band_from_previous(l, bands_[1], bands_[l - 1]));

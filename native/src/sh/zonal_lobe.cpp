@@ -1,5 +1,7 @@
 #include "sdlighting/zonal_lobe.h"
 
+#include "util/number_string.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -9,7 +11,7 @@ ZonalLobe ZonalLobe::phong(double exponent) {
   if (!(exponent >= 0.0 && exponent <= kMaxPhongExponent)) {
     throw std::invalid_argument("Phong exponent must be in [0, " +
                                 std::to_string(static_cast<long long>(kMaxPhongExponent)) + "], got " +
-                                std::to_string(exponent));
+                                number_string(exponent));
   }
   return ZonalLobe{exponent};
 }

@@ -25,8 +25,8 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   if (normals.size() != vertices.size()) throw std::invalid_argument("normals must match vertices");
   if (material.glossy && views.size() != vertices.size()) throw std::invalid_argument("a glossy material needs one view per vertex");
   check_points("vertices", vertices);
-  const std::vector<glm::dvec3> unit = unit_normals(normals);
   check_triangles("triangles", triangles, vertices.size(), "vertices");
+  const std::vector<glm::dvec3> unit = unit_normals(normals, vertices, triangles);  // the bake's fallbacks
   check_points("occluder vertices", occluders.vertices);
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   const ZonalLobe lobe = material.lobe();

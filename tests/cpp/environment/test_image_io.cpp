@@ -6,6 +6,7 @@
 #include "sdlighting/spherical_harmonics.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sd {
@@ -71,6 +73,60 @@ TEST(EnvironmentFiles, MissingEmptyAndGarbageFilesThrowWithPath) {
   std::array<std::string, 6> faces;
   faces.fill(missing);
   EXPECT_THROW(Environment::load_cube(faces), std::runtime_error);
+}
+
+TEST(EnvironmentFiles, DirectoriesFifosAndDevicesAreRefusedWithoutReading) {
+  // Before the stat check a FIFO blocked in open() for a writer and /dev/zero was read forever.
+  const std::string fifo = temp_path("pipe.exr");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const std::string directory = temp_path("folder.exr");
+  std::filesystem::create_directory(directory);
+  const std::pair<std::string, std::string> cases[] = {
+      {fifo, "a FIFO"}, {"/dev/zero", "a device file"}, {directory, "a directory"}};
+  for (const auto& [path, kind] : cases) {
+    try {
+      Environment::load(path);
+      FAIL() << path << " loaded";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(kind), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(EnvironmentFiles, TruncatedFilesThrow) {
+  std::mt19937_64 rng(9);
+  const std::vector<float> rgb = random_pixels(64 * 32 * 3, 4.0f, rng);
+  const std::vector<unsigned char> bytes(64 * 32 * 3, 200);
+  // A cut TIFF read "successfully" with its error only recorded, as a black lower half.
+  const std::pair<const char*, bool> files[] = {
+      {"cut.exr", true}, {"cut.hdr", true}, {"cut.tif", true}, {"cut.png", false}, {"cut.jpg", false}};
+  for (const auto& [name, floats] : files) {
+    const std::string path = temp_path(name);
+    if (floats) {
+      write_image(path, 64, 32, 3, rgb, OIIO::TypeDesc::FLOAT);
+    } else {
+      write_image(path, 64, 32, 3, bytes, OIIO::TypeDesc::UINT8);
+    }
+    std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
+    EXPECT_THROW(Environment::load(path), std::runtime_error) << name;
+  }
+}
+
+TEST(EnvironmentFiles, SixteenThousandWideEightBitJpegAndPngLoad) {
+  constexpr int kWidth = 16384, kHeight = 8;
+  const std::vector<unsigned char> rgb(static_cast<size_t>(kWidth) * kHeight * 3, 188);
+  const double linear = std::pow((188.0 / 255.0 + 0.055) / 1.055, 2.4);
+  for (const char* name : {"wide.jpg", "wide.png"}) {
+    const std::string path = temp_path(name);
+    write_image(path, kWidth, kHeight, 3, rgb, OIIO::TypeDesc::UINT8);
+    const Environment env = Environment::load(path);
+    EXPECT_EQ(env.width(), kWidth);
+    EXPECT_EQ(env.height(), kHeight);
+    // A flat JPEG decodes to within one level of 188: about 1 % in linear light.
+    for (float v : env.pixels()) ASSERT_NEAR(v, linear, 0.012 * linear) << name;
+    EXPECT_NEAR(env.sh(4)[0], linear, 0.012 * linear) << name;
+  }
 }
 
 TEST(EnvironmentFiles, FloatFilesRoundTripAndNaNFilesThrow) {

@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <stdexcept>
 
 namespace sd {
@@ -212,7 +214,7 @@ TEST(ShRotation, RejectsInvalidInput) {
   EXPECT_THROW(ShRotation(reflection, 4), std::invalid_argument);
   EXPECT_THROW(ShRotation(-r, 4), std::invalid_argument);
   glm::dmat3 skewed = r;
-  skewed[0][1] += 1e-6;
+  skewed[0][1] += 1e-4;
   EXPECT_THROW(ShRotation(skewed, 4), std::invalid_argument);
   glm::dmat3 nan = r;
   nan[1][2] = std::numeric_limits<double>::quiet_NaN();
@@ -223,10 +225,42 @@ TEST(ShRotation, RejectsInvalidInput) {
   EXPECT_THROW(ShRotation(r, -1), std::invalid_argument);
   EXPECT_THROW(ShRotation(r, 65), std::invalid_argument);
   EXPECT_NO_THROW(ShRotation(r, 64));
-  // Defects far below the 1e-9 tolerance are accepted.
+  // Defects far below the 1e-5 tolerance are accepted.
   glm::dmat3 nearly = r;
   nearly[0][1] += 1e-12;
   EXPECT_NO_THROW(ShRotation(nearly, 4));
+}
+
+TEST(ShRotation, ReflectionsAreNamedAndFloat32RotationsAccepted) {
+  std::mt19937_64 rng(32);
+  const glm::dmat3 r = random_rotation(rng);
+  try {
+    ShRotation(-r, 2);
+    FAIL() << "a reflection accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("a reflection (det = -1), not a rotation"), std::string::npos) << e.what();
+  }
+  try {
+    glm::dmat3 scaled = r;
+    scaled[1] *= 1.001;
+    ShRotation(scaled, 2);
+    FAIL() << "a scaled matrix accepted";
+  } catch (const std::invalid_argument& e) {
+    // %g, not std::to_string's "0.000000" or "0.002001".
+    EXPECT_NE(std::string(e.what()).find("= 0.002001, tolerance 1e-05"), std::string::npos) << e.what();
+  }
+  // R rounded to float32 (defect ~1e-7): accepted, and D(R) is as orthogonal and as close to
+  // D(R) of the exact rotation as the rounding allows.
+  const glm::dmat3 rounded = glm::dmat3(glm::mat3(r));
+  const int order = 16;
+  const ShRotation exact(r, order), from_float(rounded, order);
+  for (int l = 0; l <= order; ++l) {
+    EXPECT_LT(band_orthogonality_defect(from_float, l), kExact) << "l=" << l;
+    const int size = 2 * l + 1;
+    for (int q = 0; q < size * size; ++q) {
+      ASSERT_NEAR(from_float.band(l)[q], exact.band(l)[q], 1e-6 * (l + 1)) << "l=" << l;
+    }
+  }
 }
 
 }  // namespace

@@ -97,8 +97,11 @@ TEST(Reference, RejectsBadInput) {
   EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 1}}, {}, {}, Material::lambert(), options),
                std::invalid_argument);
   options.samples = 10;
-  EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 0}}, {}, {}, Material::lambert(), options),
+  EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 1}, {0, 0, 1}}, {}, {}, Material::lambert(),
+                               options),
                std::invalid_argument);
+  // A zero normal gets the bake's fallback (+Z for a vertex without faces), as in bake_transfer.
+  EXPECT_NO_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 0}}, {}, {}, Material::lambert(), options));
   EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 1}}, {}, {}, Material::phong(8.0), options),
                std::invalid_argument);
 }

@@ -29,6 +29,33 @@ sd::SphericalDesign compute_zonal_design(const std::string& lobe, double exponen
   return sd::zonal_design(sd::ZonalWeight::from_lobe(zonal_lobe), degree, design_method);
 }
 
+sd::SphericalDesign compute_continued_design(const std::string& lobe, double exponent, int degree,
+                                            double start_exponent, const DoubleArray& start_nodes,
+                                            const DoubleArray& start_weights) {
+  check_design_degree(degree);
+  const sd::ZonalLobe zonal_lobe = sd::ZonalLobe::from_name(lobe, exponent);
+  const sd::ZonalLobe start_lobe = sd::ZonalLobe::from_name(lobe, start_exponent);
+  if (start_nodes.ndim() != 2 || start_nodes.shape(1) != 3 || start_nodes.shape(0) == 0) {
+    value_error("start_nodes must have shape (N, 3), N >= 1, got " + shape_string(start_nodes));
+  }
+  const size_t n = static_cast<size_t>(start_nodes.shape(0));
+  if (start_weights.ndim() != 1 || static_cast<size_t>(start_weights.shape(0)) != n) {
+    value_error("start_weights must have shape (" + std::to_string(n) + ",) to match start_nodes, got " +
+                shape_string(start_weights));
+  }
+  check_finite("start_weights", start_weights.data(), n);
+  sd::SphericalDesign start;
+  start.degree = degree;
+  start.nodes = read_directions("start_nodes", start_nodes, false);
+  start.weights.assign(start_weights.data(), start_weights.data() + n);
+  for (size_t i = 0; i < n; ++i) {
+    if (!(start.weights[i] > 0.0)) value_error("start_weights must be positive, start_weights[" + std::to_string(i) + "] <= 0");
+  }
+  py::gil_scoped_release release;
+  return sd::zonal_design_continued(sd::ZonalWeight::from_lobe(zonal_lobe), degree,
+                                    sd::ZonalWeight::from_lobe(start_lobe), start);
+}
+
 sd::SphericalDesign compute_tabulated_design(const DoubleArray& t, const DoubleArray& w, int degree,
                                              const std::string& method) {
   check_design_degree(degree);
@@ -88,6 +115,22 @@ method: "gauss" (Gauss product rule, or its Radau variant with the pole as a nod
         (gradient projection, eq. 14), or "auto" (the smaller of both).
 Returns (nodes, weights): nodes of shape (N, 3) (unit vectors), weights of shape (N,), all
 positive, summing to 1. Raises RuntimeError if no design can be certified. Releases the GIL.)doc");
+
+  m.def(
+      "zonal_design_continued",
+      [](const std::string& lobe, double exponent, int degree, double start_exponent, const DoubleArray& start_nodes,
+         const DoubleArray& start_weights) {
+        return design_tuple(
+            compute_continued_design(lobe, exponent, degree, start_exponent, start_nodes, start_weights));
+      },
+      py::arg("lobe"), py::arg("exponent"), py::arg("degree"), py::arg("start_exponent"), py::arg("start_nodes"),
+      py::arg("start_weights"),
+      R"doc(As zonal_design, continued from a design of the same lobe and degree at a neighbouring
+exponent (start_nodes (N, 3), start_weights (N,), positive): each node moves along its meridian to
+the same fraction of the lobe's mass, then gradient projection refits the design and removes nodes
+while it certifies. Much faster than zonal_design's search, with about as many nodes as the start;
+falls back to zonal_design when the moved design does not certify. Returns (nodes, weights),
+certified like zonal_design's. Releases the GIL.)doc");
 
   m.def(
       "zonal_design_tabulated",

@@ -171,14 +171,29 @@ def test_a_corrupt_file_is_rebuilt(tmp_path, sdnative):
 def test_builds_continue_from_the_nearest_exponent(tmp_path, sdnative):
     for exponent in (8.0, 64.0, 1000.0):
         _saved(tmp_path, sdnative, design_key("phong", exponent, 6))
+    _saved(tmp_path, sdnative, design_key("phong", 30.0, 7))   # another degree: not a start
     sd = _Recording(sdnative)
     designs = LobeDesigns(sd, str(tmp_path))
-    designs.get("phong", 50.0, 6)
+    designs.get("phong", 40.0, 6)
     assert designs.wait(60)
-    assert ("zonal_design_continued", 50.0, 6, 64.0) in sd.calls
-    final = designs.get("phong", 50.0, 6)
+    # from 64 towards 40 in steps of at most CONTINUATION_STEP in sigma + 1
+    steps = [c for c in sd.calls if c[0] == "zonal_design_continued"]
+    assert steps[0][3] == 64.0 and steps[-1][1] == 40.0
+    assert all(1.0 / 1.25 - 1e-12 <= (b[1] + 1) / (b[3] + 1) < 1.0 for b in steps)
+    assert not [c for c in sd.calls if c[0] == "zonal_design" and c[3] != "gauss"]
+    final = designs.get("phong", 40.0, 6)
     assert final.final
-    lobe_designs.certify(sdnative, design_key("phong", 50.0, 6), final.nodes, final.weights)
+    lobe_designs.certify(sdnative, design_key("phong", 40.0, 6), final.nodes, final.weights)
+
+
+def test_lambert_and_phong_continue_into_each_other(tmp_path, sdnative):
+    _saved(tmp_path, sdnative, design_key("lambert", 1.0, 6))   # Phong sigma = 1
+    sd = _Recording(sdnative)
+    designs = LobeDesigns(sd, str(tmp_path))
+    designs.get("phong", 1.2, 6)
+    assert designs.wait(60)
+    assert ("zonal_design_continued", 1.2, 6, 1.0) in sd.calls
+    assert designs.get("phong", 1.2, 6).final
 
 
 def test_an_unwritable_cache_still_builds(tmp_path, sdnative):

@@ -6,8 +6,8 @@ to minutes (degree 18 and up); the draw must never wait for it. `LobeDesigns.get
 with the design from memory or from its file, or else with the Gauss product rule of the same
 degree (msd-notes, "Gauss product": certified, built in milliseconds, only more nodes, so the
 shading is already exact) while one worker thread builds the small design - continued from the
-design of the nearest exponent already known, which is much faster than a search from scratch
-(sdnative.zonal_design_continued) - and stores it.
+design of the nearest exponent already known through the lobes in between, which is much faster
+than a search from scratch (sdnative.zonal_design_continued) - and stores it.
 
 Files: one JSON file per design, `<directory>/<lobe>-<exponent>-<degree>.json`, holding FORMAT,
 VERSION, the key and the nodes and weights as exact decimal doubles. A file is used only after its
@@ -33,6 +33,11 @@ log = logging.getLogger(__name__)
 FORMAT = "sd_lighting lobe design"
 VERSION = 1
 LOBES = ("lambert", "phong")
+# Continuation steps: sigma + 1 grows by at most this factor per step (each takes tens of
+# milliseconds at degree 10; steps of 1.25 almost always certify, twice that often does not),
+# halved up to CONTINUATION_HALVINGS times where a step fails, before a search from scratch.
+CONTINUATION_STEP = 1.25
+CONTINUATION_HALVINGS = 3
 
 DesignKey = namedtuple("DesignKey", "lobe exponent degree")
 
@@ -169,9 +174,15 @@ class DesignFiles:
         return out
 
 
+def _phong_exponent(key):
+    """The key's lobe as a Phong lobe, the family continuation moves in: Lambert's weight
+    4 max(0, t) is Phong's (2 sigma + 2) max(0, t)^sigma at sigma = 1."""
+    return 1.0 if key.lobe == "lambert" else key.exponent
+
+
 def _distance(a, b):
-    """How far apart two exponents are for continuation: the lobe's width scales as 1/(sigma+1)."""
-    return abs(math.log((a + 1.0) / (b + 1.0)))
+    """How far apart two lobes are for continuation: a Phong lobe's width scales as 1/(sigma+1)."""
+    return abs(math.log((_phong_exponent(a) + 1.0) / (_phong_exponent(b) + 1.0)))
 
 
 class LobeDesigns:
@@ -244,13 +255,12 @@ class LobeDesigns:
             self._queue.clear()
 
     def _neighbour(self, key):
-        """The final design of the same lobe and degree with the nearest exponent, or None."""
+        """The final design of the same degree whose lobe is nearest, or None."""
         with self._lock:
-            known = [k for k in self._designs if k.lobe == key.lobe and k.degree == key.degree]
-        candidates = set(known)
-        candidates.update(k for k in self.files.keys() if k.lobe == key.lobe and k.degree == key.degree)
+            candidates = {k for k in self._designs if k.degree == key.degree}
+        candidates.update(k for k in self.files.keys() if k.degree == key.degree)
         candidates.discard(key)
-        for other in sorted(candidates, key=lambda k: _distance(k.exponent, key.exponent)):
+        for other in sorted(candidates, key=lambda k: _distance(k, key)):
             with self._lock:
                 design = self._designs.get(other)
             design = design or self.files.load(other)
@@ -260,15 +270,35 @@ class LobeDesigns:
 
     def _build(self, key):
         neighbour = self._neighbour(key)
-        if neighbour is None:
+        design = self._continue(key, *neighbour) if neighbour is not None else None
+        if design is None:
             nodes, weights = self._sd.zonal_design(key.lobe, key.exponent, key.degree)
-        else:
-            start_key, start = neighbour
-            nodes, weights = self._sd.zonal_design_continued(
-                key.lobe, key.exponent, key.degree, start_key.exponent, start.nodes, start.weights)
-        design = Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), True)
+            design = Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), True)
         certify(self._sd, key, design.nodes, design.weights)
         return design
+
+    def _continue(self, key, start_key, start):
+        """The key's design continued from a neighbour's along the lobes in between (steps
+        geometric in sigma + 1), or None where a step fails even when halved."""
+        goal = _phong_exponent(key)
+        exponent, nodes, weights = _phong_exponent(start_key), start.nodes, start.weights
+        step = math.log(CONTINUATION_STEP)
+        halvings = 0
+        while exponent != goal:
+            distance = math.log((goal + 1.0) / (exponent + 1.0))
+            if abs(distance) <= step:
+                target = goal
+            else:
+                target = (exponent + 1.0) * math.exp(math.copysign(step, distance)) - 1.0
+            found = self._sd.zonal_design_continued("phong", target, key.degree, exponent, nodes, weights)
+            if found is None:
+                halvings += 1
+                if halvings > CONTINUATION_HALVINGS:
+                    return None
+                step /= 2.0
+                continue
+            exponent, (nodes, weights) = target, found
+        return Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), True)
 
     def _work(self):
         while True:

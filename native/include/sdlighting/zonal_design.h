@@ -6,6 +6,7 @@
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/zonal_lobe.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,11 +69,12 @@ SphericalDesign zonal_design(const ZonalWeight& weight, int degree, DesignMethod
 /// neighbouring weight `start_weight` (the lobe at a nearby exponent): every node keeps its
 /// azimuth and moves along its meridian to where the same fraction of the mass lies closer to the
 /// pole, then gradient projection (eq. 14) refits the design and removes nodes while it still
-/// certifies. Much faster than zonal_design's search, with about as many nodes as the start. Falls
-/// back to zonal_design (Auto) when the moved design does not certify; returns the Gauss product
-/// rule instead when that is smaller. Throws std::invalid_argument for a degree out of range or a
-/// start of another degree.
-SphericalDesign zonal_design_continued(const ZonalWeight& weight, int degree, const ZonalWeight& start_weight,
-                                       const SphericalDesign& start);
+/// certifies; the Gauss product rule instead when that is smaller. Milliseconds where
+/// zonal_design's search takes seconds to minutes, with about as many nodes as the start (often
+/// fewer than the search finds). std::nullopt when the moved design does not refit to a certified
+/// one (the step was too large: continue in smaller steps, or use zonal_design). Throws
+/// std::invalid_argument for a degree out of range or a start of another degree.
+std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start);
 
 }  // namespace sd

@@ -353,8 +353,8 @@ Recurrence ZonalWeight::radial_recurrence(int m, int n) const {
   return discrete_recurrence(nodes_, w, n);
 }
 
-SphericalDesign zonal_design_continued(const ZonalWeight& weight, int degree, const ZonalWeight& start_weight,
-                                       const SphericalDesign& start) {
+std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start) {
   check_order("design degree", degree, kMaxDesignDegree);
   if (start.degree != degree || start.size() == 0 || start.weights.size() != start.nodes.size()) {
     throw std::invalid_argument("zonal_design_continued needs a start design of degree " + std::to_string(degree) +
@@ -362,7 +362,7 @@ SphericalDesign zonal_design_continued(const ZonalWeight& weight, int degree, co
   }
   ZonalDesignBuilder builder(weight, degree);
   std::optional<SphericalDesign> continued = builder.continued(start_weight, start);
-  if (!continued) return zonal_design(weight, degree, DesignMethod::Auto);
+  if (!continued) return std::nullopt;
   SphericalDesign gauss = builder.gauss();
   return continued->size() < gauss.size() ? *continued : gauss;
 }

@@ -268,7 +268,10 @@ class LobeDesigns:
                 return other, design
         return None
 
-    def _build(self, key):
+    def build(self, key):
+        """The key's final design, built now in the calling thread (the worker's step; benchmarks):
+        continued from the nearest design of the same degree known in memory or on disk, else
+        searched from scratch; certified."""
         neighbour = self._neighbour(key)
         design = self._continue(key, *neighbour) if neighbour is not None else None
         if design is None:
@@ -309,7 +312,7 @@ class LobeDesigns:
                 key = self._queue[0]
             design, failure = None, None
             try:
-                design = self._build(key)
+                design = self.build(key)
             except Exception as exc:  # a failed build keeps the Gauss rule; the panel says why
                 failure = "%s: %s" % (type(exc).__name__, exc)
                 log.error("lobe design %s: %s", key, failure)

@@ -32,7 +32,7 @@ sd::SphericalDesign compute_zonal_design(const std::string& lobe, double exponen
 
 std::optional<sd::SphericalDesign> compute_continued_design(const std::string& lobe, double exponent, int degree,
                                             double start_exponent, const DoubleArray& start_nodes,
-                                            const DoubleArray& start_weights) {
+                                            const DoubleArray& start_weights, bool thin) {
   check_design_degree(degree);
   const sd::ZonalLobe zonal_lobe = sd::ZonalLobe::from_name(lobe, exponent);
   const sd::ZonalLobe start_lobe = sd::ZonalLobe::from_name(lobe, start_exponent);
@@ -54,7 +54,7 @@ std::optional<sd::SphericalDesign> compute_continued_design(const std::string& l
   }
   py::gil_scoped_release release;
   return sd::zonal_design_continued(sd::ZonalWeight::from_lobe(zonal_lobe), degree,
-                                    sd::ZonalWeight::from_lobe(start_lobe), start);
+                                    sd::ZonalWeight::from_lobe(start_lobe), start, thin);
 }
 
 sd::SphericalDesign compute_tabulated_design(const DoubleArray& t, const DoubleArray& w, int degree,
@@ -120,17 +120,17 @@ positive, summing to 1. Raises RuntimeError if no design can be certified. Relea
   m.def(
       "zonal_design_continued",
       [](const std::string& lobe, double exponent, int degree, double start_exponent, const DoubleArray& start_nodes,
-         const DoubleArray& start_weights) {
+         const DoubleArray& start_weights, bool thin) {
         const std::optional<sd::SphericalDesign> design =
-            compute_continued_design(lobe, exponent, degree, start_exponent, start_nodes, start_weights);
+            compute_continued_design(lobe, exponent, degree, start_exponent, start_nodes, start_weights, thin);
         return design ? py::object(design_tuple(*design)) : py::object(py::none());
       },
       py::arg("lobe"), py::arg("exponent"), py::arg("degree"), py::arg("start_exponent"), py::arg("start_nodes"),
-      py::arg("start_weights"),
+      py::arg("start_weights"), py::arg("thin") = true,
       R"doc(As zonal_design, continued from a design of the same lobe and degree at a neighbouring
 exponent (start_nodes (N, 3), start_weights (N,), positive): each node moves along its meridian to
-the same fraction of the lobe's mass, then gradient projection refits the design and removes nodes
-while it certifies. Milliseconds where zonal_design's search takes seconds to minutes, with about as
+the same fraction of the lobe's mass, then gradient projection refits the design and, if thin,
+removes nodes while it certifies (costly at high degrees: for the last of a chain of steps). Milliseconds where zonal_design's search takes seconds to minutes, with about as
 many nodes as the start. Returns (nodes, weights), certified like zonal_design's, or None when the
 moved design does not refit to a certified one (the step was too large: continue in smaller steps,
 or call zonal_design). Releases the GIL.)doc");

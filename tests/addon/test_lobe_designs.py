@@ -117,10 +117,10 @@ class _Recording:
             self.release.wait(30)
         return self._sd.zonal_design(lobe, exponent, degree, method)
 
-    def zonal_design_continued(self, lobe, exponent, degree, start_exponent, nodes, weights):
-        self.calls.append(("zonal_design_continued", exponent, degree, start_exponent))
+    def zonal_design_continued(self, lobe, exponent, degree, start_exponent, nodes, weights, thin=True):
+        self.calls.append(("zonal_design_continued", exponent, degree, start_exponent, thin))
         self.release.wait(30)
-        return self._sd.zonal_design_continued(lobe, exponent, degree, start_exponent, nodes, weights)
+        return self._sd.zonal_design_continued(lobe, exponent, degree, start_exponent, nodes, weights, thin=thin)
 
 
 def test_get_never_waits_for_a_build(tmp_path, sdnative):
@@ -180,6 +180,7 @@ def test_builds_continue_from_the_nearest_exponent(tmp_path, sdnative):
     steps = [c for c in sd.calls if c[0] == "zonal_design_continued"]
     assert steps[0][3] == 64.0 and steps[-1][1] == 40.0
     assert all(1.0 / 1.25 - 1e-12 <= (b[1] + 1) / (b[3] + 1) < 1.0 for b in steps)
+    assert [b[4] for b in steps] == [False] * (len(steps) - 1) + [True]   # thinned where it ends
     assert not [c for c in sd.calls if c[0] == "zonal_design" and c[3] != "gauss"]
     final = designs.get("phong", 40.0, 6)
     assert final.final
@@ -192,7 +193,7 @@ def test_lambert_and_phong_continue_into_each_other(tmp_path, sdnative):
     designs = LobeDesigns(sd, str(tmp_path))
     designs.get("phong", 1.2, 6)
     assert designs.wait(60)
-    assert ("zonal_design_continued", 1.2, 6, 1.0) in sd.calls
+    assert ("zonal_design_continued", 1.2, 6, 1.0, True) in sd.calls
     assert designs.get("phong", 1.2, 6).final
 
 

@@ -33,11 +33,12 @@ log = logging.getLogger(__name__)
 FORMAT = "sd_lighting lobe design"
 VERSION = 1
 LOBES = ("lambert", "phong")
-# Continuation steps: sigma + 1 grows by at most this factor per step (each takes tens of
-# milliseconds at degree 10; steps of 1.25 almost always certify, twice that often does not),
-# halved up to CONTINUATION_HALVINGS times where a step fails, before a search from scratch.
+# Continuation steps: sigma + 1 changes by at most this factor per step (tens of milliseconds at
+# degree 10; 1.25 almost always certifies, twice that often does not). A step that fails is
+# halved for the rest of the way (growing it back fails again: measured at degrees 12, 14); after
+# CONTINUATION_HALVINGS halvings the build searches from scratch instead.
 CONTINUATION_STEP = 1.25
-CONTINUATION_HALVINGS = 3
+CONTINUATION_HALVINGS = 4
 
 DesignKey = namedtuple("DesignKey", "lobe exponent degree")
 
@@ -285,20 +286,20 @@ class LobeDesigns:
         geometric in sigma + 1), or None where a step fails even when halved."""
         goal = _phong_exponent(key)
         exponent, nodes, weights = _phong_exponent(start_key), start.nodes, start.weights
-        step = math.log(CONTINUATION_STEP)
-        halvings = 0
+        longest = math.log(CONTINUATION_STEP)
+        step = longest
         while exponent != goal:
             distance = math.log((goal + 1.0) / (exponent + 1.0))
             if abs(distance) <= step:
                 target = goal
             else:
                 target = (exponent + 1.0) * math.exp(math.copysign(step, distance)) - 1.0
-            found = self._sd.zonal_design_continued("phong", target, key.degree, exponent, nodes, weights)
+            found = self._sd.zonal_design_continued("phong", target, key.degree, exponent, nodes, weights,
+                                                    thin=target == goal)
             if found is None:
-                halvings += 1
-                if halvings > CONTINUATION_HALVINGS:
-                    return None
                 step /= 2.0
+                if step < longest / 2 ** CONTINUATION_HALVINGS:
+                    return None
                 continue
             exponent, (nodes, weights) = target, found
         return Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), True)

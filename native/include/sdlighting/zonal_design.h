@@ -68,13 +68,15 @@ SphericalDesign zonal_design(const ZonalWeight& weight, int degree, DesignMethod
 /// The design of `degree` for `weight` continued from `start`, a design of the same degree for a
 /// neighbouring weight `start_weight` (the lobe at a nearby exponent): every node keeps its
 /// azimuth and moves along its meridian to where the same fraction of the mass lies closer to the
-/// pole, then gradient projection (eq. 14) refits the design and removes nodes while it still
-/// certifies; the Gauss product rule instead when that is smaller. Milliseconds where
+/// pole, then gradient projection (eq. 14) refits the design and, if `thin`, removes nodes while
+/// it still certifies (costly at high degrees: worth it where the chain of steps ends, not on the
+/// way); the Gauss product rule instead when that is smaller. Milliseconds where
 /// zonal_design's search takes seconds to minutes, with about as many nodes as the start (often
 /// fewer than the search finds). std::nullopt when the moved design does not refit to a certified
 /// one (the step was too large: continue in smaller steps, or use zonal_design). Throws
 /// std::invalid_argument for a degree out of range or a start of another degree.
 std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
-                                                      const ZonalWeight& start_weight, const SphericalDesign& start);
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start,
+                                                      bool thin = true);
 
 }  // namespace sd

@@ -199,9 +199,10 @@ class ZonalDesignBuilder {
 
   // Continuation (msd-notes, Theorem 2.1's designs vary smoothly with the lobe): the design of a
   // neighbouring weight with each node moved along its meridian to the same mass fraction and
-  // each weight scaled to the new mass, refitted (eq. 14), then thinned node by node while it
-  // certifies. None when the moved design does not refit to a certified one.
-  std::optional<SphericalDesign> continued(const ZonalWeight& from_weight, const SphericalDesign& from) const {
+  // each weight scaled to the new mass, refitted (eq. 14), then (if `thin`) thinned node by node
+  // while it certifies. None when the moved design does not refit to a certified one.
+  std::optional<SphericalDesign> continued(const ZonalWeight& from_weight, const SphericalDesign& from,
+                                           bool thin) const {
     const MassProfile from_profile = mass_profile(from_weight);
     SphericalDesign design;
     design.degree = degree_;
@@ -215,6 +216,7 @@ class ZonalDesignBuilder {
     const MomentSystem system = orthonormal_zonal_system(weight_, degree_);
     fit_design(system, design.nodes, design.weights, fit_options());
     if (!try_certify(design)) return std::nullopt;
+    if (!thin) return design;
     auto certify = [this](SphericalDesign& candidate) { return try_certify(candidate); };
     FitOptions thinning = fit_options();
     thinning.stop_when_stalled = true;  // a node too few shows as a fit that stops converging
@@ -354,14 +356,15 @@ Recurrence ZonalWeight::radial_recurrence(int m, int n) const {
 }
 
 std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
-                                                      const ZonalWeight& start_weight, const SphericalDesign& start) {
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start,
+                                                      bool thin) {
   check_order("design degree", degree, kMaxDesignDegree);
   if (start.degree != degree || start.size() == 0 || start.weights.size() != start.nodes.size()) {
     throw std::invalid_argument("zonal_design_continued needs a start design of degree " + std::to_string(degree) +
                                 " with as many weights as nodes");
   }
   ZonalDesignBuilder builder(weight, degree);
-  std::optional<SphericalDesign> continued = builder.continued(start_weight, start);
+  std::optional<SphericalDesign> continued = builder.continued(start_weight, start, thin);
   if (!continued) return std::nullopt;
   SphericalDesign gauss = builder.gauss();
   return continued->size() < gauss.size() ? *continued : gauss;

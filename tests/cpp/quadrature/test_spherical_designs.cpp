@@ -97,6 +97,22 @@ TEST(ZonalDesign, ContinuedFromLambertToPhong) {
   }
 }
 
+TEST(ZonalDesign, ContinuedWithoutThinningKeepsTheStartsNodeCount) {
+  // The add-on's steps on the way to the exponent it wants: refitted, certified, not thinned.
+  const SphericalDesign start = zonal_design(ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), 8, DesignMethod::Gauss);
+  const ZonalLobe lobe = ZonalLobe::phong(10.25);
+  const std::optional<SphericalDesign> moved = zonal_design_continued(
+      ZonalWeight::from_lobe(lobe), 8, ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), start, false);
+  ASSERT_TRUE(moved);
+  expect_lobe_design(*moved, lobe, 8);
+  EXPECT_EQ(moved->size(), start.size());
+  const std::optional<SphericalDesign> thinned = zonal_design_continued(
+      ZonalWeight::from_lobe(lobe), 8, ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), start, true);
+  ASSERT_TRUE(thinned);
+  expect_lobe_design(*thinned, lobe, 8);
+  EXPECT_LT(thinned->size(), start.size());
+}
+
 TEST(ZonalDesign, ContinuedRefusesAStartOfAnotherDegree) {
   const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::phong(8.0));
   const SphericalDesign start = zonal_design(weight, 6);

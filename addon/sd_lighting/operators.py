@@ -44,6 +44,7 @@ class SD_OT_bake(bpy.types.Operator):
         return any(o.type == 'MESH' for o in context.selected_objects)
 
     def _prepare(self, context):
+        prediction.stop_sampling()
         try:
             return baking.BakeJob(baking.prepare(context, _selected_meshes(context)))
         except baking.BakeError as exc:

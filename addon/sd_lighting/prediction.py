@@ -138,6 +138,12 @@ def error(context):
     return predictor.error if predictor is not None else None
 
 
+def stop_sampling():
+    """Cancels and forgets the predictions still sampling: a bake about to start needs the cores."""
+    for key in [k for k, p in _predictors.items() if _sampling(p)]:
+        _predictors.pop(key).cancel()
+
+
 def clear():
     """Cancels and forgets every prediction (unregister, a new file)."""
     import bpy

@@ -84,6 +84,8 @@ class SD_PT_lighting(bpy.types.Panel):
                           icon='ERROR' if predicted.needs_confirmation else 'TIME')
             elif problem:
                 layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')
+            elif prediction.settings_key(context) is not None:
+                layout.label(text="Predicting the bake time...", icon='TIME')
 
         # Live shading
         box = layout.box()

@@ -53,7 +53,6 @@ def _module(package, name):
 
 def variants(package):
     """Every variant the live shading can build at ORDERS."""
-    gs = package.gpu_shading
     shader_variant = _module(package, "utils.shader_variant")
     sd = package.native.get()
     for method in _module(package, "utils.methods").METHODS:
@@ -67,8 +66,9 @@ def variants(package):
                 else:
                     stride = {"scalar": 1, "design": DESIGN_TEXELS}[data.packing]
                 design = 0
-                if method.lobe_design:
-                    design = len(gs.lobe_design("phong" if glossy else "lambert", PHONG_EXPONENT, s + sv))
+                if method.lobe_design:  # the Gauss rule the live shading starts with: the largest
+                    design = len(sd.zonal_design("phong" if glossy else "lambert", PHONG_EXPONENT,
+                                                 s + sv, "gauss")[1])
                 gaunt = len(sd.gaunt_coefficients(s, sv, s + sv)[1]) if method.gaunt_table else 0
                 textures = [()]
                 if method.band_limited_texture:

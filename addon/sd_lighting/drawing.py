@@ -7,6 +7,9 @@ x -> L(g R x): g the environment rotation (environment.py), R the rotation of th
 (the bake's directions are in the object's bake frame: baking.py). The eye is the viewport's own
 camera.
 
+The lobe designs of MSD (12) are built in a worker thread (gpu_shading.lobe_designs): a draw never
+waits for one; while one builds, a timer redraws the viewports when it is done.
+
 Colour: the shader writes scene-linear radiance times 2^exposure (the scene's Film/colour
 management exposure); the viewport shows what a POST_VIEW handler draws with the sRGB curve
 only, i.e. the Standard view transform, whatever the scene's view transform is.
@@ -26,6 +29,7 @@ DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins ove
 
 _handler = None
 _objects = {}         # object name -> (key, ObjectData)
+_lobe_generation = 0  # the lobe designs' build count the viewports last showed
 last_error = ""
 
 
@@ -148,6 +152,31 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
         data.draw(block, texture)
 
 
+def _tag_viewports():
+    import bpy
+    for window in bpy.context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type == 'VIEW_3D':
+                area.tag_redraw()
+
+
+def _poll_lobe_designs():
+    """Timer while lobe designs build: redraws the viewports (and the panel's status) when one is
+    done; ends when none is pending."""
+    global _lobe_generation
+    designs = gpu_shading.lobe_designs()
+    if designs.generation != _lobe_generation:
+        _lobe_generation = designs.generation
+        _tag_viewports()
+    return 0.25 if designs.pending() else None
+
+
+def _watch_lobe_designs():
+    import bpy
+    if gpu_shading.lobe_designs_building() and not bpy.app.timers.is_registered(_poll_lobe_designs):
+        bpy.app.timers.register(_poll_lobe_designs, first_interval=0.25)
+
+
 def _draw_handler():
     global last_error
     import bpy
@@ -168,6 +197,7 @@ def _draw_handler():
         draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
         gpu.state.depth_mask_set(False)
         gpu.state.depth_test_set('NONE')
+        _watch_lobe_designs()
         last_error = ""
     except Exception as exc:  # never raise into Blender's draw loop; the panel shows it
         message = "%s: %s" % (type(exc).__name__, exc)
@@ -252,4 +282,6 @@ def unregister():
     if _handler is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_handler, 'WINDOW')
         _handler = None
+    if bpy.app.timers.is_registered(_poll_lobe_designs):
+        bpy.app.timers.unregister(_poll_lobe_designs)
     clear_cache()

@@ -9,7 +9,9 @@ What a draw reads:
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
   gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);
-- the uniform block `sd` (Variant.frame_fields), rebuilt every frame;
+- the uniform block `sd` (Variant.frame_fields), rebuilt every frame; for MSD (12) it holds the
+  lobe's design (utils/lobe_designs.py: the Gauss product rule until the small design, built in a
+  worker thread, is there; then the variant is swapped);
 - for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
 - with the band-limited texture option (methods that can read it), the band-limited environment
   L~ (unrotated) as an equirect RGBA32F texture `sd_band_limited_texture`, looked up at g R x
@@ -17,11 +19,13 @@ What a draw reads:
 Variants are compiled on first use and cached.
 """
 
+import dataclasses
 import os
 
 import numpy as np
 
 from . import attributes, native
+from .utils import lobe_designs as lobe_design_cache
 from .utils import methods, transforms
 from .utils.bake_data import BAKE
 from .utils.shader_variant import (BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
@@ -32,7 +36,7 @@ SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.
 
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
-_lobe_designs = {}            # (lobe, exponent, degree) -> float32 [D, 4]
+_lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, strength, s, width, height) -> GPUTexture
 
 
@@ -50,9 +54,12 @@ def _read_shader(name):
 
 
 def clear_cache():
+    global _lobe_designs
     _shaders.clear()
     _gaunt_textures.clear()
-    _lobe_designs.clear()
+    if _lobe_designs is not None:
+        _lobe_designs.close()
+        _lobe_designs = None
     _band_limited_textures.clear()
 
 
@@ -143,16 +150,39 @@ def gaunt_texture(light_order, visibility_order):
     return _gaunt_textures[key]
 
 
+def lobe_designs():
+    """The session's lobe designs (utils/lobe_designs.py), cached in the user's cache folder."""
+    global _lobe_designs
+    if _lobe_designs is None:
+        _lobe_designs = lobe_design_cache.LobeDesigns(native.get(), lobe_design_cache.default_directory())
+    return _lobe_designs
+
+
 def lobe_design(lobe, exponent, degree):
-    """The lobe's design of the degree (sdnative.zonal_design, as the CPU evaluator uses): [D, 4]."""
-    key = (lobe, float(exponent), int(degree))
-    if key not in _lobe_designs:
-        nodes, weights = native.get().zonal_design(lobe, float(exponent), int(degree))
-        design = np.empty((len(weights), 4), dtype=np.float32)
-        design[:, :3] = nodes
-        design[:, 3] = weights
-        _lobe_designs[key] = design
-    return _lobe_designs[key]
+    """The lobe's design of the degree for eq. (12): a lobe_designs.Design, final or the Gauss
+    rule standing in while the final one builds; never waits for a build."""
+    return lobe_designs().get(lobe, exponent, degree)
+
+
+def lobe_designs_building():
+    return _lobe_designs is not None and bool(_lobe_designs.pending())
+
+
+def lobe_design_status():
+    """Lines for the panel: the lobe designs being built or whose build failed."""
+    if _lobe_designs is None:
+        return []
+    lines = []
+    for key in _lobe_designs.pending():
+        lines.append("Building the lobe design of %s, degree %d (Gauss rule meanwhile)"
+                     % (_lobe_label(key), key.degree))
+    for key, why in _lobe_designs.failures().items():
+        lines.append("Lobe design of %s, degree %d failed: %s" % (_lobe_label(key), key.degree, why))
+    return lines
+
+
+def _lobe_label(key):
+    return "Lambert" if key.lobe == "lambert" else "Phong sigma %.3g" % key.exponent
 
 
 def make_batch(primitive, content, indices=None):
@@ -208,7 +238,7 @@ class ObjectData:
             self.design = lobe_design(self.lobe, self.exponent, s + sv)
         self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride,
-                               len(self.design) if self.design is not None else 0, gaunt_count,
+                               len(self.design.weights) if self.design is not None else 0, gaunt_count,
                                per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else ())
         self.shader = shader_program(self.variant)
@@ -246,6 +276,7 @@ class ObjectData:
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
         for the band-limited texture (it holds the unrotated L~, looked up at g R x)."""
+        self.refresh_design()
         values = {"model": model, "view_projection": view_projection,
                   "world_to_local": transforms.rotation_part(model).T, "camera": camera,
                   "params": (exposure_scale, target[0], target[1], depth_bias),
@@ -253,7 +284,7 @@ class ObjectData:
         if self.variant.band_limited_texture:
             values["local_to_environment"] = local_to_environment
         if self.design is not None:
-            values["design"] = self.design
+            values["design"] = self.design.texels()
         return self.variant.frame_block(values)
 
     def draw(self, block, band_limited_texture=None):
@@ -270,3 +301,15 @@ class ObjectData:
         for _, name in self.variant.samplers():
             self.shader.uniform_sampler(name, textures[name])
         self.batch.draw(self.shader)
+
+    def refresh_design(self):
+        """Swaps the final lobe design in for the Gauss rule standing in, once it is built: a
+        variant of the new size and a new uniform buffer."""
+        if self.design is None or self.design.final:
+            return
+        design = lobe_design(self.lobe, self.exponent, self.light_order + self.visibility_order)
+        if design is not self.design:
+            self.design = design
+            self.variant = dataclasses.replace(self.variant, lobe_design_size=len(design.weights))
+            self.shader = shader_program(self.variant)
+            self.ubo = None

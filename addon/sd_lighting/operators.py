@@ -1,9 +1,9 @@
 """Operators: bake (sd_lighting.bake), still preview (sd_lighting.render_preview), clear bake."""
 
 import bpy
-from bpy.props import IntProperty, StringProperty
+from bpy.props import BoolProperty, IntProperty, StringProperty
 
-from . import baking, drawing, preview
+from . import baking, drawing, prediction, preview
 
 active_job = None     # the BakeJob running in the UI, for the panel and poll()
 
@@ -23,6 +23,11 @@ class SD_OT_bake(bpy.types.Operator):
     bl_label = "Bake"
     bl_options = {'REGISTER', 'UNDO'}
 
+    # Set by invoke when the predicted time asks for the dialog; its OK then runs execute, which
+    # starts the modal bake instead of the synchronous one.
+    confirmed: BoolProperty(options={'HIDDEN', 'SKIP_SAVE'})
+    predicted_time: StringProperty(options={'HIDDEN', 'SKIP_SAVE'})
+
     _timer = None
     _job = None
 
@@ -39,6 +44,7 @@ class SD_OT_bake(bpy.types.Operator):
         return True
 
     def _prepare(self, context):
+        prediction.stop_sampling()
         try:
             return baking.BakeJob(*baking.prepare(context, context.selected_objects))
         except baking.BakeError as exc:
@@ -65,7 +71,10 @@ class SD_OT_bake(bpy.types.Operator):
         return {'FINISHED'}
 
     def execute(self, context):
-        """Synchronous bake (scripts and tests): same steps, in the calling thread."""
+        """Synchronous bake (scripts and tests): same steps, in the calling thread; after the
+        long-bake dialog, the modal bake."""
+        if self.confirmed:
+            return self._start(context)
         job = self._prepare(context)
         if job is None:
             return {'CANCELLED'}
@@ -73,6 +82,20 @@ class SD_OT_bake(bpy.types.Operator):
         return self._finish(context, job)
 
     def invoke(self, context, event):
+        predicted = prediction.for_confirmation(context)
+        if predicted is not None and predicted.needs_confirmation:
+            self.confirmed = True
+            self.predicted_time = predicted.text()
+            return context.window_manager.invoke_props_dialog(self, width=400)
+        return self._start(context)
+
+    def draw(self, context):
+        if self.confirmed:
+            self.layout.label(text="Predicted bake time: " + self.predicted_time, icon='ERROR')
+            self.layout.label(text="Bake anyway? (Esc cancels it while it runs)")
+
+    def _start(self, context):
+        """The modal bake: a worker thread, progress, Esc."""
         global active_job
         job = self._prepare(context)
         if job is None:

@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import baking, drawing, environment, materials, native, operators
+from . import baking, drawing, environment, gpu_shading, materials, native, operators, prediction
 from .utils import methods
 
 
@@ -75,6 +75,17 @@ class SD_PT_lighting(bpy.types.Panel):
             row.operator("sd_lighting.cancel_bake", text="Cancel", icon='CANCEL')
         else:
             layout.operator("sd_lighting.bake", icon='RENDER_STILL')
+            predicted = prediction.current(context)
+            problem = prediction.error(context)
+            if predicted is not None:
+                row = layout.row()
+                row.alert = predicted.needs_confirmation
+                row.label(text="Predicted bake time: " + predicted.text(),
+                          icon='ERROR' if predicted.needs_confirmation else 'TIME')
+            elif problem:
+                layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')
+            elif prediction.settings_key(context) is not None:
+                layout.label(text="Predicting the bake time...", icon='TIME')
 
         # Live shading
         box = layout.box()
@@ -84,6 +95,8 @@ class SD_PT_lighting(bpy.types.Panel):
         box.prop(settings, "band_limited_texture")
         if drawing.last_error:
             box.label(text=drawing.last_error[:80], icon='ERROR')
+        for line in gpu_shading.lobe_design_status():
+            box.label(text=line[:100], icon='TIME')
         box.operator("sd_lighting.render_preview", icon='IMAGE_DATA')
 
         # What the active object's bake stored

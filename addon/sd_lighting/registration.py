@@ -4,7 +4,7 @@ handler, and a load_post handler that drops the GPU data and environments of the
 import bpy
 from bpy.app.handlers import persistent
 
-from . import drawing, environment, gpu_shading, operators, panels, properties
+from . import drawing, environment, gpu_shading, operators, panels, prediction, properties
 
 
 @persistent
@@ -12,6 +12,7 @@ def _on_load(_dummy):
     drawing.clear_cache()
     gpu_shading.clear_cache()
     environment.clear_cache()
+    prediction.clear()
 
 
 def register():
@@ -27,6 +28,7 @@ def unregister():
     if _on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(_on_load)
     drawing.unregister()
+    prediction.clear()
     gpu_shading.clear_cache()
     environment.clear_cache()
     panels.unregister()

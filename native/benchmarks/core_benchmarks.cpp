@@ -1,4 +1,5 @@
-// Per-call times of the core: SH evaluation, SH rotation, Gaunt tables and design construction.
+// Per-call times of the core: SH evaluation, SH rotation, Gaunt tables and design construction
+// (lobe designs searched from scratch and continued from a neighbouring exponent).
 #include "sdlighting/gaunt.h"
 #include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -72,7 +73,18 @@ void BM_ZonalDesign(benchmark::State& state) {
   const sd::ZonalWeight weight = sd::ZonalWeight::from_lobe(sd::ZonalLobe::phong(static_cast<double>(state.range(1))));
   for (auto _ : state) benchmark::DoNotOptimize(sd::zonal_design(weight, degree, sd::DesignMethod::Auto));
 }
-BENCHMARK(BM_ZonalDesign)->Args({4, 8})->Args({6, 8})->Args({8, 32})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ZonalDesign)->Args({4, 8})->Args({6, 8})->Args({8, 32})->Args({10, 8})->Unit(benchmark::kMillisecond);
+
+// One step of the add-on's continuation in σ (σ + 1 times 1.25), against BM_ZonalDesign's search.
+void BM_ZonalDesignContinued(benchmark::State& state) {
+  const int degree = static_cast<int>(state.range(0));
+  const double sigma = static_cast<double>(state.range(1));
+  const sd::ZonalWeight from = sd::ZonalWeight::from_lobe(sd::ZonalLobe::phong(sigma));
+  const sd::ZonalWeight to = sd::ZonalWeight::from_lobe(sd::ZonalLobe::phong(1.25 * (sigma + 1.0) - 1.0));
+  const sd::SphericalDesign start = sd::zonal_design(from, degree);
+  for (auto _ : state) benchmark::DoNotOptimize(sd::zonal_design_continued(to, degree, from, start));
+}
+BENCHMARK(BM_ZonalDesignContinued)->Args({6, 8})->Args({8, 32})->Args({10, 8})->Unit(benchmark::kMillisecond);
 
 // A visibility-like measure: 1024 ray directions of which the upper hemisphere's escape.
 void BM_WeightedDesign(benchmark::State& state) {

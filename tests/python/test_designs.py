@@ -56,6 +56,18 @@ def test_zonal_design_report(sd):
     assert sd.zonal_design_report("lambert", 0.0, 4, method="gauss")["method"] == "gauss-radau"
 
 
+def test_zonal_design_continued(sd, rng):
+    start = sd.zonal_design("phong", 8.0, 6)
+    nodes, weights = sd.zonal_design_continued("phong", 10.0, 6, 8.0, *start)
+    check_design(nodes, weights)
+    assert len(weights) <= len(start[1])
+    f = RandomPolynomial(rng, 6)
+    assert weights @ f(nodes) == pytest.approx(lobe_integral(f, "phong", 10.0), abs=QUADRATURE)
+    # from Lambert (Phong at sigma 1): its design moves to sigma 1.2
+    lambert = sd.zonal_design("lambert", 0.0, 6)
+    check_design(*sd.zonal_design_continued("phong", 1.2, 6, 1.0, *lambert))
+
+
 def test_module_constants(sd):
     assert sd.DESIGN_TOLERANCE == 1e-10
     assert "Condon" in sd.__doc__ and "l^2 + l + m" in sd.__doc__

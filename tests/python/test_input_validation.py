@@ -102,6 +102,22 @@ def test_zonal_design(sd, function, args, match):
         getattr(sd, function)(*args)
 
 
+def test_zonal_design_continued(sd):
+    nodes, weights = sd.zonal_design("phong", 8.0, 4)
+    for args, match in [
+        (("phong", 9.0, 31, 8.0, nodes, weights), "degree"),
+        (("ggx", 9.0, 4, 8.0, nodes, weights), "lobe"),
+        (("phong", 9.0, 4, -1.0, nodes, weights), "exponent"),
+        (("phong", 9.0, 4, 8.0, nodes[:, :2], weights), "start_nodes"),
+        (("phong", 9.0, 4, 8.0, nodes[:0], weights[:0]), "start_nodes"),
+        (("phong", 9.0, 4, 8.0, nodes, weights[:-1]), "start_weights"),
+        (("phong", 9.0, 4, 8.0, nodes, -weights), "positive"),
+        (("phong", 9.0, 4, 8.0, nodes, weights * NAN), "start_weights"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            sd.zonal_design_continued(*args)
+
+
 @pytest.mark.parametrize("t,w,degree,method,match", [
     ([0.0, 1.0], [1.0, 1.0], -1, "auto", "degree"),
     ([0.0, 1.0], [1.0, 1.0], 31, "auto", "degree"),

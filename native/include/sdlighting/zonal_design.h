@@ -6,6 +6,7 @@
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/zonal_lobe.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,5 +64,19 @@ class ZonalWeight {
 ///   generic node count for the smallest design it can certify.
 /// - Auto: the smaller of both.
 SphericalDesign zonal_design(const ZonalWeight& weight, int degree, DesignMethod method = DesignMethod::Auto);
+
+/// The design of `degree` for `weight` continued from `start`, a design of the same degree for a
+/// neighbouring weight `start_weight` (the lobe at a nearby exponent): every node keeps its
+/// azimuth and moves along its meridian to where the same fraction of the mass lies closer to the
+/// pole, then gradient projection (eq. 14) refits the design and, if `thin`, removes nodes while
+/// it still certifies (costly at high degrees: worth it where the chain of steps ends, not on the
+/// way); the Gauss product rule instead when that is smaller. Milliseconds where
+/// zonal_design's search takes seconds to minutes, with about as many nodes as the start (often
+/// fewer than the search finds). std::nullopt when the moved design does not refit to a certified
+/// one (the step was too large: continue in smaller steps, or use zonal_design). Throws
+/// std::invalid_argument for a degree out of range or a start of another degree.
+std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start,
+                                                      bool thin = true);
 
 }  // namespace sd

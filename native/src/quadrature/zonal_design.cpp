@@ -80,6 +80,48 @@ MomentSystem orthonormal_zonal_system(const ZonalWeight& weight, int degree) {
   return system;
 }
 
+// The mass of the weight closer to the pole than s, piecewise linear through a Gauss rule of the
+// weight (each node's weight split evenly on both sides of it), and its inverse: where starts put
+// their rings, and how continuation moves a node from one weight to another.
+class MassProfile {
+ public:
+  MassProfile(const Rule1D& rule, double support_min, double support_max, double mass) {
+    s_.push_back(support_min);
+    c_.push_back(0.0);
+    double cumulative = 0.0;
+    for (size_t i = 0; i < rule.nodes.size(); ++i) {
+      s_.push_back(rule.nodes[i]);
+      c_.push_back(cumulative + 0.5 * rule.weights[i]);
+      cumulative += rule.weights[i];
+    }
+    s_.push_back(support_max);
+    c_.push_back(mass);
+    for (double& c : c_) c /= mass;
+  }
+
+  /// The fraction u of the mass with s' < s.
+  double fraction(double s) const { return interpolate(s_, c_, s); }
+
+  /// The s at which a fraction u of the mass lies closer to the pole.
+  double quantile(double u) const { return interpolate(c_, s_, u); }
+
+ private:
+  static double interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
+    if (at <= x.front()) return y.front();
+    if (at >= x.back()) return y.back();
+    const size_t i = std::upper_bound(x.begin(), x.end(), at) - x.begin();
+    const double f = (at - x[i - 1]) / std::max(x[i] - x[i - 1], 1e-300);
+    return y[i - 1] + f * (y[i] - y[i - 1]);
+  }
+
+  std::vector<double> s_, c_;  // increasing
+};
+
+MassProfile mass_profile(const ZonalWeight& weight) {
+  return MassProfile(gauss_rule(weight.radial_recurrence(0, kBaseNodes), kBaseNodes), weight.support_min(),
+                     weight.support_max(), weight.mass());
+}
+
 struct ProductRule {
   Rule1D radial;
   bool pole_node = false;
@@ -115,7 +157,7 @@ class ZonalDesignBuilder {
       : weight_(weight),
         degree_(degree),
         moments_(weight.sh_moments(degree)),
-        mass_rule_(gauss_rule(weight.radial_recurrence(0, kBaseNodes), kBaseNodes)) {}
+        profile_(mass_profile(weight)) {}
 
   // Gauss product rule, or its Radau variant with the pole as a node, whichever is smaller.
   SphericalDesign gauss() const {
@@ -156,6 +198,36 @@ class ZonalDesignBuilder {
     return spread && spread->size() < best.size() ? *spread : best;
   }
 
+  // Continuation (msd-notes, Theorem 2.1's designs vary smoothly with the lobe): the design of a
+  // neighbouring weight with each node moved along its meridian to the same mass fraction and
+  // each weight scaled to the new mass, refitted (eq. 14), then (if `thin`) thinned node by node
+  // while it certifies. None when the moved design does not refit to a certified one.
+  std::optional<SphericalDesign> continued(const ZonalWeight& from_weight, const SphericalDesign& from,
+                                           bool thin) const {
+    const MassProfile from_profile = mass_profile(from_weight);
+    SphericalDesign design;
+    design.degree = degree_;
+    design.method = "gradient";
+    for (int i = 0; i < from.size(); ++i) {
+      const glm::dvec3& x = from.nodes[i];
+      const double phi = std::atan2(x.y, x.x);
+      design.nodes.push_back(direction_from(profile_.quantile(from_profile.fraction(one_minus_z(x))), phi));
+      design.weights.push_back(from.weights[i] * weight_.mass() / from_weight.mass());
+    }
+    const MomentSystem system = orthonormal_zonal_system(weight_, degree_);
+    fit_design(system, design.nodes, design.weights, fit_options());
+    if (!try_certify(design)) return std::nullopt;
+    if (!thin) return design;
+    auto certify = [this](SphericalDesign& candidate) { return try_certify(candidate); };
+    FitOptions thinning = fit_options();
+    thinning.stop_when_stalled = true;  // a node too few shows as a fit that stops converging
+    for (int size = design.size(); size > design_lower_bound(degree_); size = design.size()) {
+      design = prune_design(system, design, size - 1, certify, thinning);
+      if (design.size() == size) break;
+    }
+    return design;
+  }
+
  private:
   static constexpr int kRestarts = 4;
   // Sizes above the generic count worth trying from spread starts: beyond, thinning the Gauss
@@ -176,33 +248,13 @@ class ZonalDesignBuilder {
       const double phase = 2.0 * M_PI * (jitter(rng) + 0.5);
       for (int i = 0; i < n; ++i) {
         const double u = (i + 0.5 + (restart > 0 ? 0.9 * jitter(rng) : 0.0)) / n;
-        design.nodes.push_back(direction_from(quantile(u), phase + golden_angle * i));
+        design.nodes.push_back(direction_from(profile_.quantile(u), phase + golden_angle * i));
         design.weights.push_back(weight_.mass() / n);
       }
       fit_design(system, design.nodes, design.weights, fit_options());
       if (design.size() > 0 && design.size() <= n && try_certify(design)) return design;
     }
     return std::nullopt;
-  }
-
-  // s at which a fraction u of the mass lies closer to the pole, interpolated between the base
-  // rule's nodes: a start whose rings follow the weight.
-  double quantile(double u) const {
-    const Rule1D& rule = mass_rule_;
-    const double target = u * weight_.mass();
-    double cumulative = 0.0, previous_s = weight_.support_min(), previous_c = 0.0;
-    for (size_t i = 0; i < rule.nodes.size(); ++i) {
-      const double c = cumulative + 0.5 * rule.weights[i];
-      if (c >= target) {
-        const double f = (target - previous_c) / std::max(c - previous_c, 1e-300);
-        return previous_s + f * (rule.nodes[i] - previous_s);
-      }
-      cumulative += rule.weights[i];
-      previous_s = rule.nodes[i];
-      previous_c = c;
-    }
-    return previous_s + (weight_.support_max() - previous_s) * (target - previous_c) /
-                            std::max(weight_.mass() - previous_c, 1e-300);
   }
 
   bool try_certify(SphericalDesign& design) const { return certify_design(design, moments_, weight_.mass()); }
@@ -217,7 +269,7 @@ class ZonalDesignBuilder {
   const ZonalWeight& weight_;
   int degree_;
   std::vector<double> moments_;
-  Rule1D mass_rule_;  // for quantile()
+  MassProfile profile_;
 };
 
 }  // namespace
@@ -302,6 +354,21 @@ Recurrence ZonalWeight::radial_recurrence(int m, int n) const {
   std::vector<double> w(weights_);
   for (size_t i = 0; i < w.size(); ++i) w[i] *= std::pow(nodes_[i] * (2.0 - nodes_[i]), m);
   return discrete_recurrence(nodes_, w, n);
+}
+
+std::optional<SphericalDesign> zonal_design_continued(const ZonalWeight& weight, int degree,
+                                                      const ZonalWeight& start_weight, const SphericalDesign& start,
+                                                      bool thin) {
+  check_order("design degree", degree, kMaxDesignDegree);
+  if (start.degree != degree || start.size() == 0 || start.weights.size() != start.nodes.size()) {
+    throw std::invalid_argument("zonal_design_continued needs a start design of degree " + std::to_string(degree) +
+                                " with as many weights as nodes");
+  }
+  ZonalDesignBuilder builder(weight, degree);
+  std::optional<SphericalDesign> continued = builder.continued(start_weight, start, thin);
+  if (!continued) return std::nullopt;
+  SphericalDesign gauss = builder.gauss();
+  return continued->size() < gauss.size() ? *continued : gauss;
 }
 
 SphericalDesign zonal_design(const ZonalWeight& weight, int degree, DesignMethod method) {

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <random>
 
 namespace sd {
@@ -63,6 +64,61 @@ TEST(ZonalDesign, ReachesTheSeedsNodeCounts) {
       EXPECT_GE(zonal_design(weight, degree).size(), design_lower_bound(degree));
     }
   }
+}
+
+TEST(ZonalDesign, ContinuedFromANeighbouringExponentCertifiesWithNoMoreNodes) {
+  // Steps of 1.25 in σ + 1, as the add-on takes them; the count stays at or below the search's.
+  for (int degree : {4, 6, 8, 10}) {
+    SphericalDesign previous = zonal_design(ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), degree);
+    double previous_sigma = 8.0;
+    for (double sigma : {10.25, 13.06}) {
+      const ZonalLobe lobe = ZonalLobe::phong(sigma);
+      const ZonalWeight weight = ZonalWeight::from_lobe(lobe);
+      const std::optional<SphericalDesign> continued =
+          zonal_design_continued(weight, degree, ZonalWeight::from_lobe(ZonalLobe::phong(previous_sigma)), previous);
+      ASSERT_TRUE(continued) << "degree " << degree << " sigma " << sigma;
+      expect_lobe_design(*continued, lobe, degree);
+      EXPECT_LE(continued->size(), zonal_design(weight, degree).size()) << "degree " << degree << " sigma " << sigma;
+      previous = *continued;
+      previous_sigma = sigma;
+    }
+  }
+}
+
+TEST(ZonalDesign, ContinuedFromLambertToPhong) {
+  // Lambert's weight is Phong's at σ = 1; continuing down to σ = 0.8 and up to 1.25 certifies.
+  const SphericalDesign lambert = zonal_design(ZonalWeight::from_lobe(ZonalLobe::lambert()), 8);
+  for (double sigma : {0.8, 1.25}) {
+    const std::optional<SphericalDesign> continued = zonal_design_continued(
+        ZonalWeight::from_lobe(ZonalLobe::phong(sigma)), 8, ZonalWeight::from_lobe(ZonalLobe::lambert()), lambert);
+    ASSERT_TRUE(continued) << sigma;
+    expect_lobe_design(*continued, ZonalLobe::phong(sigma), 8);
+    EXPECT_LE(continued->size(), lambert.size()) << sigma;
+  }
+}
+
+TEST(ZonalDesign, ContinuedWithoutThinningKeepsTheStartsNodeCount) {
+  // The add-on's steps on the way to the exponent it wants: refitted, certified, not thinned.
+  const SphericalDesign start = zonal_design(ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), 8, DesignMethod::Gauss);
+  const ZonalLobe lobe = ZonalLobe::phong(10.25);
+  const std::optional<SphericalDesign> moved = zonal_design_continued(
+      ZonalWeight::from_lobe(lobe), 8, ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), start, false);
+  ASSERT_TRUE(moved);
+  expect_lobe_design(*moved, lobe, 8);
+  EXPECT_EQ(moved->size(), start.size());
+  const std::optional<SphericalDesign> thinned = zonal_design_continued(
+      ZonalWeight::from_lobe(lobe), 8, ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), start, true);
+  ASSERT_TRUE(thinned);
+  expect_lobe_design(*thinned, lobe, 8);
+  EXPECT_LT(thinned->size(), start.size());
+}
+
+TEST(ZonalDesign, ContinuedRefusesAStartOfAnotherDegree) {
+  const ZonalWeight weight = ZonalWeight::from_lobe(ZonalLobe::phong(8.0));
+  const SphericalDesign start = zonal_design(weight, 6);
+  EXPECT_THROW(zonal_design_continued(weight, 8, weight, start), std::invalid_argument);
+  EXPECT_THROW(zonal_design_continued(weight, kMaxDesignDegree + 1, weight, start), std::invalid_argument);
+  EXPECT_THROW(zonal_design_continued(weight, 6, weight, SphericalDesign{}), std::invalid_argument);
 }
 
 TEST(ZonalDesign, GaussForOddDegreeUsesThePlainProduct) {

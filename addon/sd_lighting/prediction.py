@@ -1,0 +1,157 @@
+"""The predicted bake time of the panel's settings and selection (utils/bake_time.py), for the
+panel and the bake operator's confirmation.
+
+A prediction is kept per settings key (the panel's bake settings, the environment and the selected
+meshes with their sizes). The panel only asks for it: the bake's inputs are gathered by
+baking.prepare in a timer (never in a draw), and the sample bakes run in a worker thread.
+"""
+
+import os
+import time
+
+import numpy as np
+
+from . import baking, native
+from .utils import bake_time
+
+_predictors = {}          # settings key -> BakeTimePredictor (the latest few)
+_KEPT = 8
+_requested = None         # the key a timer will start, if any
+
+
+def settings_key(context):
+    """What the bake's time depends on: the bake settings, the environment (automatic s) and the
+    selected meshes (names and sizes); None without a selected mesh."""
+    scene = context.scene
+    settings = scene.sd_lighting
+    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers))
+                          for o in context.selected_objects if o.type == 'MESH'))
+    if not meshes:
+        return None
+    names = ("method", "material_source", "phong_exponent", "automatic_orders", "target_error",
+             "max_automatic_order", "light_order", "visibility_order", "rays", "environment_source",
+             "environment_path")
+    world = scene.world.name if scene.world is not None else ""
+    return tuple(getattr(settings, name) for name in names) + (world, meshes)
+
+
+def sample_jobs(tasks):
+    """The sampling jobs of baking.prepare's tasks: each object's own mesh joins its occluders,
+    so that a sampled triangle's vertices see the rest of the object."""
+    jobs = []
+    for task in tasks:
+        geometry = task.geometry
+        arguments = task.bake_arguments()
+        vertices, triangles = [geometry.vertices], [geometry.triangles]
+        if "occluder_vertices" in arguments:
+            vertices.append(arguments["occluder_vertices"])
+            triangles.append(arguments["occluder_triangles"] + len(geometry.vertices))
+        arguments["occluder_vertices"] = np.concatenate(vertices)
+        arguments["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
+        jobs.append(bake_time.SampleJob(geometry.vertices, geometry.normals, geometry.triangles, arguments))
+    return jobs
+
+
+def start(context):
+    """Starts predicting the bake of the selection under the scene's settings (main thread);
+    returns the predictor, or None when the bake could not start (the bake says why)."""
+    key = settings_key(context)
+    if key is None:
+        return None
+    predictor = _predictors.get(key)
+    if predictor is not None:
+        return predictor
+    try:
+        tasks = baking.prepare(context, [o for o in context.selected_objects if o.type == 'MESH'])
+    except baking.BakeError:
+        return None
+    predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1)
+    for old in list(_predictors)[:max(len(_predictors) - _KEPT + 1, 0)]:
+        _predictors.pop(old).cancel()
+    _predictors[key] = predictor
+    predictor.start()
+    return predictor
+
+
+def for_confirmation(context, wait=3.0):
+    """The prediction the bake operator asks with (main thread): waits up to `wait` seconds for
+    the sample, less once it is clear that the bake takes over a minute; None when unknown."""
+    predictor = start(context)
+    if predictor is None:
+        return None
+    deadline = time.perf_counter() + wait
+    while _sampling(predictor) and time.perf_counter() < deadline:
+        predicted = predictor.prediction()
+        if predicted is not None and predicted.needs_confirmation:
+            break
+        predictor.join(0.05)
+    return predictor.prediction()
+
+
+def current(context):
+    """The prediction for the panel's settings and selection, or None while unknown; asks a timer
+    to start one when there is none (a panel's draw must not evaluate the depsgraph)."""
+    global _requested
+    import bpy
+    key = settings_key(context)
+    predictor = _predictors.get(key) if key is not None else None
+    if predictor is None:
+        if key is not None and _requested != key:
+            _requested = key
+            bpy.app.timers.register(_start_requested, first_interval=0.0)
+        return None
+    if _sampling(predictor) and not bpy.app.timers.is_registered(_redraw_while_sampling):
+        bpy.app.timers.register(_redraw_while_sampling, first_interval=0.5)
+    return predictor.prediction()
+
+
+def _start_requested():
+    global _requested
+    import bpy
+    _requested = None
+    start(bpy.context)
+    _redraw_panels()
+
+
+def _redraw_panels():
+    import bpy
+    for window in bpy.context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type == 'VIEW_3D':
+                for region in area.regions:
+                    if region.type == 'UI':
+                        region.tag_redraw()
+
+
+def _sampling(predictor):
+    return not predictor.finished and predictor.error is None
+
+
+def _redraw_while_sampling():
+    _redraw_panels()
+    return 0.5 if any(_sampling(p) for p in _predictors.values()) else None
+
+
+def error(context):
+    """Why the prediction for the panel's settings failed, or None."""
+    predictor = _predictors.get(settings_key(context))
+    return predictor.error if predictor is not None else None
+
+
+def stop_sampling():
+    """Cancels and forgets the predictions still sampling: a bake about to start needs the cores."""
+    for key in [k for k, p in _predictors.items() if _sampling(p)]:
+        _predictors.pop(key).cancel()
+
+
+def clear():
+    """Cancels and forgets every prediction (unregister, a new file)."""
+    import bpy
+    global _requested
+    for predictor in _predictors.values():
+        predictor.cancel()
+    _predictors.clear()
+    _requested = None
+    for timer in (_start_requested, _redraw_while_sampling):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)

@@ -1,0 +1,175 @@
+"""The predicted time of a bake, from timed bakes of a few sampled triangles (issue: orders that
+cannot be baked in reasonable time are not offered blindly).
+
+A bake costs a setup (the Embree scene of the mesh and its occluders) plus a time per vertex that
+depends on the method and orders - MSD (13) builds a design per vertex, milliseconds at degree 6,
+tens of seconds at 18 - and on how much of the sky the vertex sees. The sample: a few triangles
+drawn at random (seeded) with their own vertices, baked by sdnative.bake_transfer with the bake's
+own options against the whole mesh and its occluders, so a sampled vertex sees what it sees in
+the bake, on as many threads. Rounds of increasing size separate the setup from the per-vertex
+time; a round is skipped when the previous one predicts it would take over SAMPLE_BUDGET. While a
+round runs, its progress gives a lower bound, so a bake that takes hours says so within a second.
+
+Nothing here needs Blender; the sdnative module is passed in.
+"""
+
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
+ROUNDS = (2, 16)             # triangles per sample round (about 3 vertices each)
+SAMPLE_BUDGET = 5.0          # seconds a further round may take
+
+
+def sample_mesh(vertices, normals, triangles, count, seed=0):
+    """`count` triangles drawn without replacement and their vertices, re-indexed:
+    (vertices [n, 3], normals [n, 3], triangles [count, 3] int32)."""
+    triangles = np.asarray(triangles).reshape(-1, 3)
+    rng = np.random.default_rng(seed)
+    chosen = triangles[rng.choice(len(triangles), min(count, len(triangles)), replace=False)]
+    used, inverse = np.unique(chosen.ravel(), return_inverse=True)
+    return (np.asarray(vertices)[used], np.asarray(normals)[used],
+            inverse.reshape(-1, 3).astype(np.int32))
+
+
+def extrapolate(rounds, vertex_count):
+    """Seconds for `vertex_count` vertices from timed rounds [(vertices, seconds)]: the line through
+    the two largest rounds (setup + time per vertex), or through the origin from the largest when
+    there is one round or the line's setup comes out negative (noise)."""
+    rounds = sorted(rounds)
+    n2, t2 = rounds[-1]
+    if len(rounds) > 1:
+        n1, t1 = rounds[-2]
+        if n2 > n1:
+            per_vertex = (t2 - t1) / (n2 - n1)
+            setup = t1 - per_vertex * n1
+            if per_vertex > 0.0 and setup >= 0.0:
+                return setup + per_vertex * vertex_count
+    return t2 * vertex_count / n2
+
+
+def lower_bound(elapsed, done, threads, vertex_count):
+    """Seconds that `vertex_count` vertices take at least, from a round that ran `elapsed` seconds
+    and finished `done` vertices on `threads` threads: the threads' time went into those vertices
+    and at most one more each."""
+    return elapsed * vertex_count / (done + threads)
+
+
+def format_duration(seconds):
+    if seconds < 60.0:
+        return "%.0f s" % max(seconds, 1.0)
+    if seconds < 3600.0:
+        return "%.1f min" % (seconds / 60.0)
+    if seconds < 86400.0:
+        return "%.1f h" % (seconds / 3600.0)
+    return "%.1f days" % (seconds / 86400.0)
+
+
+@dataclass(frozen=True)
+class Prediction:
+    seconds: float
+    final: bool          # False: still sampling (a lower bound, or an estimate being refined)
+    lower_bound: bool    # the seconds are a lower bound (no round finished yet)
+
+    @property
+    def needs_confirmation(self):
+        return self.seconds > CONFIRM_SECONDS
+
+    def text(self):
+        if self.lower_bound:
+            return "at least %s (estimating)" % format_duration(self.seconds)
+        return "about %s%s" % (format_duration(self.seconds), "" if self.final else " (estimating)")
+
+
+@dataclass
+class SampleJob:
+    """One object's bake: its mesh, and bake_transfer's keywords (orders, rays, occluders: every
+    other object's triangles)."""
+    vertices: np.ndarray
+    normals: np.ndarray
+    triangles: np.ndarray
+    bake_arguments: dict
+
+
+class BakeTimePredictor:
+    """Times sample bakes of every job in a worker thread; `prediction()` at any time."""
+
+    def __init__(self, sdnative, jobs, threads):
+        self._sd = sdnative
+        self._jobs = jobs
+        self._threads = max(int(threads), 1)
+        self._lock = threading.Lock()
+        self._estimates = [None] * len(jobs)   # per job: seconds from its finished rounds
+        self._running = None                   # (job index, round start, done, round vertices)
+        self._cancelled = False
+        self._thread = None
+        self.finished = False
+        self.error = None
+
+    def start(self):
+        self._thread = threading.Thread(target=self._run, name="sd_lighting bake time", daemon=True)
+        self._thread.start()
+
+    def cancel(self):
+        self._cancelled = True
+
+    def join(self, timeout=None):
+        if self._thread is not None:
+            self._thread.join(timeout)
+        return self.finished
+
+    def prediction(self):
+        """The prediction so far: None before anything is known."""
+        with self._lock:
+            estimates = list(self._estimates)
+            running = self._running
+        total, bound = 0.0, False
+        for index, job in enumerate(self._jobs):
+            count = len(job.vertices)
+            if estimates[index] is not None:
+                total += estimates[index]
+            elif running is not None and running[0] == index:
+                total += lower_bound(time.perf_counter() - running[1], running[2], self._threads, count)
+                bound = True
+        if total == 0.0 and not self.finished:
+            return None
+        return Prediction(total, self.finished, bound)
+
+    def _run(self):
+        try:
+            for index, job in enumerate(self._jobs):
+                self._sample(index, job)
+        except Exception as exc:  # the panel shows it; the bake itself reports its own errors
+            if not self._cancelled:
+                self.error = "%s: %s" % (type(exc).__name__, exc)
+        finally:
+            with self._lock:
+                self._running = None
+            self.finished = not self._cancelled and self.error is None
+
+    def _sample(self, index, job):
+        rounds = []
+        for triangles in ROUNDS:
+            vertices, normals, sample_triangles = sample_mesh(job.vertices, job.normals, job.triangles,
+                                                              triangles, seed=index)
+            if rounds and extrapolate(rounds, len(vertices)) > SAMPLE_BUDGET:
+                break
+            start = time.perf_counter()
+            with self._lock:
+                self._running = (index, start, 0, len(vertices))
+
+            def progress(done, total, start=start):
+                with self._lock:
+                    self._running = (index, start, done, total)
+                return not self._cancelled
+
+            self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
+                                   **job.bake_arguments)
+            rounds.append((len(vertices), time.perf_counter() - start))
+            with self._lock:
+                self._estimates[index] = extrapolate(rounds, len(job.vertices))
+            if len(vertices) == len(job.vertices):
+                break

@@ -1,0 +1,133 @@
+"""The bake-time prediction (utils/bake_time.py): the sample, the extrapolation, the lower bound
+while sampling, the text and the confirmation threshold."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from sd_lighting.utils import bake_time
+from sd_lighting.utils.bake_time import BakeTimePredictor, Prediction, SampleJob
+
+
+def grid(n):
+    """An n x n vertex grid in the plane z = 0: vertices, normals, triangles."""
+    x, y = np.meshgrid(np.arange(n, dtype=np.float64), np.arange(n, dtype=np.float64))
+    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
+    normals = np.tile([0.0, 0.0, 1.0], (n * n, 1))
+    i = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]
+    i = i.ravel()
+    triangles = np.concatenate([np.stack([i, i + 1, i + n], 1), np.stack([i + 1, i + n + 1, i + n], 1)])
+    return vertices, normals, triangles.astype(np.int32)
+
+
+def test_sample_mesh_keeps_its_triangles():
+    vertices, normals, triangles = grid(20)
+    v, n, t = bake_time.sample_mesh(vertices, normals, triangles, 16, seed=3)
+    assert t.shape == (16, 3) and t.dtype == np.int32
+    assert len(v) == len(n) == len(np.unique(t)) and t.max() == len(v) - 1
+    # every sampled triangle is one of the mesh's, with its own corners
+    original = {tuple(row) for row in vertices[triangles].reshape(-1, 9).round(9)}
+    assert all(tuple(row) in original for row in v[t].reshape(-1, 9).round(9))
+    again = bake_time.sample_mesh(vertices, normals, triangles, 16, seed=3)
+    assert np.array_equal(again[0], v)   # seeded
+    assert len(bake_time.sample_mesh(vertices, normals, triangles[:5], 16)[2]) == 5
+
+
+def test_extrapolation_separates_setup_from_vertices():
+    rounds = [(6, 0.5 + 6 * 0.01), (48, 0.5 + 48 * 0.01)]
+    assert bake_time.extrapolate(rounds, 10000) == pytest.approx(0.5 + 100.0)
+    # one round, or a noisy pair whose setup comes out negative: through the origin
+    assert bake_time.extrapolate([(10, 2.0)], 1000) == pytest.approx(200.0)
+    assert bake_time.extrapolate([(10, 2.0), (40, 3.0)], 400) == pytest.approx(2.0 - 10 / 30 + 400 / 30)
+    assert bake_time.extrapolate([(10, 1.0), (40, 8.0)], 400) == pytest.approx(400 * 8.0 / 40)
+
+
+def test_lower_bound_counts_the_vertices_in_flight():
+    # 10 s on 2 threads with nothing finished: each thread is still on its first vertex, so each
+    # vertex takes over 10 s of a thread: 1000 vertices take over 5000 s on the two.
+    assert bake_time.lower_bound(10.0, 0, 2, 1000) == pytest.approx(5000.0)
+    assert bake_time.lower_bound(10.0, 98, 2, 1000) == pytest.approx(100.0)
+
+
+def test_text_and_confirmation():
+    assert Prediction(30.0, True, False).text() == "about 30 s"
+    assert Prediction(150.0, True, False).text() == "about 2.5 min"
+    assert Prediction(7200.0, False, True).text() == "at least 2.0 h (estimating)"
+    assert Prediction(3 * 86400.0, False, False).text() == "about 3.0 days (estimating)"
+    assert not Prediction(bake_time.CONFIRM_SECONDS, True, False).needs_confirmation
+    assert Prediction(bake_time.CONFIRM_SECONDS + 1.0, True, False).needs_confirmation
+
+
+class FakeNative:
+    """bake_transfer that takes SETUP + PER_VERTEX per vertex (sleeping), with progress."""
+    SETUP, PER_VERTEX = 0.05, 0.004
+
+    def __init__(self):
+        self.calls = []
+        self.gate = threading.Event()
+        self.gate.set()
+
+    def bake_transfer(self, vertices, normals, triangles, progress=None, **kwargs):
+        self.calls.append((len(vertices), kwargs))
+        self.gate.wait(30)
+        time.sleep(self.SETUP)
+        for done in range(len(vertices)):
+            time.sleep(self.PER_VERTEX)
+            if progress is not None and not progress(done + 1, len(vertices)):
+                raise RuntimeError("cancelled")
+        return {}
+
+
+def test_predictor_recovers_setup_and_per_vertex_time():
+    sd = FakeNative()
+    vertices, normals, triangles = grid(50)
+    predictor = BakeTimePredictor(sd, [SampleJob(vertices, normals, triangles, {"rays": 64})], threads=1)
+    predictor.start()
+    assert predictor.join(30)
+    predicted = predictor.prediction()
+    expected = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices)
+    assert predicted.final and not predicted.lower_bound
+    assert predicted.seconds == pytest.approx(expected, rel=0.3)
+    assert [kwargs for _, kwargs in sd.calls] == [{"rays": 64}] * len(bake_time.ROUNDS)
+
+
+def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
+    sd = FakeNative()
+    sd.gate.clear()
+    vertices, normals, triangles = grid(30)
+    jobs = [SampleJob(vertices, normals, triangles, {}), SampleJob(vertices, normals, triangles, {})]
+    predictor = BakeTimePredictor(sd, jobs, threads=1)
+    predictor.start()
+    time.sleep(0.3)
+    bound = predictor.prediction()
+    assert bound.lower_bound and not bound.final
+    assert bound.seconds >= 0.25 * len(vertices)   # 0.3 s and nothing done: over 0.3 s per vertex
+    sd.gate.set()
+    assert predictor.join(30)
+    total = predictor.prediction()
+    assert total.final and not total.lower_bound
+    one = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices)
+    assert total.seconds == pytest.approx(2 * one, rel=0.3)
+
+
+def test_cancel_stops_sampling():
+    sd = FakeNative()
+    vertices, normals, triangles = grid(30)
+    predictor = BakeTimePredictor(sd, [SampleJob(vertices, normals, triangles, {})], threads=1)
+    predictor.cancel()
+    predictor.start()
+    predictor.join(30)
+    assert not predictor.finished and predictor.error is None
+
+
+def test_a_failing_sample_reports_why():
+    class Failing(FakeNative):
+        def bake_transfer(self, *args, **kwargs):
+            raise ValueError("rays must be in [1, 16777216], got 0")
+    vertices, normals, triangles = grid(10)
+    predictor = BakeTimePredictor(Failing(), [SampleJob(vertices, normals, triangles, {})], threads=1)
+    predictor.start()
+    predictor.join(30)
+    assert not predictor.finished and "rays must be" in predictor.error

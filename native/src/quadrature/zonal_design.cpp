@@ -235,7 +235,12 @@ class ZonalDesignBuilder {
   static constexpr int kExtraSizes = 3;
   static constexpr int kMaxIterations = 300;
 
-  FitOptions fit_options() const { return FitOptions{1e-15 * std::sqrt(weight_.mass()), kMaxIterations, false}; }
+  FitOptions fit_options() const {
+    FitOptions options;
+    options.tolerance = 1e-15 * std::sqrt(weight_.mass());
+    options.max_iterations = kMaxIterations;
+    return options;
+  }
 
   std::optional<SphericalDesign> attempt(const MomentSystem& system, int n) const {
     std::mt19937_64 rng(1000003ull * degree_ + n);

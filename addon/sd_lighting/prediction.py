@@ -62,7 +62,7 @@ def start(context):
     if predictor is not None:
         return predictor
     try:
-        tasks = baking.prepare(context, [o for o in context.selected_objects if o.type == 'MESH'])
+        tasks, _ = baking.prepare(context, context.selected_objects)  # skipped objects: the bake warns
     except baking.BakeError:
         return None
     predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1)

@@ -7,7 +7,9 @@ threads: every core), the wall time of `sdnative.bake_transfer` on the mesh's ve
 and triangles as the add-on reads them (baking.Geometry). Against:
 - Cycles: `bpy.ops.object.bake(type='AO', target='VERTEX_COLORS')` of the same object, CPU, all
   threads, samples = rays, adaptive sampling and denoising off, into a colour attribute; timed
-  around the operator (scene sync and BVH build included, as for ours).
+  around the operator (scene sync and BVH build included, as for ours). Its AO distance (the
+  world's) is the mesh's bounding-box diagonal unless --cycles-distance says otherwise: the
+  factory default, 10, would let a large model's Cycles rays stop short where ours go on.
 - the rays alone: sdnative has no raw-ray entry point, so the closest proxy is bake_transfer with
   only the ambient occlusion requested (the same rays, traced and counted, nothing else built);
   the C++ `visibility_benchmarks` compares that with raw Embree rtcOccluded1M.
@@ -17,7 +19,8 @@ Mesh: by default assimp's 2CylinderEngine.glb (Debian's assimp-testmodels,
 Suzanne subdivided (level 4). --quick: Suzanne subdivided to level 2 (about 8k vertices).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_bake.py -- [--zip build/sd_lighting.zip]
-         [--rays 256] [--mesh PATH|suzanne] [--quick] [--skip METHOD_ID,...]
+         [--rays 256] [--mesh PATH|suzanne] [--quick] [--cycles-distance D]
+         [--skip METHOD_ID,...]
 (PATH: .glb/.gltf/.obj/.ply/.stl.) Not part of the test suite.
 """
 
@@ -44,6 +47,10 @@ def options():
     parser.add_argument("--rays", type=int, default=256, help="rays per vertex = Cycles samples")
     parser.add_argument("--mesh", default=None, help="a model file, or 'suzanne'")
     parser.add_argument("--quick", action="store_true", help="a small mesh (Suzanne, ~8k vertices)")
+    parser.add_argument("--cycles-distance", type=float, default=None,
+                        help="Cycles' AO distance (world); default: the mesh's bounding-box diagonal, "
+                             "so that every occluder counts as in sdnative's unbounded rays; "
+                             "0: keep the world's default (10)")
     parser.add_argument("--skip", default="", help="method ids not to bake, comma-separated")
     args = parser.parse_args(argv)
     if args.mesh is None:
@@ -67,6 +74,9 @@ def imported(scene, path):
     before = set(bpy.data.objects)
     ext = os.path.splitext(path)[1].lower()
     if ext in (".glb", ".gltf"):
+        # Debian's Blender 3.4 glTF importer uses np.bool, which NumPy 1.24+ removed
+        if "bool" not in np.__dict__:
+            np.bool = bool
         bpy.ops.import_scene.gltf(filepath=path)
     elif ext == ".obj":
         if hasattr(bpy.ops.wm, "obj_import"):
@@ -80,6 +90,7 @@ def imported(scene, path):
     else:
         raise ValueError("unsupported mesh file %s" % path)
     new = [obj for obj in bpy.data.objects if obj not in before]
+    others = [obj.name for obj in new if obj.type != 'MESH']
     meshes = [obj for obj in new if obj.type == 'MESH']
     if not meshes:
         raise ValueError("%s has no mesh" % path)
@@ -91,9 +102,8 @@ def imported(scene, path):
     if len(meshes) > 1:
         bpy.ops.object.join()
     obj = bpy.context.view_layer.objects.active
-    for other in new:
-        if other != obj and other.name in bpy.data.objects:
-            bpy.data.objects.remove(other)
+    for name in others:   # empties the importer made parents
+        bpy.data.objects.remove(bpy.data.objects[name])
     bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
     return obj, "%s (%d parts joined)" % (os.path.basename(path), len(meshes))
 
@@ -127,8 +137,11 @@ def bake_jobs(package, skip):
     return list(jobs.values())
 
 
-def cycles_ao(scene, obj, samples):
-    """Seconds of Cycles' AO bake of obj to a colour attribute at `samples` samples."""
+def cycles_ao(scene, obj, samples, distance):
+    """Seconds of Cycles' AO bake of obj to a colour attribute at `samples` samples, and the mean
+    AO it stored."""
+    if distance:
+        scene.world.light_settings.distance = distance
     scene.render.engine = 'CYCLES'
     scene.cycles.device = 'CPU'
     scene.cycles.samples = samples
@@ -196,7 +209,10 @@ def main():
         rows.append((" / ".join(labels), seconds, str(shown), extra))
         print("  baked %s in %.2f s %s" % (rows[-1][0], seconds, extra), flush=True)
 
-    cycles_seconds, cycles_mean = cycles_ao(scene, obj, rays)
+    distance = args.cycles_distance
+    if distance is None:
+        distance = float(np.linalg.norm(geometry.vertices.max(axis=0) - geometry.vertices.min(axis=0)))
+    cycles_seconds, cycles_mean = cycles_ao(scene, obj, rays, distance)
     print("  Cycles AO bake in %.2f s" % cycles_seconds, flush=True)
     print("  mean AO: sdnative %.3f (whole sphere, unbounded), Cycles %.3f (cosine-weighted "
           "hemisphere, world AO distance %.3g)"
@@ -204,8 +220,9 @@ def main():
              scene.world.light_settings.distance), flush=True)
 
     print()
-    print("Bake of %s, %d vertices, %d rays per vertex (Cycles: %d samples), s = %d, s' = %d"
-          % (mesh_name, n, rays, rays, LIGHT_ORDER, VISIBILITY_ORDER))
+    print("Bake of %s, %d vertices, %d rays per vertex (Cycles: %d samples, AO distance %.4g), "
+          "s = %d, s' = %d" % (mesh_name, n, rays, rays, scene.world.light_settings.distance,
+                               LIGHT_ORDER, VISIBILITY_ORDER))
     header = "%-42s %9s %12s %10s %10s  %s" % ("method", "seconds", "vertices/s", "÷ Cycles",
                                               "÷ AO-only", "bake_transfer arguments")
     print(header)

@@ -57,6 +57,7 @@ TESTS = [
     ("test_background_builds", GPU, 600, [], [], (3, 4, 0)),
     ("test_preview", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_world_orientation", BACKGROUND, 300, [], [], (3, 4, 0)),
+    ("test_material_colour", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_scale", BACKGROUND, 300, [], [], (3, 4, 0)),
     # GPU: the binary runs under Xvfb, with a window, so it has an undo stack to test
     ("test_robustness", GPU, 300, [], [], (3, 4, 0)),

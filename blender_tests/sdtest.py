@@ -218,7 +218,9 @@ def add_object(scene, name, mesh):
     return obj
 
 
-def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.0, 1.0)):
+def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.0, 1.0), smooth=True):
+    """An icosphere, shaded smooth by default: its baked copy then keeps its vertices (flat faces
+    give each face corner a vertex of its own: utils/corners.py)."""
     import bmesh
     mesh = bpy.data.meshes.new(name)
     bm = bmesh.new()
@@ -227,9 +229,30 @@ def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.
     bmesh.ops.create_icosphere(bm, **kwargs)
     bm.to_mesh(mesh)
     bm.free()
+    mesh.polygons.foreach_set("use_smooth", [smooth] * len(mesh.polygons))
     obj = add_object(scene, name, mesh)
     obj.location = location
     return obj
+
+
+def diffuse_material(name, colour=(1.0, 1.0, 1.0, 1.0), image=None):
+    """A material of one Diffuse BSDF (Lambert in the add-on and in Cycles) of the colour, or of the
+    image plugged into its colour. A white one makes the live shading show B itself (an object
+    without a material has Blender's default 0.8 grey surface)."""
+    material = bpy.data.materials.new(name)
+    use_nodes(material)
+    tree = material.node_tree
+    for node in list(tree.nodes):
+        if node.type != 'OUTPUT_MATERIAL':
+            tree.nodes.remove(node)
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = colour
+    if image is not None:
+        texture = tree.nodes.new("ShaderNodeTexImage")
+        texture.image = image
+        tree.links.new(texture.outputs["Color"], diffuse.inputs["Color"])
+    tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    return material
 
 
 def grid(scene, name="Ground", cuts=10, size=4.0, location=(0.0, 0.0, 0.0)):
@@ -341,4 +364,48 @@ def relative_error(gpu_values, cpu_values):
     per_vertex = diff / np.maximum(np.abs(cpu_values), 0.01 * scale)
     return float(diff.max() / scale), float(per_vertex.max())
 
+
+# ----------------------------------------------------------------------------------------------
+# Images: Cycles against the preview
+
+def load_exr(path):
+    """An EXR's RGBA as float32 [H, W, 4], rows top-first."""
+    import numpy as np
+    image = bpy.data.images.load(path)
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(height, width, 4)[::-1]
+
+
+def block_averages(image, mask, block):
+    """RGB averages over the block x block tiles that lie wholly inside the mask: [K, 3]."""
+    n, m = image.shape[0] // block, image.shape[1] // block
+    rgb = image[:n * block, :m * block, :3].reshape(n, block, m, block, 3).mean(axis=(1, 3))
+    full = mask[:n * block, :m * block].reshape(n, block, m, block).all(axis=(1, 3))
+    return rgb[full]
+
+
+def cycles_render(scene, path, size, samples=512):
+    """Renders the scene with Cycles as a user comparing with the preview would (direct light
+    only, pixel filter off, no denoising - Debian's Cycles has no OpenImageDenoise - transparent
+    film) at size x size into an EXR; returns load_exr's image."""
+    render = scene.render
+    render.engine = 'CYCLES'
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    if hasattr(scene.cycles, "use_preview_denoising"):
+        scene.cycles.use_preview_denoising = False
+    scene.cycles.seed = 1
+    scene.cycles.filter_width = 0.01
+    scene.cycles.max_bounces = 0
+    render.film_transparent = True
+    render.resolution_x = render.resolution_y = size
+    render.resolution_percentage = 100
+    render.image_settings.file_format = 'OPEN_EXR'
+    render.image_settings.color_depth = '32'
+    render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    return load_exr(path)
 

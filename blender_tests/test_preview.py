@@ -95,6 +95,9 @@ def main():
     _, mapping = sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     ball = sdtest.ico_sphere(scene, subdivisions=3, location=(0.0, 0.0, 0.75), radius=0.75)
     ground = sdtest.grid(scene, cuts=24, size=4.0)
+    white = sdtest.diffuse_material("White")     # the preview shows B itself
+    for obj in (ball, ground):
+        obj.data.materials.append(white)
     sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
     settings = sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 4, 2, rays=128,
                                     select=[ball, ground])

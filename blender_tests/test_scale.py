@@ -52,6 +52,8 @@ def monkey_mesh():
     obj = bpy.context.active_object
     mesh = obj.data
     bpy.data.objects.remove(obj)
+    # smooth: one baked vertex per mesh vertex (flat faces would give each corner its own)
+    mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
     return mesh
 
 

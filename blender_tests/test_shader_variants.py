@@ -3,8 +3,9 @@ ends.
 
 Variants: every method x lobe (Lambert, Phong; PRT (2) Lambert only) x orders (s, s') in ORDERS
 (0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn / vertex-target, and the
-band-limited-texture variants of MSD (12), (13): 204 programs, each built by gpu_shading exactly as the
-live shading builds it (defines, frame block, samplers, interface).
+band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each drawn variant with
+material albedos (slots and an image texture): 238 programs, each built by gpu_shading exactly as
+the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
@@ -43,6 +44,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
+ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
 DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
 
@@ -78,6 +80,11 @@ def variants(package):
                         for texture in textures:
                             yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt,
                                                          per_pixel, vertex_target, texture)
+                            if (s, sv) == ALBEDO_ORDERS and not vertex_target:
+                                yield shader_variant.Variant(
+                                    method, glossy, s, sv, stride, design, gaunt, per_pixel,
+                                    vertex_target, texture, material_count=3, material_slots=True,
+                                    albedo_texture=True)
 
 
 def name(variant):
@@ -142,7 +149,7 @@ def main():
     print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
                                 else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
     all_variants = list(variants(package))
-    checks.check(len(all_variants) == 204, "variants enumerated", "%d" % len(all_variants))
+    checks.check(len(all_variants) == 238, "variants enumerated", "%d" % len(all_variants))
 
     # 1. This Blender's GPU backend.
     failed, start = [], time.perf_counter()

@@ -78,6 +78,9 @@ class Test:
         sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
         self.ball = sdtest.ico_sphere(scene, subdivisions=3, location=(0.0, 0.0, 0.75), radius=0.75)
         self.ground = sdtest.grid(scene, cuts=30, size=4.0)
+        white = sdtest.diffuse_material("White")     # the viewport shows B itself
+        for obj in (self.ball, self.ground):
+            obj.data.materials.append(white)
         sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
         sdtest.bake_settings(scene, 'msd_visibility', 'PHONG', 4, 2, rays=256, phong_exponent=4.0,
                              select=[self.ball, self.ground])

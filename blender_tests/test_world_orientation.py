@@ -23,40 +23,6 @@ BLOCK = 6
 ROTATION = (math.radians(25.0), math.radians(-35.0), math.radians(70.0))
 
 
-def load_exr(path):
-    image = bpy.data.images.load(path)
-    pixels = np.empty(SIZE * SIZE * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(SIZE, SIZE, 4)[::-1]
-
-
-def blocks(image, mask):
-    """Block averages of RGB over blocks fully inside the mask."""
-    n = SIZE // BLOCK
-    rgb = image[:n * BLOCK, :n * BLOCK, :3].reshape(n, BLOCK, n, BLOCK, 3).mean(axis=(1, 3))
-    full = mask[:n * BLOCK, :n * BLOCK].reshape(n, BLOCK, n, BLOCK).all(axis=(1, 3))
-    return rgb[full]
-
-
-def cycles_render(scene, path):
-    render = scene.render
-    render.engine = 'CYCLES'
-    scene.cycles.samples = 512
-    scene.cycles.use_denoising = False
-    if hasattr(scene.cycles, "use_preview_denoising"):
-        scene.cycles.use_preview_denoising = False
-    scene.cycles.seed = 1
-    render.film_transparent = True
-    render.resolution_x = render.resolution_y = SIZE
-    render.resolution_percentage = 100
-    render.image_settings.file_format = 'OPEN_EXR'
-    render.image_settings.color_depth = '32'
-    render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    return load_exr(path)
-
-
 def main():
     checks = sdtest.Checks("test_world_orientation")
     args = sdtest.arguments()
@@ -66,17 +32,7 @@ def main():
     _, mapping = sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     mapping.inputs["Rotation"].default_value = ROTATION
     ball = sdtest.ico_sphere(scene, subdivisions=5, radius=1.0, location=(0.0, 0.0, 0.0))
-    ball.data.polygons.foreach_set("use_smooth", [True] * len(ball.data.polygons))
-    material = bpy.data.materials.new("White")
-    sdtest.use_nodes(material)
-    tree = material.node_tree
-    for node in list(tree.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            tree.nodes.remove(node)
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
-    ball.data.materials.append(material)
+    ball.data.materials.append(sdtest.diffuse_material("White"))
     sdtest.camera(scene, location=(0.0, -4.5, 0.0), target=(0.0, 0.0, 0.0), lens=60.0)
 
     sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[ball])
@@ -84,17 +40,17 @@ def main():
 
     def preview(path):
         assert bpy.ops.sd_lighting.render_preview(filepath=path, width=SIZE, height=SIZE) == {'FINISHED'}
-        return load_exr(path)
+        return sdtest.load_exr(path)
 
     ours = preview(os.path.join(args.out, "orientation_preview.exr"))
     mapping.inputs["Rotation"].default_value[2] += math.radians(90.0)
     other = preview(os.path.join(args.out, "orientation_preview_other.exr"))
     mapping.inputs["Rotation"].default_value = ROTATION
-    cycles = cycles_render(scene, os.path.join(args.out, "orientation_cycles.exr"))
+    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "orientation_cycles.exr"), SIZE)
 
     mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
     checks.check(mask.mean() > 0.3, "both images show the sphere", "%.0f %% of pixels" % (100 * mask.mean()))
-    a, b, c = blocks(ours, mask), blocks(cycles, mask), blocks(other, mask)
+    a, b, c = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles, other))
     relative = np.abs(a - b).max(axis=1) / b.max(axis=1)
     wrong = np.abs(c - b).max(axis=1) / b.max(axis=1)
     checks.check(np.median(relative) < 0.03 and np.percentile(relative, 90) < 0.06,

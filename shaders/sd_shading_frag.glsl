@@ -1,8 +1,25 @@
 /* sd-lighting fragment shader (prepended by sd_shading_lib.glsl).
  *
- * Writes scene-linear radiance times 2^exposure (sd.params.x); the viewport applies the sRGB
- * curve to it (the Standard view transform).
+ * Writes scene-linear radiance times 2^exposure (sd.params.x), times the surface's albedo; the
+ * viewport applies the sRGB curve to it (the Standard view transform).
  */
+
+/* The albedo B is multiplied by (SD_ALBEDO: the slot's colour, or its image texture at the pixel's
+ * UV, which Blender's GPU textures return as scene-linear values). */
+vec3 sd_surface_albedo()
+{
+#ifdef SD_ALBEDO
+#  ifdef SD_ALBEDO_TEXTURE
+  if (sd_albedo.a > 0.5) {
+    return texture(sd_albedo_texture, sd_uv).rgb;
+  }
+#  endif
+  return sd_albedo.rgb;
+#else
+  return vec3(1.0);
+#endif
+}
+
 void main()
 {
 #ifdef SD_PER_PIXEL
@@ -18,8 +35,8 @@ void main()
   if (sd_bary.z > 0.0) {
     rgb += sd_bary.z * sd_shade(int(sd_corners.z + 0.5), normal, view);
   }
-  fragColor = vec4(sd.params.x * rgb, 1.0);
+  fragColor = vec4(sd.params.x * rgb * sd_surface_albedo(), 1.0);
 #else
-  fragColor = vec4(sd_color, 1.0);
+  fragColor = vec4(sd_color * sd_surface_albedo(), 1.0);
 #endif
 }

@@ -7,6 +7,8 @@
  * the triangle's vertex indices in `corners` and the barycentric corner in `bary`).
  * SD_VERTEX_TARGET (tests): vertex p is drawn as a point at pixel (p % width, p / width) of a
  * float target, so the readback holds exactly what the shader computed for every vertex.
+ * SD_ALBEDO: the vertex's material slot picks its albedo from sd.albedo (SD_MATERIAL_SLOTS: the
+ * attribute material_slot, else slot 0), passed on with the UV of the albedo texture.
  */
 void main()
 {
@@ -23,6 +25,17 @@ void main()
   /* A small pull towards the eye, so that the overlay wins the depth test against the viewport's
    * own drawing of the same surface. */
   gl_Position.z -= sd.params.w * gl_Position.w;
+#endif
+
+#ifdef SD_ALBEDO
+#  ifdef SD_MATERIAL_SLOTS
+  sd_albedo = sd.albedo[int(material_slot + 0.5)];
+#  else
+  sd_albedo = sd.albedo[0];
+#  endif
+#  ifdef SD_ALBEDO_TEXTURE
+  sd_uv = uv;
+#  endif
 #endif
 
 #ifdef SD_PER_PIXEL

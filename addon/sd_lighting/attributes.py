@@ -101,11 +101,63 @@ def new_mesh(name, vertices, loop_vertices, loop_starts, loop_totals):
     return mesh
 
 
-def read_triangles(mesh):
+def _loop_triangles(mesh, prop):
     mesh.calc_loop_triangles()
-    triangles = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
-    mesh.loop_triangles.foreach_get('vertices', triangles)
-    return triangles.reshape(-1, 3)
+    values = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get(prop, values)
+    return values.reshape(-1, 3)
+
+
+def read_triangles(mesh):
+    """Each triangle's three vertices, int32 [T, 3]."""
+    return _loop_triangles(mesh, 'vertices')
+
+
+def read_triangle_loops(mesh):
+    """Each triangle's three loops (face corners), int32 [T, 3]."""
+    return _loop_triangles(mesh, 'loops')
+
+
+def read_loop_material_slots(mesh):
+    """Each loop's material slot (its polygon's material_index), int32 [L]."""
+    starts = np.empty(len(mesh.polygons), dtype=np.int64)
+    mesh.polygons.foreach_get('loop_start', starts)
+    totals = np.empty(len(mesh.polygons), dtype=np.int64)
+    mesh.polygons.foreach_get('loop_total', totals)
+    slots = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get('material_index', slots)
+    out = np.zeros(len(mesh.loops), dtype=np.int32)
+    first = np.repeat(starts, totals)
+    within = np.arange(totals.sum()) - np.repeat(np.cumsum(totals) - totals, totals)
+    out[first + within] = np.repeat(slots, totals)
+    return out
+
+
+def read_loop_uvs(mesh, name):
+    """Each loop's UV in the named UV layer ("": the active render layer), float32 [L, 2]; zeros
+    when the mesh has no such layer."""
+    layers = mesh.uv_layers
+    layer = layers.get(name) if name else next((l for l in layers if l.active_render), None)
+    uvs = np.zeros(len(mesh.loops) * 2, dtype=np.float32)
+    if layer is not None:
+        layer.data.foreach_get('uv', uvs)
+    return uvs.reshape(-1, 2)
+
+
+def write_surface(mesh, material_slots, uvs):
+    """Stores what the shading reads besides the bake: each vertex's material slot and albedo-texture
+    UV (either may be None: one material, no texture)."""
+    if material_slots is not None:
+        _new(mesh, bake_data.MATERIAL_SLOT, 'FLOAT', 'value', material_slots)
+    if uvs is not None:
+        _new(mesh, bake_data.UV, 'FLOAT2', 'vector', uvs)
+
+
+def read_surface(mesh):
+    """(material slots float32 [N] or None, UVs float32 [N, 2] or None) as write_surface stored them."""
+    slots = _read(mesh, bake_data.MATERIAL_SLOT, 'value', 1) if bake_data.MATERIAL_SLOT in mesh.attributes else None
+    uvs = _read(mesh, bake_data.UV, 'vector', 2) if bake_data.UV in mesh.attributes else None
+    return slots, uvs
 
 
 def read(mesh):

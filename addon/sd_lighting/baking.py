@@ -26,8 +26,8 @@ import uuid
 import numpy as np
 
 from . import attributes, compat, environment, materials, native
-from .utils import methods, transforms
-from .utils.bake_data import BAKE, BAKED_MESH
+from .utils import corners, methods, transforms
+from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
@@ -52,27 +52,40 @@ def _unit(normals):
 class Geometry:
     """A mesh as arrays: its positions and polygons in the object's local frame (to rebuild it as
     the baked mesh), and the vertices, unit normals and triangles that are baked, in the bake frame
-    (transforms.bake_frame: the local frame with the object's scale K applied)."""
+    (transforms.bake_frame: the local frame with the object's scale K applied).
 
-    def __init__(self, mesh, shape):
-        """mesh: a temporary mesh (Object.to_mesh()), which this scales by K."""
-        self.positions = attributes.read_positions(mesh)
-        self.loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
-        mesh.loops.foreach_get('vertex_index', self.loop_vertices)
+    The vertices are the mesh's split where its corners shade differently (utils/corners.py): each
+    carries the corner normal Blender and Cycles shade with, its material slot and, when a material
+    reads an image texture, its UV (`material_slots`, `uvs`: per vertex, or None)."""
+
+    def __init__(self, mesh, shape, uv_map=None):
+        """mesh: a temporary mesh (Object.to_mesh()), which this scales by K; uv_map: the name of
+        the UV layer an albedo texture is read through ("" for the active render layer), or None."""
+        positions = attributes.read_positions(mesh)
+        loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
+        mesh.loops.foreach_get('vertex_index', loop_vertices)
         self.loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_start', self.loop_starts)
         self.loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_total', self.loop_totals)
+        loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
+        loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
         # The scale applied as Object > Apply > Scale does (normals recomputed from the scaled
-        # faces), and a mirror's faces flipped outside out (the bake reads their winding).
+        # faces); a mirror's normals and triangles turned outside out (the bake reads their winding).
         matrix = np.eye(4)
         matrix[:3, :3] = shape
         mesh.transform([list(row) for row in matrix])
-        if np.linalg.det(shape) < 0:
-            mesh.flip_normals()
-        self.vertices = attributes.read_positions(mesh).astype(np.float64)
-        self.normals = _unit(compat.vertex_normals(mesh).astype(np.float64))
-        self.triangles = attributes.read_triangles(mesh)
+        mirrored = np.linalg.det(shape) < 0
+        normals = compat.corner_normals(mesh).astype(np.float64)
+        split = corners.split(loop_vertices, -normals if mirrored else normals, loop_slots, loop_uvs)
+        self.positions = positions[split.origin]
+        self.loop_vertices = split.loop_vertex
+        self.vertices = attributes.read_positions(mesh).astype(np.float64)[split.origin]
+        self.normals = _unit(split.normal_sums)
+        triangle_loops = attributes.read_triangle_loops(mesh)
+        self.triangles = split.loop_vertex[triangle_loops[:, ::-1] if mirrored else triangle_loops]
+        self.material_slots = None if loop_slots is None else corners.vertex_values(split, loop_slots)
+        self.uvs = None if loop_uvs is None else corners.vertex_values(split, loop_uvs)
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
@@ -87,7 +100,7 @@ def _evaluated_arrays(obj, depsgraph, shape):
     try:
         if mesh is None:
             return None
-        return Geometry(mesh, shape)
+        return Geometry(mesh, shape, materials.albedo_uv_map(obj))
     finally:
         evaluated.to_mesh_clear()
 
@@ -330,6 +343,7 @@ class BakeJob:
                 mesh = task.geometry.build_mesh(MESH_PREFIX + task.object_name)
                 built.append((obj, mesh, task))
                 floats = attributes.write(mesh, task.geometry.normals, task.result)
+                attributes.write_surface(mesh, task.geometry.material_slots, task.geometry.uvs)
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))
                 mesh[BAKE] = settings
@@ -400,6 +414,14 @@ def scale_changed(obj):
     baked = np.array(list(info["shape"]), dtype=np.float64).reshape(3, 3)
     current = transforms.bake_frame(obj.matrix_world)[0]
     return not np.allclose(current, baked, rtol=0.0, atol=1e-5 * np.abs(baked).max())
+
+
+def albedo_texture_unbaked(obj):
+    """Whether the object's material reads an image texture its bake kept no UVs for (the texture
+    was added since): the live shading then shows the material's flat colour."""
+    mesh = baked_mesh(obj)
+    return (mesh is not None and materials.albedo_uv_map(obj) is not None
+            and UV not in mesh.attributes)
 
 
 def _release(mesh):

@@ -19,7 +19,7 @@ import logging
 
 import numpy as np
 
-from . import attributes, baking, environment, gpu_shading, native
+from . import attributes, baking, environment, gpu_shading, materials, native
 from .utils import methods, transforms
 from .utils.bake_data import BAKE
 
@@ -127,7 +127,7 @@ def _frame(scene, obj, data, view, scale, source=None, rotation=None, **kwargs):
     """(uniform block, band-limited texture or None) of one draw of the object's data."""
     light, gr = local_light(scene, obj, data.light_order, source, rotation)
     block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
-                             light, gr, scale, **kwargs)
+                             light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
     texture = None
     if data.uses_band_limited_texture:
         texture = gpu_shading.band_limited_texture(source or environment.source(scene),

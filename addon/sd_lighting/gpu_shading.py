@@ -15,7 +15,11 @@ What a draw reads:
 - for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
 - with the band-limited texture option (methods that can read it), the band-limited environment
   L~ (unrotated) as an equirect RGBA32F texture `sd_band_limited_texture`, looked up at g R x
-  instead of summing (s+1)^2 SH terms per direction.
+  instead of summing (s+1)^2 SH terms per direction;
+- the albedo B is multiplied by (materials.py), read from the object's materials at every draw:
+  one colour per material slot in the block, a vertex attribute `material_slot` where the bake
+  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`. An object
+  whose albedos are all white gets a variant without any of it.
 Variants are compiled on first use and cached.
 """
 
@@ -24,12 +28,13 @@ import os
 
 import numpy as np
 
-from . import attributes, native
+from . import attributes, materials, native
 from .utils import lobe_designs as lobe_design_cache
 from .utils import methods, transforms
 from .utils.bake_data import BAKE
-from .utils.shader_variant import (BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
-                                   TEXTURE_WIDTH, Variant, band_limited_texture_size)
+from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER,
+                                   DATA_SAMPLER, GAUNT_SAMPLER, TEXTURE_WIDTH, Variant,
+                                   band_limited_texture_size)
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.glsl")
@@ -248,6 +253,16 @@ class ObjectData:
 
         positions = attributes.read_positions(mesh)
         normals = attributes.read_normals(mesh)
+        slots, uvs = attributes.read_surface(mesh)
+        self.slot_count = int(slots.max()) + 1 if slots is not None and len(slots) else 1
+        self.has_uvs = uvs is not None
+        self.albedo_image = None
+        surface = {}    # per-vertex albedo inputs; the test target reads B alone
+        if slots is not None and not vertex_target:
+            surface["material_slot"] = slots
+        if uvs is not None and not vertex_target:
+            surface["uv"] = uvs
+        self.vertex_target = vertex_target
         if vertex_target:
             content = {"pos": positions, "nrm": normals}
             if per_pixel:
@@ -263,20 +278,47 @@ class ObjectData:
                 content = {"pos": positions[corners], "nrm": normals[corners],
                            "corners": np.repeat(triangles.astype(np.float32), 3, axis=0),
                            "bary": np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1))}
+                content.update({name: values[corners] for name, values in surface.items()})
                 self.batch = make_batch('TRIS', content)
             else:
-                self.batch = make_batch('TRIS', {"pos": positions, "nrm": normals}, indices=triangles)
+                self.batch = make_batch('TRIS', dict({"pos": positions, "nrm": normals}, **surface),
+                                        indices=triangles)
         self.ubo = None
 
+    def _use_albedos(self, albedos):
+        """The block's albedo rows for the materials' current albedos (materials.object_albedos),
+        switching to the variant they need: none when all are white. Returns the rows or None."""
+        rows = np.zeros((self.slot_count, 4))
+        rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
+        image = None
+        if not self.vertex_target:
+            for slot, albedo in enumerate(albedos[:self.slot_count]):
+                rows[slot, :3] = albedo.colour
+                if albedo.image is not None and self.has_uvs:
+                    rows[slot, 3] = 1.0
+                    image = albedo.image
+        white = image is None and bool(np.all(rows[:, :3] == 1.0))
+        variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
+                                      material_slots=not white and self.slot_count > 1,
+                                      albedo_texture=image is not None)
+        if variant != self.variant:
+            self.variant = variant
+            self.shader = shader_program(variant)
+            self.ubo = None
+        self.albedo_image = image
+        return None if white else rows
+
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
-                    exposure_scale, target=(1, 1), depth_bias=0.0):
+                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=()):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
-        for the band-limited texture (it holds the unrotated L~, looked up at g R x)."""
+        for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
+        the object's materials.object_albedos (none: white)."""
         self.refresh_design()
+        albedo_rows = self._use_albedos(list(albedos))
         values = {"model": model, "view_projection": view_projection,
                   "world_to_local": transforms.rotation_part(model).T, "camera": camera,
                   "params": (exposure_scale, target[0], target[1], depth_bias),
@@ -285,6 +327,8 @@ class ObjectData:
             values["local_to_environment"] = local_to_environment
         if self.design is not None:
             values["design"] = self.design.texels()
+        if albedo_rows is not None:
+            values["albedo"] = albedo_rows
         return self.variant.frame_block(values)
 
     def draw(self, block, band_limited_texture=None):
@@ -298,6 +342,8 @@ class ObjectData:
         self.shader.uniform_block("sd", self.ubo)
         textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
                     BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture}
+        if self.variant.albedo_texture:
+            textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
         for _, name in self.variant.samplers():
             self.shader.uniform_sampler(name, textures[name])
         self.batch.draw(self.shader)

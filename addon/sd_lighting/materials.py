@@ -1,18 +1,50 @@
-"""The BRDF lobe of an object: read from its first material with a Principled BSDF (the rule is
-utils/lobes.py), or forced by the panel's settings. An object without such a material is Lambert.
+"""What an object's materials give the shading: the BRDF lobe (the rule is utils/lobes.py) and
+the albedo B is multiplied by.
+
+A material's surface BSDF is the Principled or Diffuse BSDF feeding its active Material Output's
+Surface, else the first such node in its tree. Its albedo is the BSDF's base colour: a constant,
+or an Image Texture plugged straight into it (read through the UV map the node's Vector input
+names, or the mesh's active render UV map). What Lambert or Phong with an albedo cannot express
+(the Principled specular layer of a rough dielectric, colour computed by other nodes, a second
+image texture on one object) is approximated, and `Albedo.note` says how. A material without such
+a BSDF uses its viewport colour; a face without a material has Blender's default surface, a 0.8
+grey diffuse (as Cycles renders it).
 """
+
+from dataclasses import dataclass
+from typing import Optional
 
 from . import compat
 from .utils import lobes
 
+WHITE = (1.0, 1.0, 1.0)
+DEFAULT_SURFACE = (0.8, 0.8, 0.8)   # what Cycles and EEVEE shade a face without a material with
 
-def _principled(material):
-    if not compat.uses_nodes(material):
+
+@dataclass(frozen=True)
+class Albedo:
+    """A material slot's albedo: a linear RGB colour, or an image read through a UV map."""
+    colour: tuple = DEFAULT_SURFACE
+    image: object = None            # bpy.types.Image, or None
+    uv_map: Optional[str] = None    # the image's UV map ("": the active render one)
+    note: str = ""                  # what is approximated, for the panel
+
+
+def _bsdf_nodes(material):
+    return [n for n in material.node_tree.nodes if n.type in ('BSDF_PRINCIPLED', 'BSDF_DIFFUSE')]
+
+
+def surface_bsdf(material):
+    """The material's Principled or Diffuse BSDF node (see the module's doc), or None."""
+    if material is None or not compat.uses_nodes(material):
         return None
+    candidates = _bsdf_nodes(material)
     for node in material.node_tree.nodes:
-        if node.type == 'BSDF_PRINCIPLED':
-            return node
-    return None
+        if node.type == 'OUTPUT_MATERIAL' and node.is_active_output:
+            surface = node.inputs.get("Surface")
+            if surface is not None and surface.is_linked and surface.links[0].from_node in candidates:
+                return surface.links[0].from_node
+    return candidates[0] if candidates else None
 
 
 def _input_value(node, name, default):
@@ -22,12 +54,84 @@ def _input_value(node, name, default):
     return float(socket.default_value)
 
 
+def _colour_socket(node):
+    return node.inputs.get("Base Color" if node.type == 'BSDF_PRINCIPLED' else "Color")
+
+
+def _uv_map(image_node):
+    vector = image_node.inputs.get("Vector")
+    if vector is not None and vector.is_linked and vector.links[0].from_node.type == 'UVMAP':
+        return vector.links[0].from_node.uv_map
+    return ""
+
+
+def albedo(material):
+    """The Albedo of one material (None: an empty slot, Blender's default surface)."""
+    if material is None:
+        return Albedo()
+    node = surface_bsdf(material)
+    if node is None:
+        return Albedo(tuple(material.diffuse_color)[:3], note="no Principled or Diffuse BSDF: "
+                      "its viewport colour")
+    socket = _colour_socket(node)
+    colour = tuple(socket.default_value)[:3]
+    note = ""
+    if node.type == 'BSDF_PRINCIPLED' and lobes.lobe_from_principled(
+            _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0))[0][0] == "lambert":
+        specular = _input_value(node, "Specular IOR Level", _input_value(node, "Specular", 0.0))
+        if specular > 0.0:
+            note = "specular layer not shaded (Lambert)"
+    if socket.is_linked:
+        source = socket.links[0].from_node
+        if source.type == 'TEX_IMAGE' and source.image is not None:
+            return Albedo(colour, source.image, _uv_map(source), note)
+        note = "colour from node %s shown as the input's default" % source.name
+    return Albedo(colour, note=note)
+
+
+def object_albedos(obj):
+    """One Albedo per material slot of the object (at least one). Only one image texture per
+    object is shown: slots reading another image show their colour input's default value."""
+    slots = list(getattr(obj, "material_slots", ()))
+    out = [albedo(slot.material) for slot in slots] or [Albedo()]
+    image = texture_image(out)
+    return [a if a.image is None or a.image == image else
+            Albedo(a.colour, note="second image texture (%s) shown as a flat colour" % a.image.name)
+            for a in out]
+
+
+def texture_image(albedos):
+    """The one image texture the object's albedos read, or None."""
+    return next((a.image for a in albedos if a.image is not None), None)
+
+
+def albedo_uv_map(obj):
+    """The UV map the object's albedo texture is read through ("": the active render one), or None
+    without a texture: the bake keeps these UVs per vertex."""
+    return next((a.uv_map for a in object_albedos(obj) if a.image is not None), None)
+
+
+def albedo_summary(obj):
+    """Lines for the panel: each slot's albedo and what is approximated."""
+    lines = []
+    for slot, albedo in zip(list(getattr(obj, "material_slots", ())) or [None], object_albedos(obj)):
+        name = slot.material.name if slot is not None and slot.material is not None else "no material"
+        if albedo.image is not None:
+            what = "image %s (UV map %s)" % (albedo.image.name, albedo.uv_map or "active render")
+        else:
+            what = "(%.2f, %.2f, %.2f)" % albedo.colour
+        lines.append("%s: albedo %s" % (name, what) + ("; %s" % albedo.note if albedo.note else ""))
+    return lines
+
+
 def lobe_from_material(obj):
     """("lambert", 1.0) or ("phong", sigma) for the object's material, and a short explanation."""
     for slot in getattr(obj, "material_slots", ()):
-        node = _principled(slot.material)
+        node = surface_bsdf(slot.material)
         if node is None:
             continue
+        if node.type == 'BSDF_DIFFUSE':
+            return ("lambert", 1.0), "%s: Diffuse BSDF -> Lambert" % slot.material.name
         lobe, why = lobes.lobe_from_principled(_input_value(node, "Roughness", 0.5),
                                                _input_value(node, "Metallic", 0.0))
         return lobe, "%s: %s" % (slot.material.name, why)

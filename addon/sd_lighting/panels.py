@@ -62,6 +62,9 @@ class SD_PT_lighting(bpy.types.Panel):
             box.prop(settings, "phong_exponent")
         elif settings.material_source == 'MATERIAL' and context.active_object is not None:
             box.label(text=materials.lobe_from_material(context.active_object)[1][:60])
+        if context.active_object is not None:
+            for line in materials.albedo_summary(context.active_object):
+                box.label(text=line[:100])
         box.prop(settings, "method", text="")
         row = box.row(align=True)
         row.prop(settings, "rays")
@@ -124,6 +127,9 @@ class SD_PT_lighting(bpy.types.Panel):
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
         if baking.scale_changed(obj):
             col.label(text="Scale changed since the bake: bake again", icon='ERROR')
+        if baking.albedo_texture_unbaked(obj):
+            col.label(text="The image texture needs UVs the bake did not keep: bake again",
+                      icon='ERROR')
         box.operator("sd_lighting.clear_bake", icon='X')
 
 

@@ -12,13 +12,15 @@ from sd_lighting.utils.shader_variant import BlockField, Variant
 
 def all_variants():
     for method in methods.METHODS:
-        for glossy, per_pixel, target, texture in itertools.product((False, True), repeat=4):
+        for glossy, per_pixel, target, texture, albedo in itertools.product((False, True), repeat=5):
             if texture and not method.band_limited_texture:
                 continue
             yield Variant(method, glossy, 4, 2, 0 if method.data is None else 3,
                           18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                           per_pixel, target,
-                          shader_variant.band_limited_texture_size(4) if texture else ())
+                          shader_variant.band_limited_texture_size(4) if texture else (),
+                          material_count=2 if albedo else 0, material_slots=albedo,
+                          albedo_texture=albedo)
 
 
 def test_defines_of_a_known_variant(sdnative):
@@ -60,8 +62,26 @@ def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source,
     used = set(re.findall(r"\b(SD_[A-Z0-9_]*[A-Z0-9])\b", source)) - defined_in_glsl
     assert used == produced
     assert set(re.findall(r"\bsd\.([a-z_]+)", source)) == fields
-    glsl_samplers = set(re.findall(r"texelFetch\((sd_[a-z_]+)", source))
+    glsl_samplers = set(re.findall(r"(?:texelFetch|texture)\((sd_[a-z_]+)", source))
     assert glsl_samplers == samplers
+
+
+def test_albedo_variants_read_only_what_the_materials_need(sdnative):
+    unshadowed = methods.get("unshadowed")
+    white = Variant(unshadowed, False, 1, 0)
+    flat = Variant(unshadowed, False, 1, 0, material_count=1)
+    textured = Variant(unshadowed, False, 1, 0, material_count=3, material_slots=True,
+                       albedo_texture=True)
+    assert not any(name.startswith("SD_ALBEDO") for name in white.defines(sdnative.sh_recurrence_constants))
+    assert "albedo" not in [f.name for f in white.frame_fields()]
+    defines = flat.defines(sdnative.sh_recurrence_constants)
+    assert defines["SD_ALBEDO"] == "1"
+    assert "SD_MATERIAL_SLOTS" not in defines and "SD_ALBEDO_TEXTURE" not in defines
+    assert [n for _, n in flat.vertex_inputs()] == ["pos", "nrm"]
+    assert ("flat", "vec4", "sd_albedo") in flat.interface()
+    assert [n for _, n in textured.vertex_inputs()] == ["pos", "nrm", "material_slot", "uv"]
+    assert textured.samplers() == [(3, "sd_albedo_texture")]
+    assert [f for f in textured.frame_fields() if f.name == "albedo"][0].length == 3
 
 
 def test_every_input_and_interface_member_is_one_the_glsl_reads(glsl_source):

@@ -16,6 +16,8 @@ import numpy as np
 
 PREFIX = "sd_"
 NORMAL = PREFIX + "normal"          # FLOAT_VECTOR: the normal a vertex was baked and is shaded with
+MATERIAL_SLOT = PREFIX + "material_slot"  # FLOAT: the vertex's material slot (objects with several)
+UV = PREFIX + "uv"                  # FLOAT2: the vertex's UV for the albedo texture (when one is read)
 BAKE = PREFIX + "bake"              # custom property: the bake's settings and summary
 BAKED_MESH = PREFIX + "baked_mesh"  # custom property of an object: its baked mesh
 

@@ -20,6 +20,7 @@ TEXTURE_WIDTH = 1 << TEXTURE_WIDTH_LOG2   # every data texture has this width (r
 DATA_SAMPLER = (0, "sd_data")                               # per-vertex texels
 GAUNT_SAMPLER = (1, "sd_gaunt")                             # (a, b, c, G) of eq. (10)
 BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equirect image
+ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
 
 
 def band_limited_texture_size(order):
@@ -87,6 +88,9 @@ class Variant:
     per_pixel: bool = False
     vertex_target: bool = False   # tests: vertex p drawn as pixel p of a float target
     band_limited_texture: tuple = ()   # (width, height) of L~'s texture, or () for the SH sum
+    material_count: int = 0       # albedos in the block, one per material slot (0: white, none)
+    material_slots: bool = False  # the vertices carry their slot (objects with several)
+    albedo_texture: bool = False  # a slot's albedo is an image texture, read through `uv`
 
     @property
     def basis_order(self):
@@ -135,6 +139,12 @@ class Variant:
             d["SD_BAND_LIMITED_TEXTURE"] = "1"
             d["SD_BAND_LIMITED_TEXTURE_WIDTH"] = str(self.band_limited_texture[0])
             d["SD_BAND_LIMITED_TEXTURE_HEIGHT"] = str(self.band_limited_texture[1])
+        if self.material_count:
+            d["SD_ALBEDO"] = "1"
+            if self.material_slots:
+                d["SD_MATERIAL_SLOTS"] = "1"
+            if self.albedo_texture:
+                d["SD_ALBEDO_TEXTURE"] = "1"
         return d
 
     def vertex_inputs(self):
@@ -142,14 +152,25 @@ class Variant:
         inputs = [("vec3", "pos"), ("vec3", "nrm")]
         if self.per_pixel:
             inputs += [("vec3", "corners"), ("vec3", "bary")]
+        if self.material_count and self.material_slots:
+            inputs.append(("float", "material_slot"))
+        if self.material_count and self.albedo_texture:
+            inputs.append(("vec2", "uv"))
         return inputs
 
     def interface(self):
         """What the vertex stage passes on, in location order: (qualifier, GLSL type, name)."""
         if self.per_pixel:
-            return [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
-                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
-        return [("smooth", "vec3", "sd_color")]
+            out = [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
+                   ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
+        else:
+            out = [("smooth", "vec3", "sd_color")]
+        if self.material_count:
+            # a triangle's corners share their slot (utils/corners.py splits vertices between slots)
+            out.append(("flat", "vec4", "sd_albedo"))
+            if self.albedo_texture:
+                out.append(("smooth", "vec2", "sd_uv"))
+        return out
 
     def samplers(self):
         """(slot, name) of the samplers the variant reads."""
@@ -160,6 +181,8 @@ class Variant:
             out.append(GAUNT_SAMPLER)
         if self.band_limited_texture:
             out.append(BAND_LIMITED_TEXTURE_SAMPLER)
+        if self.material_count and self.albedo_texture:
+            out.append(ALBEDO_TEXTURE_SAMPLER)
         return out
 
     def frame_fields(self):
@@ -175,6 +198,9 @@ class Variant:
             fields.append(BlockField("local_to_environment", "mat4"))  # g R: the texture is unrotated
         if self.method.lobe_design:
             fields.append(BlockField("design", "vec4", self.lobe_design_size))  # x, y, z, lambda
+        if self.material_count:
+            # per slot: linear rgb, and 1 where the albedo is the image texture instead
+            fields.append(BlockField("albedo", "vec4", self.material_count))
         return fields
 
     def frame_struct(self):

@@ -64,6 +64,28 @@ struct Fans {
   }
 };
 
+// Each vertex's representative among the vertices at exactly its point (the first by index): a
+// mesh split at hard edges or seams (glTF, the add-on's corner copies) has several vertices at p,
+// and every face through p bounds the free space next to it, whichever copy it belongs to.
+std::vector<unsigned> coincident_representatives(const std::vector<glm::dvec3>& points) {
+  std::vector<unsigned> order(points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](unsigned a, unsigned b) {
+    const glm::dvec3 &p = points[a], &q = points[b];
+    if (p.x != q.x) return p.x < q.x;
+    if (p.y != q.y) return p.y < q.y;
+    if (p.z != q.z) return p.z < q.z;
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::vector<unsigned> representative(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const bool same = i > 0 && points[order[i]] == points[order[i - 1]];
+    representative[order[i]] = same ? representative[order[i - 1]] : order[i];
+  }
+  return representative;
+}
+
 }  // namespace
 
 TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
@@ -84,7 +106,12 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
     areas[t] = glm::length(area_normals[t]);
     centroids[t] = (a + b + c) / 3.0;
   }
-  const Fans fans(points.size(), triangles, areas);
+  const std::vector<unsigned> representative = coincident_representatives(points);
+  std::vector<Triangle> welded(triangles);
+  for (Triangle& t : welded) {
+    for (int k = 0; k < 3; ++k) t[k] = representative[t[k]];
+  }
+  const Fans fans(points.size(), welded, areas);  // the faces through each vertex's point
   const double faceless = faceless_offset(points, shifted_occluders);
   const std::vector<glm::dvec3> fibonacci = spherical_fibonacci(kCandidateDirections);
 
@@ -95,7 +122,8 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
     for (std::size_t v = begin; v < end; ++v) {
       const glm::dvec3& p = points[v];
       const glm::dvec3& n = unit_normals[v];
-      fan.assign(fans.triangles.begin() + fans.offsets[v], fans.triangles.begin() + fans.offsets[v + 1]);
+      const unsigned r = representative[v];
+      fan.assign(fans.triangles.begin() + fans.offsets[r], fans.triangles.begin() + fans.offsets[r + 1]);
       const double floor = kOriginFloat * largest_coordinate(p);
       if (fan.empty()) {
         origins_[v] = p + std::max(faceless, floor) * n;

@@ -6,6 +6,8 @@
 // from the edge and the open quarter-space reads as blocked; at the bottom corner of a box standing
 // on a floor, p + εn lies below the floor and the lower half-space leaks in. So each vertex's rays
 // start at a point q = p + η u in free space next to p:
+// "The triangles around p" are all the object's triangles through the point p, also those of other
+// vertices at exactly p (a mesh split at hard edges or seams).
 //   η = kOriginOffset × the shortest edge of the triangles around p (the size of the local
 //       geometry: thin slabs and fine detail stay resolved, the scale of the object does not
 //       matter), at least kOriginFloat × |p|∞ in the traced frame (above float32 rounding);

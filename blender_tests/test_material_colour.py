@@ -1,0 +1,167 @@
+"""Material colour and corner data (issue 8, items 4 and 5) against Cycles.
+
+A smooth UV sphere (convex: no self-shadowing) with two material slots - a red Diffuse BSDF on
+the upper half, a Diffuse BSDF reading a generated colour-grid image through the sphere's UVs on
+the lower half - under forest.exr is rendered by Cycles (direct light, pixel filter off) and by
+the add-on's preview with the unshadowed Lambert formula at s = 8, as in test_world_orientation.
+The preview multiplies B by each slot's albedo (the image per pixel), so the two agree channel by
+channel; the same preview with white materials does not. A colour changed after the bake shows
+without baking again (albedos are read at every draw).
+
+Corner data: a flat-shaded cube's baked copy has one vertex per face corner (24) with the face
+normals; the smooth sphere keeps its vertices, split only along the material boundary and the UV
+seam; a flat-shaded icosphere shades flat like Cycles, unlike the same mesh baked smooth.
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR
+"""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+SIZE = 120
+BLOCK = 6
+RED = (0.8, 0.15, 0.05, 1.0)
+
+
+def uv_sphere(scene):
+    import bmesh
+    mesh = bpy.data.meshes.new("Ball")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")   # calc_uvs fills the active UV layer: there must be one
+    kwargs = {"u_segments": 48, "v_segments": 24, "calc_uvs": True}
+    kwargs["radius" if bpy.app.version >= (3, 0, 0) else "diameter"] = 1.0
+    bmesh.ops.create_uvsphere(bm, **kwargs)
+    bm.to_mesh(mesh)
+    bm.free()
+    count = len(mesh.polygons)
+    mesh.polygons.foreach_set("use_smooth", [True] * count)
+    centres = np.empty(3 * count, dtype=np.float32)
+    mesh.polygons.foreach_get("center", centres)
+    mesh.polygons.foreach_set("material_index", (centres[2::3] < 0.0).astype(np.int32))
+    return sdtest.add_object(scene, "Ball", mesh)
+
+
+def flat_cube(scene):
+    import bmesh
+    mesh = bpy.data.meshes.new("Cube")
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = sdtest.add_object(scene, "Cube", mesh)
+    obj.location = (0.0, 0.0, -5.0)
+    return obj
+
+
+def main():
+    checks = sdtest.Checks("test_material_colour")
+    args = sdtest.arguments()
+    package = sdtest.install_addon(args.zip)
+
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    ball = uv_sphere(scene)
+    grid = bpy.data.images.new("Grid", 256, 256)
+    grid.generated_type = 'COLOR_GRID'
+    red = sdtest.diffuse_material("Red", RED)
+    ball.data.materials.append(red)
+    ball.data.materials.append(sdtest.diffuse_material("Grid", image=grid))
+    cube = flat_cube(scene)
+    sdtest.camera(scene, location=(0.0, -4.2, 0.6), target=(0.0, 0.0, 0.0), lens=55.0)
+
+    # Corner data
+    sdtest.bake_settings(scene, 'ambient_occlusion', 'LAMBERT', 2, rays=16, select=[cube])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the flat cube")
+    baked = package.baking.baked_mesh(cube)
+    normals = package.attributes.read_normals(baked)
+    positions = package.attributes.read_positions(baked)
+    face_normal = np.sign(positions) * (np.abs(positions) == np.abs(positions).max(axis=1)[:, None])
+    checks.check(len(baked.vertices) == 24, "a flat cube bakes one vertex per face corner",
+                 "%d vertices (the cube has %d)" % (len(baked.vertices), len(cube.data.vertices)))
+    checks.check(len(normals) == 24 and np.abs(np.abs(normals).max(axis=1) - 1.0).max() < 1e-6,
+                 "each corner vertex has its face's normal", "largest component %s" % np.abs(normals).max(axis=1)[:4])
+    checks.check(np.all(np.sum(normals * face_normal, axis=1) > 0.999),
+                 "the corner normals point out of their faces")
+    checks.check("sd_material_slot" not in baked.attributes and "sd_uv" not in baked.attributes,
+                 "one material without a texture stores no slots or UVs")
+    cube.hide_set(True)
+    cube.hide_render = True
+
+    sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[ball])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the sphere")
+    baked = package.baking.baked_mesh(ball)
+    rings, segments = 24, 48
+    # two poles, 23 rings of 48; the equator ring splits by slot, one meridian by the UV seam
+    expected = 2 + (rings - 1) * segments + segments + (rings - 1) + 1 + 2 * segments
+    checks.check(len(ball.data.vertices) < len(baked.vertices) <= expected,
+                 "the smooth sphere splits only along the material boundary and UV seams",
+                 "%d of %d vertices (at most %d)" % (len(baked.vertices), len(ball.data.vertices), expected))
+    slots, uvs = package.attributes.read_surface(baked)
+    checks.check(slots is not None and uvs is not None and set(np.unique(slots)) == {0.0, 1.0},
+                 "the baked sphere keeps its slots and UVs")
+
+    def preview(name):
+        path = os.path.join(args.out, name)
+        assert bpy.ops.sd_lighting.render_preview(filepath=path, width=SIZE, height=SIZE) == {'FINISHED'}
+        return sdtest.load_exr(path)
+
+    ours = preview("colour_preview.exr")
+    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "colour_cycles.exr"), SIZE, 1024)
+    red.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    grid_link = ball.data.materials[1].node_tree.links[0]
+    ball.data.materials[1].node_tree.links.remove(grid_link)
+    white = preview("colour_preview_white.exr")
+    red.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = (0.1, 0.7, 0.2, 1.0)
+    green = preview("colour_preview_green.exr")
+
+    mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+    checks.check(mask.mean() > 0.3, "both images show the sphere", "%.0f %% of pixels" % (100 * mask.mean()))
+    a, b, w = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles, white))
+    relative = (np.abs(a - b) / b.max(axis=1)[:, None]).max(axis=1)
+    wrong = (np.abs(w - b) / b.max(axis=1)[:, None]).max(axis=1)
+    checks.check(np.median(relative) < 0.04 and np.percentile(relative, 90) < 0.10,
+                 "preview = Cycles channel by channel (colour and image texture, block averages)",
+                 "median %.1f %%, 90th pct %.1f %% over %d blocks; mean RGB %s vs Cycles %s" % (
+                     100 * np.median(relative), 100 * np.percentile(relative, 90), len(relative),
+                     np.round(a.mean(axis=0), 3), np.round(b.mean(axis=0), 3)))
+    checks.check(np.median(wrong) > 3 * np.median(relative), "a white preview differs from Cycles",
+                 "median %.1f %%" % (100 * np.median(wrong)))
+    top = mask & (np.arange(SIZE)[:, None] < SIZE // 3)
+    green_top, white_top = green[top, :3].mean(axis=0), white[top, :3].mean(axis=0)
+    checks.check(np.allclose(green_top / white_top, (0.1, 0.7, 0.2), rtol=0.02),
+                 "a colour changed after the bake shows without baking again",
+                 "top third / white: %s" % np.round(green_top / white_top, 3))
+
+    # Flat faces shade flat, as in Cycles (corner normals); the same mesh baked smooth does not.
+    ball.hide_set(True)
+    ball.hide_render = True
+    facets = sdtest.ico_sphere(scene, "Facets", subdivisions=1, location=(0.0, 0.0, 0.0), smooth=False)
+    facets.data.materials.append(sdtest.diffuse_material("White"))
+    sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[facets])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the flat-shaded icosphere")
+    flat = preview("facets_preview.exr")
+    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "facets_cycles.exr"), SIZE, 1024)
+    facets.data.polygons.foreach_set("use_smooth", [True] * len(facets.data.polygons))
+    facets.data.update()
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it shaded smooth")
+    smooth = preview("facets_preview_smooth.exr")
+    mask = (flat[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+    a, b, c = (sdtest.block_averages(image, mask, BLOCK) for image in (flat, cycles, smooth))
+    relative = (np.abs(a - b) / b.max(axis=1)[:, None]).max(axis=1)
+    wrong = (np.abs(c - b) / b.max(axis=1)[:, None]).max(axis=1)
+    checks.check(np.median(relative) < 0.03 and np.percentile(relative, 90) < 0.10,
+                 "flat faces: preview = Cycles (block averages)",
+                 "median %.1f %%, 90th pct %.1f %% over %d blocks" % (
+                     100 * np.median(relative), 100 * np.percentile(relative, 90), len(relative)))
+    checks.check(np.percentile(wrong, 90) > 2 * np.percentile(relative, 90),
+                 "the same mesh shaded smooth differs from Cycles' flat faces",
+                 "90th pct %.1f %%" % (100 * np.percentile(wrong, 90)))
+    return checks.summary()
+
+
+sdtest.run(main)

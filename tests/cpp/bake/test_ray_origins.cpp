@@ -47,6 +47,33 @@ TEST(RayOrigins, SplitVertexAtTheFootOfAWallSeesTheOpenQuarter) {
   EXPECT_NEAR(ambient_occlusion(plate, wall)[0], 0.25, kFraction);
 }
 
+TEST(RayOrigins, CornerCopiesOfAFlatShadedBoxAreNeverBlack) {
+  // The box of BoxStandingOnAFloorLeaksNoLightUnderIt split at every face corner, each copy with
+  // its face's normal (a flat-shaded mesh as the add-on bakes it, or a glTF import). A copy that
+  // knew only its own face did not skip the other faces through its point in its probes and could
+  // start behind one: AO 0 where the point sees 3/8 (bottom) or 1/2 (top). A copy's value lies
+  // between the limit along its face (1/4: the half-space in front of it less the floor's side)
+  // and its point's.
+  const Mesh welded = test::solid_box({0, 0, 0}, {1, 1, 1});
+  Mesh split;
+  for (const Triangle& t : welded.triangles) {
+    const glm::dvec3 &a = welded.vertices[t[0]], &b = welded.vertices[t[1]], &c = welded.vertices[t[2]];
+    const glm::dvec3 normal = glm::normalize(glm::cross(b - a, c - a));
+    const auto first = static_cast<std::int64_t>(split.vertices.size());
+    for (int k = 0; k < 3; ++k) {
+      split.vertices.push_back(welded.vertices[t[k]]);
+      split.normals.push_back(normal);
+    }
+    split.triangles.push_back({first, first + 1, first + 2});
+  }
+  const std::vector<double> ao = ambient_occlusion(split, test::ground_quad(1000.0, 0.0));
+  for (std::size_t v = 0; v < split.vertices.size(); ++v) {
+    const double point = split.vertices[v].z == 0.0 ? 0.375 : 0.5;
+    EXPECT_GE(ao[v], 0.25 - kFraction) << "copy " << v;
+    EXPECT_LE(ao[v], point + kFraction) << "copy " << v;
+  }
+}
+
 TEST(RayOrigins, ThinSlabBlocksItsLowerHalf) {
   // Two plates 1e-3 of their edge apart, facing away from each other: from the centre of the top
   // one, the lower half-space is blocked; an origin between the plates would see only the gap.

@@ -262,7 +262,6 @@ class ObjectData:
             surface["material_slot"] = slots
         if uvs is not None and not vertex_target:
             surface["uv"] = uvs
-        self.vertex_target = vertex_target
         if vertex_target:
             content = {"pos": positions, "nrm": normals}
             if per_pixel:
@@ -288,15 +287,16 @@ class ObjectData:
     def _use_albedos(self, albedos):
         """The block's albedo rows for the materials' current albedos (materials.object_albedos),
         switching to the variant they need: none when all are white. Returns the rows or None."""
+        if self.variant.vertex_target:
+            return None
         rows = np.zeros((self.slot_count, 4))
         rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
         image = None
-        if not self.vertex_target:
-            for slot, albedo in enumerate(albedos[:self.slot_count]):
-                rows[slot, :3] = albedo.colour
-                if albedo.image is not None and self.has_uvs:
-                    rows[slot, 3] = 1.0
-                    image = albedo.image
+        for slot, albedo in enumerate(albedos[:self.slot_count]):
+            rows[slot, :3] = albedo.colour
+            if albedo.image is not None and self.has_uvs:
+                rows[slot, 3] = 1.0
+                image = albedo.image
         white = image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,

@@ -375,8 +375,8 @@ the displayed radiance: a dict with 'window' ('none', 'hanning', 'lanczos' or 's
 'sloan_lambda', 'factors' (sigma_0 .. sigma_s: multiply band l of L_lm by sigma_l, before or after
 rotating), 'error' and 'unwindowed_error' (the displayed error with the window and with none),
 'l2_error' and 'unwindowed_l2_error' (the plain relative RMS of the clamped B), 'min_over_max' and
-'unwindowed_min_over_max' (min of B~ over axes and channels, not clamped, / max of the full B:
-negative = ringing below zero).
+'unwindowed_min_over_max' (min / max of B~ over axes and channels, not clamped: negative =
+ringing below zero).
 
 The displayed error: unshadowed B~(a) = sum_{l<=s} sigma_l w_l L_lm y_lm(a) (Funk-Hecke) against the
 full B of order 64, per RGB channel over a 256 x 128 grid of lobe axes a, both clamped at 0 (as the

@@ -34,8 +34,8 @@ def test_describe():
     choice = dict(ringing.unwindowed(4), window="hanning", error=0.04, unwindowed_error=0.12,
                   min_over_max=-0.02, unwindowed_min_over_max=-0.36)
     assert ringing.describe(choice, "automatic") == (
-        "Hanning: 12.0 % -> 4.0 % displayed error, min/max B -36 % -> -2 %")
+        "Hanning: 12.0 % -> 4.0 % displayed error, min/max B -36.0 % -> -2.0 %")
     none = dict(ringing.unwindowed(4), unwindowed_error=0.07, error=0.07)
     assert ringing.describe(none, "automatic") == "None: no window lowers the 7.0 % displayed error"
-    assert ringing.describe(none, "none") == "None: 7.0 % displayed error, min/max B +0 %"
+    assert ringing.describe(none, "none") == "None: 7.0 % displayed error, min/max B +0.0 %"
     assert set(ringing.WINDOWS) == set(ringing.LABELS)

@@ -44,6 +44,6 @@ def describe(choice, setting):
     if choice["window"] == "none":
         if setting == "automatic":
             return "None: no window lowers the %.1f %% displayed error" % before
-        return "None: %.1f %% displayed error, min/max B %+.0f %%" % (before, low_before)
-    return "%s: %.1f %% -> %.1f %% displayed error, min/max B %+.0f %% -> %+.0f %%" % (
+        return "None: %.1f %% displayed error, min/max B %+.1f %%" % (before, low_before)
+    return "%s: %.1f %% -> %.1f %% displayed error, min/max B %+.1f %% -> %+.1f %%" % (
         LABELS[choice["window"]], before, after, low_before, low_after)

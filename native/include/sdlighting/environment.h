@@ -95,7 +95,7 @@ struct RingingWindowChoice {
   double unwindowed_error = 0.0;        // displayed_error with none
   double l2_error = 0.0;                // plain relative RMS of the clamped B, with the window
   double unwindowed_l2_error = 0.0;     // the same with none
-  double min_over_max = 0.0;            // min over axes and channels of B̃ (not clamped) / max of B (full)
+  double min_over_max = 0.0;            // min / max of B̃ (not clamped) over axes and channels
   double unwindowed_min_over_max = 0.0; // the same with none: negative = ringing below zero
 };
 

@@ -36,7 +36,7 @@ constexpr double kMinimumGain = 0.01;
 struct RowSums {
   double tone_error = 0.0, tone_norm = 0.0, error = 0.0, norm = 0.0;
   double min_value = std::numeric_limits<double>::infinity();
-  double max_reference = -std::numeric_limits<double>::infinity();
+  double max_value = -std::numeric_limits<double>::infinity();
 };
 
 // The lobe-filtered coefficients f_l ŵ_l L_lm for l <= order (f empty: 1).
@@ -69,10 +69,9 @@ class DisplayedError {
                              double* out = reference_.data() + 3 * static_cast<size_t>(j) * kAxesWidth;
                              for (int q = 0; q < 3 * kAxesWidth; ++q) out[q] = std::max(values[q], 0.0);
                            });
-    for (double b : reference_) max_reference_ = std::max(max_reference_, b);
   }
 
-  // (tone-mapped error, plain clamped relative RMS, min B̃ / max B) of order s with factors f.
+  // (tone-mapped error, plain clamped relative RMS, min B̃ / max B̃) of order s with factors f.
   std::array<double, 3> operator()(int order, const std::vector<double>& f) const {
     std::vector<RowSums> rows(kAxesHeight);
     evaluate_equirect_rows(filtered(light_, w_hat_, order, f), order, kAxesWidth, kAxesHeight,
@@ -81,6 +80,7 @@ class DisplayedError {
                              const double* ref = reference_.data() + 3 * static_cast<size_t>(j) * kAxesWidth;
                              for (int q = 0; q < 3 * kAxesWidth; ++q) {
                                r.min_value = std::min(r.min_value, values[q]);
+                               r.max_value = std::max(r.max_value, values[q]);
                                const double shown = std::max(values[q], 0.0), truth = ref[q];
                                r.error += (shown - truth) * (shown - truth);
                                r.norm += truth * truth;
@@ -105,10 +105,11 @@ class DisplayedError {
       total.error += r.error;
       total.norm += r.norm;
       total.min_value = std::min(total.min_value, r.min_value);
+      total.max_value = std::max(total.max_value, r.max_value);
     }
     return {total.tone_norm > 0.0 ? std::sqrt(total.tone_error / total.tone_norm) : 0.0,
             total.norm > 0.0 ? std::sqrt(total.error / total.norm) : 0.0,
-            max_reference_ > 0.0 ? total.min_value / max_reference_ : 0.0};
+            total.max_value > 0.0 ? total.min_value / total.max_value : 0.0};
   }
 
   // The choice's errors for the window spec with factors f, beside none's.
@@ -148,7 +149,6 @@ class DisplayedError {
   std::vector<double> w_hat_;
   std::array<double, 3> mean_;  // B̄_c = ŵ_0 L_00,c, the mean of B over the axes
   std::vector<double> reference_;
-  double max_reference_ = 0.0;
 };
 
 }  // namespace

@@ -50,9 +50,12 @@ TEST(RingingWindow, DisplayedErrorIsNormalised) {
   const RingingWindowChoice zeros = env.displayed_error(lobe, 8, std::vector<double>(9, 0.0));
   EXPECT_NEAR(zeros.error, 1.0, kExact);
   EXPECT_NEAR(zeros.l2_error, 1.0, kExact);
-  // At the full order nothing is truncated: the error vanishes but for the grid's own rounding.
-  const RingingWindowChoice full = env.displayed_error(ZonalLobe::lambert(), 16, std::vector<double>(17, 1.0));
-  EXPECT_LT(full.error, 1e-3);
+  // A map of order 1 (up to its texels' steps) loses nothing at s = 16.
+  const Environment sky = Environment::from_equirect_pixels(
+      128, 64, equirect_pixels(128, 64, [](const glm::dvec3& d) { return glm::dvec3(1.0 + 0.5 * d.z); }));
+  const RingingWindowChoice full = sky.displayed_error(ZonalLobe::lambert(), 16, std::vector<double>(17, 1.0));
+  EXPECT_LT(full.error, 1e-4);
+  EXPECT_GT(full.min_over_max, 0.0);
   EXPECT_THROW(env.displayed_error(lobe, 8, std::vector<double>(8, 1.0)), std::invalid_argument);
   EXPECT_THROW(env.displayed_error(lobe, kMaxShadingOrder + 1, std::vector<double>(kMaxShadingOrder + 2, 1.0)),
                std::invalid_argument);
@@ -94,22 +97,24 @@ TEST(RingingWindow, AutomaticNeverWorseThanNone) {
   }
 }
 
-// Issue 12: glossy B went negative by up to 36 % of its range (σ = 61, s = 16) on the sun HDRIs. The
-// automatic window lowers the displayed error there and lifts the negative part.
+// Issue 12: glossy B rings below zero on the sun HDRIs (σ = 61; s = 16 the issue's case, s = 8 rings
+// more). The automatic window lowers the displayed error there and lifts the negative part.
 TEST(RingingWindow, SunHdrisRingLessWithTheAutomaticWindow) {
   if (!have_blender_hdris()) GTEST_SKIP() << "Blender's studio lights are not installed at " << kBlenderWorlds;
   for (const char* name : {"sunrise", "city", "interior"}) {
     const Environment env = Environment::load(kBlenderWorlds + name + ".exr");
-    const RingingWindowChoice chosen = env.automatic_ringing_window(ZonalLobe::phong(61.0), 16);
-    std::printf("%-9s Phong 61, s = 16: %s (lambda %.3g): displayed error %.1f %% -> %.1f %%, plain clamped RMS "
-                "%.1f %% -> %.1f %%, min B / max B %+.1f %% -> %+.1f %%\n",
-                name, ringing_window_name(chosen.window.window).c_str(), chosen.window.sloan_lambda,
-                100 * chosen.unwindowed_error, 100 * chosen.error, 100 * chosen.unwindowed_l2_error,
-                100 * chosen.l2_error, 100 * chosen.unwindowed_min_over_max, 100 * chosen.min_over_max);
-    EXPECT_NE(chosen.window.window, RingingWindow::None) << name;
-    EXPECT_LT(chosen.error, chosen.unwindowed_error) << name;
-    EXPECT_LT(chosen.unwindowed_min_over_max, -0.01) << name;  // the ringing the issue reports
-    EXPECT_GT(chosen.min_over_max, chosen.unwindowed_min_over_max) << name;
+    for (int order : {8, 16}) {
+      const RingingWindowChoice chosen = env.automatic_ringing_window(ZonalLobe::phong(61.0), order);
+      std::printf("%-9s Phong 61, s = %2d: %s (lambda %.3g): displayed error %.1f %% -> %.1f %%, plain clamped RMS "
+                  "%.1f %% -> %.1f %%, min B / max B %+.1f %% -> %+.1f %%\n",
+                  name, order, ringing_window_name(chosen.window.window).c_str(), chosen.window.sloan_lambda,
+                  100 * chosen.unwindowed_error, 100 * chosen.error, 100 * chosen.unwindowed_l2_error,
+                  100 * chosen.l2_error, 100 * chosen.unwindowed_min_over_max, 100 * chosen.min_over_max);
+      EXPECT_NE(chosen.window.window, RingingWindow::None) << name;
+      EXPECT_LT(chosen.error, chosen.unwindowed_error) << name;
+      EXPECT_LT(chosen.unwindowed_min_over_max, -1e-3) << name;  // the ringing the issue reports
+      EXPECT_GT(chosen.min_over_max, chosen.unwindowed_min_over_max) << name;
+    }
   }
 }
 

@@ -16,7 +16,8 @@ import sdtest  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-TOLERANCE = 1e-3   # GPU float32 vs CPU float64, as test_gpu_matches_cpu
+TOLERANCE = 1e-3          # GPU float32 vs CPU float64, as test_gpu_matches_cpu
+TEXTURE_TOLERANCE = 1e-3  # the band-limited texture's bilinear lookup, as test_gpu_matches_cpu
 WIDTH, HEIGHT = 320, 240
 
 
@@ -67,6 +68,21 @@ def main():
                  "without a window B rings below zero at some vertices (shown as 0); the window lifts most",
                  "vertices with a channel clamped to 0: %d without, %d with the window of %d" % (
                      clamped['NONE'], clamped['AUTOMATIC'], len(ball.data.vertices)))
+
+    # The band-limited texture holds the same windowed L~ as the SH sums (MSD 12 at s + s' = 8:
+    # a small lobe design), so GPU (texture) = CPU (SH) with the window and without.
+    sdtest.bake_settings(scene, 'msd_lobe', 'PHONG', 8, 0, rays=16, phong_exponent=61.0, select=[ball])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake MSD (12), s = 8")
+    settings.band_limited_texture = True
+    for setting in ('NONE', 'AUTOMATIC'):
+        settings.ringing_window = setting
+        window = drawing.ringing_choice(scene, ball)["window"]
+        cpu = drawing.cpu_reference(scene, ball, view)
+        gpu = drawing.gpu_vertex_values(scene, ball, view)
+        relative, _ = sdtest.relative_error(gpu, cpu)
+        checks.check(relative <= TEXTURE_TOLERANCE and (window != "none") == (setting == 'AUTOMATIC'),
+                     "band-limited texture = CPU: %s (window %s)" % (setting, window),
+                     "max rel %.2e" % relative)
     return checks.summary()
 
 

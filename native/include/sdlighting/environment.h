@@ -264,7 +264,7 @@ class Environment {
 
   /// The automatic choice: of None, Hanning, Lanczos and Sloan (as ringing_window), the window with
   /// the smallest displayed_error; None unless another lowers none's error by more than 1 % of it.
-  /// Costs about 40 evaluations of order s and four of order 64 on the 256 × 128 grid (0.1–0.4 s on
+  /// Costs about 40 evaluations of order s and one of order 64 on the 256 × 128 grid (0.1–0.4 s on
   /// two cores for s = 4..16), plus the reference projection the first time (band_energies).
   RingingWindowChoice automatic_ringing_window(const ZonalLobe& lobe, int order) const;
 

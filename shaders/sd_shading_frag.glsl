@@ -1,7 +1,9 @@
 /* sd-lighting fragment shader (prepended by sd_shading_lib.glsl).
  *
  * Writes scene-linear radiance times 2^exposure (sd.params.x), times the surface's albedo; the
- * viewport applies the sRGB curve to it (the Standard view transform).
+ * viewport applies the sRGB curve to it (the Standard view transform). Clamped at 0 per channel:
+ * the truncated formulas ring below zero next to bright lights, and displayed radiance is never
+ * negative (drawing.cpu_reference clamps the same way).
  */
 
 /* The albedo B is multiplied by (SD_ALBEDO: the slot's colour, or its image texture at the pixel's
@@ -35,8 +37,8 @@ void main()
   if (sd_bary.z > 0.0) {
     rgb += sd_bary.z * sd_shade(int(sd_corners.z + 0.5), normal, view);
   }
-  fragColor = vec4(sd.params.x * rgb * sd_surface_albedo(), 1.0);
+  fragColor = vec4(max(sd.params.x * rgb, vec3(0.0)) * sd_surface_albedo(), 1.0);
 #else
-  fragColor = vec4(sd_color * sd_surface_albedo(), 1.0);
+  fragColor = vec4(max(sd_color, vec3(0.0)) * sd_surface_albedo(), 1.0);
 #endif
 }

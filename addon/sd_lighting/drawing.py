@@ -108,12 +108,36 @@ def baked_objects(scene, view_layer=None):
     return out
 
 
-def local_light(scene, obj, order, source=None, rotation=None):
-    """Coefficients of x -> L(g R x) for the object: [(s+1)^2, 3] float64; and g R."""
+def ringing_setting(scene):
+    """The scene's ringing window setting, as utils/ringing.WINDOWS names it."""
+    settings = getattr(scene, "sd_lighting", None)
+    return settings.ringing_window.lower() if settings is not None else "automatic"
+
+
+def shading_light(scene, source, lobe, exponent, order):
+    """The unrotated L of order s the live shading uses for a bake's lobe: windowed against
+    ringing with the scene's setting (environment.windowed_light). [(s+1)^2, 3] float64."""
+    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene))
+
+
+def ringing_choice(scene, obj):
+    """The ringing window the live shading uses for the object's bake (its choice dict), or None
+    without a bake. Raises environment.Unavailable without an environment."""
+    mesh = baking.baked_mesh(obj)
+    if mesh is None:
+        return None
+    bake = mesh[BAKE]
+    return environment.ringing_window(environment.source(scene), bake["lobe"], float(bake["exponent"]),
+                                      int(bake["light_order"]), ringing_setting(scene))
+
+
+def local_light(scene, obj, data, source=None, rotation=None):
+    """Coefficients of x -> L(g R x) for the object's data (ObjectData), windowed:
+    [(s+1)^2, 3] float64; and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
     gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
-    light = environment.light_coefficients(source, order)
+    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order)
     return native.get().rotated_environment_sh(light, gr), gr
 
 
@@ -125,13 +149,14 @@ def use_band_limited_texture(scene):
 
 def _frame(scene, obj, data, view, scale, source=None, rotation=None, **kwargs):
     """(uniform block, band-limited texture or None) of one draw of the object's data."""
-    light, gr = local_light(scene, obj, data.light_order, source, rotation)
+    light, gr = local_light(scene, obj, data, source, rotation)
     block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
                              light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
     texture = None
     if data.uses_band_limited_texture:
-        texture = gpu_shading.band_limited_texture(source or environment.source(scene),
-                                                   data.light_order)
+        source = source or environment.source(scene)
+        texture = gpu_shading.band_limited_texture(
+            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order))
     return block, texture
 
 
@@ -211,7 +236,9 @@ def _draw_handler():
 
 def cpu_reference(scene, obj, view):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
-    environment and rotation the live shading uses; exposure not applied. [N, 3]."""
+    environment (windowed against ringing) and rotation the live shading uses, clamped at 0 per
+    channel as the shader shows it (displayed radiance is never negative; sdnative.shade itself is
+    the raw formula); exposure not applied. [N, 3]."""
     mesh = baking.baked_mesh(obj)
     bake = dict(mesh[BAKE])
     method = methods.get(bake["method"])
@@ -220,13 +247,14 @@ def cpu_reference(scene, obj, view):
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     world = transforms.transform_points(matrix, attributes.read_positions(mesh))
     source = environment.source(scene)
-    light = environment.light_coefficients(source, int(bake["light_order"]))
+    light = shading_light(scene, source, bake["lobe"], float(bake["exponent"]), int(bake["light_order"]))
     g = environment.rotation_matrix(scene)
     r = transforms.rotation_part(matrix)
     kwargs = {key: data[key] for key in method.shade_inputs}
-    return native.get().shade(method.id, light, data["normals"],
-                              views=view.view_directions(world, r.T), rotation=g @ r,
-                              lobe=bake["lobe"], exponent=float(bake["exponent"]), **kwargs)
+    shaded = native.get().shade(method.id, light, data["normals"],
+                                views=view.view_directions(world, r.T), rotation=g @ r,
+                                lobe=bake["lobe"], exponent=float(bake["exponent"]), **kwargs)
+    return np.maximum(shaded, 0.0)
 
 
 def gpu_vertex_values(scene, obj, view, per_pixel=False):

@@ -14,7 +14,9 @@ node (or for 'FILE'), g is the settings' own `environment_rotation`. The panel's
 writes the Mapping node when there is one.
 
 SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
-draw handler asks for them every frame.
+draw handler asks for them every frame. Every method shades with L windowed against ringing
+(windowed_light; utils/ringing.py): the window of the scene's `ringing_window` setting for the
+bake's lobe and order, chosen once per (source, lobe, order) and cached.
 """
 
 import os
@@ -22,15 +24,17 @@ import os
 import numpy as np
 
 from . import compat, native
-from .utils import transforms
+from .utils import ringing, transforms
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
+_window_cache = {}   # (source key, lobe, exponent, order, window setting) -> choice dict
 
 
 def clear_cache():
     _cache.clear()
     _sh_cache.clear()
+    _window_cache.clear()
 
 
 # --------------------------------------------------------------------------------------------
@@ -215,3 +219,24 @@ def smallest_order(src, lobe, exponent, target_error, max_order):
         return 0
     order = environment(src).smallest_order(lobe, float(exponent), float(target_error), int(max_order))
     return int(max_order) if order is None else int(order)
+
+
+def ringing_window(src, lobe, exponent, order, setting):
+    """The window against ringing of L for the lobe and order s: sdnative's
+    Environment.ringing_window dict (setting: one of utils/ringing.WINDOWS), cached. The choice does
+    not depend on the strength. A uniform environment (L_00 alone, which no window changes): none."""
+    if src.kind == "uniform":
+        return ringing.unwindowed(order)
+    key = (src.key, lobe, float(exponent), int(order), setting)
+    choice = _window_cache.get(key)
+    if choice is None:
+        choice = environment(src).ringing_window(lobe, float(exponent), int(order), setting)
+        _window_cache[key] = choice
+    return choice
+
+
+def windowed_light(src, lobe, exponent, order, setting):
+    """light_coefficients with the ringing window's sigma_l on band l: the L every method shades
+    with and the band-limited texture holds."""
+    choice = ringing_window(src, lobe, exponent, order, setting)
+    return ringing.windowed(light_coefficients(src, order), choice["factors"])

@@ -42,7 +42,7 @@ SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
-_band_limited_textures = {}   # (source key, strength, s, width, height) -> GPUTexture
+_band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
 
 
 def shader_directory():
@@ -122,17 +122,18 @@ def float_texture(texels):
     return _rgba32f(width, height, padded)
 
 
-def band_limited_texture(source, order):
-    """The band-limited environment L~ of order s (unrotated, strength applied) as an RGBA32F
-    equirect texture of band_limited_texture_size(s), Blender's orientation, rows bottom-first as
-    GPU textures hold them (v = 0 at the south pole) (cached per source and order)."""
-    from . import environment
+def band_limited_texture(source, light):
+    """The band-limited environment L~ of the unrotated coefficients `light` ([(s+1)^2, 3]: the
+    source's, strength and ringing window applied, drawing.shading_light) as an RGBA32F equirect
+    texture of band_limited_texture_size(s), Blender's orientation, rows bottom-first as GPU
+    textures hold them (v = 0 at the south pole) (cached per source and coefficients)."""
+    light = np.ascontiguousarray(light, dtype=np.float64)
+    order = int(round(np.sqrt(light.shape[0]))) - 1
     width, height = band_limited_texture_size(order)
-    key = (source.key, float(source.strength), int(order), width, height)
+    key = (source.key, light.tobytes(), width, height)
     texture = _band_limited_textures.get(key)
     if texture is None:
-        coefficients = environment.light_coefficients(source, order)
-        image = np.asarray(native.get().band_limited_texture(coefficients, width, height),
+        image = np.asarray(native.get().band_limited_texture(light, width, height),
                            dtype=np.float32).reshape(height, width, 3)
         texels = np.zeros((height, width, 4), dtype=np.float32)
         texels[..., :3] = image[::-1]     # sdnative's rows are top-first

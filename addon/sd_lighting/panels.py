@@ -3,7 +3,7 @@
 import bpy
 
 from . import baking, drawing, environment, gpu_shading, materials, native, operators, prediction
-from .utils import methods
+from .utils import methods, ringing
 
 
 class SD_PT_lighting(bpy.types.Panel):
@@ -96,6 +96,14 @@ class SD_PT_lighting(bpy.types.Panel):
         row.prop(settings, "live_shading")
         row.prop(settings, "per_pixel")
         box.prop(settings, "band_limited_texture")
+        box.prop(settings, "ringing_window")
+        if context.active_object is not None:
+            try:
+                choice = drawing.ringing_choice(scene, context.active_object)
+                if choice is not None:
+                    box.label(text=ringing.describe(choice, settings.ringing_window.lower())[:100])
+            except Exception as exc:  # a broken environment must not break the panel
+                box.label(text=str(exc)[:80], icon='ERROR')
         if drawing.last_error:
             box.label(text=drawing.last_error[:80], icon='ERROR')
         for line in gpu_shading.lobe_design_status():

@@ -10,7 +10,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        IntProperty, PointerProperty, StringProperty)
 
 from . import environment, native
-from .utils import limits, methods
+from .utils import limits, methods, ringing
 
 log = logging.getLogger(__name__)
 
@@ -114,6 +114,18 @@ class SceneSettings(bpy.types.PropertyGroup):
         description=", ".join(m.label for m in methods.METHODS if m.band_limited_texture) +
         ": look the environment L~ up in a band-limited equirect float texture (bilinear, about "
         "5e-4 relative) instead of summing its (s+1)^2 SH terms at every node (exact)")
+    ringing_window: EnumProperty(
+        name="Ringing Window",
+        items=[(name.upper(), ringing.LABELS[name], description) for name, description in (
+            ("automatic", "Per lobe and s, the window that lowers the error of the displayed "
+             "radiance the most (None when none lowers it)"),
+            ("none", "The plain truncation of order s (rings below zero next to a sun)"),
+            ("hanning", "sigma_l = (1 + cos(pi l/(s+1)))/2"),
+            ("lanczos", "sigma_l = sinc(l/(s+1))"),
+            ("sloan", "Sloan's sigma_l = 1/(1 + lambda l^2 (l+1)^2), lambda chosen per lobe"))],
+        default='AUTOMATIC', update=_redraw,
+        description="Window sigma_l on band l of the environment's SH coefficients against ringing, "
+                    "for every method")
 
 
 CLASSES = (SceneSettings,)

@@ -138,12 +138,34 @@ py::dict report_dict(const sd::BandLimitedReport& r) {
   return d;
 }
 
+// A window by name and Sloan's lambda (finite, >= 0; only the 'sloan' window reads it).
+sd::RingingWindowSpec window_spec(const std::string& window, double sloan_lambda) {
+  if (!std::isfinite(sloan_lambda) || sloan_lambda < 0.0) value_error("sloan_lambda must be finite and >= 0");
+  return sd::RingingWindowSpec(sd::ringing_window_from_name(window), sloan_lambda);
+}
+
+py::dict choice_dict(const sd::RingingWindowChoice& c) {
+  py::dict d;
+  d["window"] = sd::ringing_window_name(c.window.window);
+  d["sloan_lambda"] = c.window.sloan_lambda;
+  py::array_t<double> factors(py::ssize_t(c.factors.size()));
+  std::copy(c.factors.begin(), c.factors.end(), factors.mutable_data());
+  d["factors"] = factors;
+  d["error"] = c.error;
+  d["unwindowed_error"] = c.unwindowed_error;
+  d["l2_error"] = c.l2_error;
+  d["unwindowed_l2_error"] = c.unwindowed_l2_error;
+  d["min_over_max"] = c.min_over_max;
+  d["unwindowed_min_over_max"] = c.unwindowed_min_over_max;
+  return d;
+}
+
 py::object py_band_limited(const sd::Environment& env, int lmax, int width, int height, const std::string& window,
-                           bool report) {
+                           bool report, double sloan_lambda) {
   check_order("lmax", lmax, sd::kMaxEnergyOrder);
   check_range("width", width, 1, sd::kMaxTextureSide);
   check_range("height", height, 1, sd::kMaxTextureSide);
-  const sd::RingingWindow w = sd::ringing_window_from_name(window);
+  const sd::RingingWindowSpec w = window_spec(window, sloan_lambda);
   sd::BandLimitedReport r;
   std::vector<float> rgb;
   {
@@ -157,7 +179,7 @@ py::object py_band_limited(const sd::Environment& env, int lmax, int width, int 
 }
 
 py::object py_band_limited_texture(const DoubleArray& coeffs, int width, int height, const std::string& window,
-                                   bool report) {
+                                   bool report, double sloan_lambda) {
   if (coeffs.ndim() != 2 || coeffs.shape(1) != 3) {
     value_error("coeffs must have shape (K, 3), got " + shape_string(coeffs));
   }
@@ -166,7 +188,7 @@ py::object py_band_limited_texture(const DoubleArray& coeffs, int width, int hei
   check_range("width", width, 1, sd::kMaxTextureSide);
   check_range("height", height, 1, sd::kMaxTextureSide);
   check_finite("coeffs", coeffs.data(), static_cast<size_t>(3 * k));
-  const sd::RingingWindow w = sd::ringing_window_from_name(window);
+  const sd::RingingWindowSpec w = window_spec(window, sloan_lambda);
   std::vector<double> c(coeffs.data(), coeffs.data() + 3 * k);
   sd::BandLimitedReport r;
   std::vector<float> rgb;
@@ -275,15 +297,16 @@ size, down to 1 x 1, gives the constant in L_00 and nothing else.
 threads: worker threads, 0 = all cores; the result does not depend on it (bit-identical).
 Returns shape ((lmax+1)**2, 3). Releases the GIL.)doc")
       .def("band_limited", &py_band_limited, py::arg("lmax"), py::arg("width"), py::arg("height"),
-           py::arg("window") = "none", py::arg("report") = false,
+           py::arg("window") = "none", py::arg("report") = false, py::arg("sloan_lambda") = 0.0,
            R"doc(The band-limited map L~(d) = sum_{l<=lmax} sigma_l L_lm y_lm(d) sampled at the texel centres of a
 width x height equirectangular image (same orientation, rows top-first), as float32 of shape
 (height, width, 3) — a float texture. Negative lobes are kept (not clamped).
 
 lmax: 0 .. MAX_ENERGY_ORDER; coefficients from sh(lmax) up to MAX_PROJECTION_ORDER, above that from the cached
       high-order projection (see band_energies).
-window: 'none' (sigma_l = 1), 'hanning' ((1 + cos(pi l/(lmax+1)))/2) or 'lanczos'
-        (sinc(l/(lmax+1))): windows against ringing.
+window: 'none' (sigma_l = 1), 'hanning' ((1 + cos(pi l/(lmax+1)))/2), 'lanczos'
+        (sinc(l/(lmax+1))) or 'sloan' (1/(1 + sloan_lambda l^2 (l+1)^2)): windows against ringing
+        (ringing_window chooses one).
 report: if True, returns (image, report) where report is a dict with 'min' and 'max' (per-channel
         tuples of L~; a negative min is ringing), 'negative_texels' (texels with a channel < 0),
         'negative_fraction' (their share of the texels) and 'negative_solid_angle' (their share
@@ -332,6 +355,60 @@ channel: 0, 1, 2 or 'luminance'. s: 0 .. MAX_ENERGY_ORDER. Returns 0 for a black
 unshadowed B(a) = sum_lm w_l L_lm y_lm(a), on luminance:
 sqrt(sum_{s<l<=64} w_l^2 E_l / sum_{l<=64} w_l^2 E_l).
 lobe: 'lambert' (exponent ignored) or 'phong' (exponent sigma in [0, MAX_PHONG_EXPONENT]); s: 0 .. MAX_ENERGY_ORDER.)doc")
+      .def(
+          "ringing_window",
+          [](const sd::Environment& e, const std::string& lobe, double exponent, int s, const std::string& window) {
+            check_order("s", s, sd::kMaxShadingOrder);
+            const sd::ZonalLobe z = sd::ZonalLobe::from_name(lobe, exponent);
+            const bool automatic = window == "automatic";
+            const sd::RingingWindow w = automatic ? sd::RingingWindow::None : sd::ringing_window_from_name(window);
+            sd::RingingWindowChoice c;
+            {
+              py::gil_scoped_release release;
+              c = automatic ? e.automatic_ringing_window(z, s) : e.ringing_window(z, s, w);
+            }
+            return choice_dict(c);
+          },
+          py::arg("lobe"), py::arg("exponent"), py::arg("s"), py::arg("window") = "automatic",
+          R"doc(The window against ringing for a lobe and order s (0 .. MAX_SHADING_ORDER), and what it does to
+the displayed radiance: a dict with 'window' ('none', 'hanning', 'lanczos' or 'sloan'),
+'sloan_lambda', 'factors' (sigma_0 .. sigma_s: multiply band l of L_lm by sigma_l, before or after
+rotating), 'error' and 'unwindowed_error' (the displayed error with the window and with none),
+'l2_error' and 'unwindowed_l2_error' (the plain relative RMS of the clamped B), 'min_over_max' and
+'unwindowed_min_over_max' (min / max of B~ over axes and channels, not clamped: negative =
+ringing below zero).
+
+The displayed error: unshadowed B~(a) = sum_{l<=s} sigma_l w_l L_lm y_lm(a) (Funk-Hecke) against the
+full B of order 64, per RGB channel over a 256 x 128 grid of lobe axes a, both clamped at 0 (as the
+live shading shows them) and through Reinhard's tone curve x / (x + mean B): the relative RMS of
+the difference. (In plain L2 the truncation is the best approximation of order s and every window
+loses, clamped or not; the tone curve measures the dark side that ringing spoils.)
+window: 'automatic' (default: the one of 'none', 'hanning', 'lanczos', 'sloan' with the smallest
+error, 'none' unless another lowers none's by more than 1 % of it) or one of them; 'sloan' takes the lambda that
+minimises the error (lambda = t / (s(s+1))^2 for t = 10^(k/4), k = -16 .. 12). Releases the GIL.)doc")
+      .def(
+          "displayed_error",
+          [](const sd::Environment& e, const std::string& lobe, double exponent, int s, const DoubleArray& factors) {
+            check_order("s", s, sd::kMaxShadingOrder);
+            if (factors.ndim() != 1 || factors.shape(0) != s + 1) {
+              value_error("factors must have shape (s+1,), got " + shape_string(factors));
+            }
+            check_finite("factors", factors.data(), static_cast<size_t>(s + 1));
+            const sd::ZonalLobe z = sd::ZonalLobe::from_name(lobe, exponent);
+            const std::vector<double> f(factors.data(), factors.data() + s + 1);
+            sd::RingingWindowChoice c;
+            {
+              py::gil_scoped_release release;
+              c = e.displayed_error(z, s, f);
+            }
+            py::dict d = choice_dict(c);
+            d.attr("pop")("window");
+            d.attr("pop")("sloan_lambda");
+            return d;
+          },
+          py::arg("lobe"), py::arg("exponent"), py::arg("s"), py::arg("factors"),
+          R"doc(ringing_window's errors for given window factors sigma_0 .. sigma_s (shape (s+1,)): the same dict
+without 'window' and 'sloan_lambda'.)doc")
       .def(
           "smallest_order",
           [](const sd::Environment& e, const std::string& lobe, double exponent, double target_error,
@@ -438,12 +515,12 @@ empty image; negative values are clamped to 0 and counted.)doc");
 +Y, -Y, +Z, -Z, rows top-first (see load_cube_environment for the orientation).)doc");
 
   m.def("band_limited_texture", &py_band_limited_texture, py::arg("coeffs"), py::arg("width"), py::arg("height"),
-        py::arg("window") = "none", py::arg("report") = false,
+        py::arg("window") = "none", py::arg("report") = false, py::arg("sloan_lambda") = 0.0,
         R"doc(The band-limited texture of given RGB coefficients (e.g. rotated_environment_sh of
 Environment.sh): sum_{l<=lmax} sigma_l c_lm y_lm(d) at the texel centres of a width x height
 equirectangular image (Blender's orientation, rows top-first), float32 of shape (height, width, 3).
 
-coeffs: shape ((lmax+1)**2, 3), lmax <= MAX_ENERGY_ORDER. window and report as for
+coeffs: shape ((lmax+1)**2, 3), lmax <= MAX_ENERGY_ORDER. window, sloan_lambda and report as for
 Environment.band_limited. Releases the GIL.)doc");
 }
 

@@ -183,7 +183,10 @@ lobe, exponent: "lambert", or "phong" with σ in [0, MAX_PHONG_EXPONENT].
 ambient_occlusion (N,), transfer (N, (s+1)**2), visibility (N, (s'+1)**2),
 product_matrices (N, (s+1)**2, (s'+1)**2), design_offsets int64 (N+1,), design_nodes (total, 3),
 design_weights (total,): per-vertex data as returned by bake_transfer.
-Returns (N, 3) linear RGB. Releases the GIL while it computes.)doc");
+Returns (N, 3) linear RGB: the raw formula, not clamped (a truncated L rings below zero next to a
+bright light, and the formulas' exactness tests compare the raw values); the add-on displays
+max(B, 0) per channel, and windows L against ringing first (Environment.ringing_window).
+Releases the GIL while it computes.)doc");
 }
 
 }  // namespace sdpy

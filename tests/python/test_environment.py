@@ -270,6 +270,40 @@ def test_band_limited_texture_of_rotated_coefficients(sd, rng):
         sd.band_limited_texture(np.ones((10, 3)), 8, 4)
 
 
+def test_ringing_window(sd):
+    env = sd.environment_from_pixels(sun_map(128, 64, radius_deg=3.0))
+    keys = {"window", "sloan_lambda", "factors", "error", "unwindowed_error", "l2_error",
+            "unwindowed_l2_error", "min_over_max", "unwindowed_min_over_max"}
+    chosen = env.ringing_window("phong", 61.0, 8)
+    assert set(chosen) == keys
+    assert chosen["window"] in ("none", "hanning", "lanczos", "sloan")
+    assert chosen["factors"].shape == (9,) and chosen["factors"][0] == 1.0
+    assert chosen["error"] <= chosen["unwindowed_error"]
+    hanning = env.ringing_window("phong", 61.0, 8, window="hanning")
+    l = np.arange(9)
+    np.testing.assert_allclose(hanning["factors"], 0.5 * (1 + np.cos(np.pi * l / 9)), rtol=0, atol=EXACT)
+    sloan = env.ringing_window("phong", 61.0, 8, window="sloan")
+    np.testing.assert_allclose(sloan["factors"], 1 / (1 + sloan["sloan_lambda"] * (l * (l + 1)) ** 2),
+                               rtol=0, atol=EXACT)
+    # The measure of given factors: the chosen window's own, and that of none.
+    again = env.displayed_error("phong", 61.0, 8, hanning["factors"])
+    assert set(again) == keys - {"window", "sloan_lambda"}
+    assert again["error"] == hanning["error"]
+    assert env.displayed_error("phong", 61.0, 8, np.ones(9))["error"] == chosen["unwindowed_error"]
+    # Sloan's window in the texture is that of the windowed coefficients.
+    texture = env.band_limited(8, 32, 16, window="sloan", sloan_lambda=sloan["sloan_lambda"])
+    by_hand = sd.band_limited_texture(env.sh(8) * np.repeat(sloan["factors"], 2 * l + 1)[:, None], 32, 16)
+    np.testing.assert_allclose(texture, by_hand, rtol=1e-5, atol=1e-5 * np.abs(by_hand).max())
+    with pytest.raises(ValueError, match="window"):
+        env.ringing_window("phong", 61.0, 8, window="boxcar")
+    with pytest.raises(ValueError):
+        env.ringing_window("phong", 61.0, sd.MAX_SHADING_ORDER + 1)
+    with pytest.raises(ValueError, match="factors"):
+        env.displayed_error("phong", 61.0, 8, np.ones(8))
+    with pytest.raises(ValueError, match="sloan_lambda"):
+        env.band_limited(8, 32, 16, window="sloan", sloan_lambda=-1.0)
+
+
 def test_band_energies_and_error_measures(sd):
     env = sd.environment_from_pixels(sun_map(128, 64, radius_deg=3.0))
     e = env.band_energies(16)

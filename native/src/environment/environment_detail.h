@@ -5,6 +5,7 @@
 #include "sdlighting/environment.h"
 
 #include <array>
+#include <functional>
 #include <mutex>
 #include <vector>
 
@@ -17,6 +18,13 @@ struct Environment::EnergyCache {
   std::vector<double> energies;         // (kMaxEnergyOrder+1) × 4
   std::array<double, 4> norm_squared{};  // of the projected copy
 };
+
+/// Evaluates Σ_{l<=order} c_lm y_lm (RGB coefficients, layout as Environment::sh) at the texel centres
+/// of a width × height equirect grid (environment.h's orientation, rows top-first) and calls
+/// row(j, values) once per row j with values[3 i + c] for column i — from several threads at once,
+/// for different rows. Cost ∝ height (order+1)² + width height (order+1). Unchecked sizes.
+void evaluate_equirect_rows(const std::vector<double>& coefficients, int order, int width, int height,
+                            const std::function<void(int, const double*)>& row);
 
 /// Throws std::invalid_argument naming `what` unless channel is 0, 1, 2 (R, G, B) or kLuminance.
 void check_channel(const char* what, int channel);

@@ -256,22 +256,6 @@ void check_output_size(const char* what, int width, int height) {
 
 }  // namespace
 
-RingingWindow ringing_window_from_name(const std::string& name) {
-  if (name == "none") return RingingWindow::None;
-  if (name == "hanning" || name == "hann") return RingingWindow::Hanning;
-  if (name == "lanczos") return RingingWindow::Lanczos;
-  throw std::invalid_argument("unknown window '" + name + "' (expected 'none', 'hanning' or 'lanczos')");
-}
-
-double ringing_window_factor(RingingWindow window, int l, int order) {
-  const double x = static_cast<double>(l) / (order + 1.0);
-  switch (window) {
-    case RingingWindow::Hanning: return 0.5 * (1.0 + std::cos(kPi * x));
-    case RingingWindow::Lanczos: return l == 0 ? 1.0 : std::sin(kPi * x) / (kPi * x);
-    default: return 1.0;
-  }
-}
-
 std::vector<double> Environment::sh(int order, int threads) const {
   check_order("Environment::sh: order", order, kMaxProjectionOrder);
   return project(layout_, rgb_, width_, height_, order, threads);
@@ -310,7 +294,7 @@ const Environment::EnergyCache& Environment::energy_cache() const {
   return cache;
 }
 
-std::vector<float> Environment::band_limited(int order, int width, int height, RingingWindow window,
+std::vector<float> Environment::band_limited(int order, int width, int height, const RingingWindowSpec& window,
                                              BandLimitedReport* report) const {
   check_order("Environment::band_limited: order", order, kMaxEnergyOrder);
   check_output_size("Environment::band_limited", width, height);
@@ -367,7 +351,7 @@ int Environment::smallest_order(const ZonalLobe& lobe, double target_error, int 
 }
 
 std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficients, int order, int width, int height,
-                                        RingingWindow window, BandLimitedReport* report) {
+                                        const RingingWindowSpec& window, BandLimitedReport* report) {
   check_order("band_limited_texture: order", order, kMaxEnergyOrder);
   check_output_size("band_limited_texture", width, height);
   const int k = sh_count(order), mc = order + 1;
@@ -387,54 +371,31 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
     const double sigma = ringing_window_factor(window, l, order);
     for (int q = 3 * l * l; q < 3 * (l + 1) * (l + 1); ++q) coefficients[q] *= sigma;
   }
-  const AzimuthTables azimuth(width, mc);
   std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
   // Per-row statistics, reduced in row order afterwards.
   std::vector<std::array<double, 6>> row_extrema(height);
   std::vector<int64_t> row_negative(height, 0);
   std::vector<char> row_overflow(height, 0);  // a value beyond float32 (or inf/NaN in double)
-  parallel_for(static_cast<size_t>(height), 4, [&](size_t j0, size_t j1) {
-    std::vector<double> p(k), a(6 * static_cast<size_t>(mc));
-    for (size_t j = j0; j < j1; ++j) {
-      const double theta = equirect_theta(static_cast<int>(j), height);
-      sh_basis(order, glm::dvec3(std::sin(theta), 0.0, std::cos(theta)), p.data());
-      // a[c mc + m] = Σ_l σ_l L_l,+m P̄_lm;  a[(3+c) mc + m] = Σ_l σ_l L_l,−m P̄_lm.
-      std::fill(a.begin(), a.end(), 0.0);
-      for (int l = 0; l <= order; ++l) {
-        const int center = l * l + l;
-        for (int m = 0; m <= l; ++m) {
-          const double pl = p[center + m];
-          for (int c = 0; c < 3; ++c) a[c * mc + m] += pl * coefficients[3 * (center + m) + c];
-          if (m > 0) {
-            for (int c = 0; c < 3; ++c) a[(3 + c) * mc + m] += pl * coefficients[3 * (center - m) + c];
-          }
-        }
+  evaluate_equirect_rows(coefficients, order, width, height, [&](int j, const double* values) {
+    std::array<double, 6> extrema = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                                     std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                                     -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    int64_t negative = 0;
+    float* out = rgb.data() + j * 3 * static_cast<size_t>(width);
+    for (int i = 0; i < width; ++i) {
+      bool below = false;
+      for (int c = 0; c < 3; ++c) {
+        const double v = values[3 * i + c];
+        out[3 * i + c] = static_cast<float>(v);
+        if (!(std::abs(v) <= std::numeric_limits<float>::max())) row_overflow[j] = 1;
+        extrema[c] = std::min(extrema[c], v);
+        extrema[3 + c] = std::max(extrema[3 + c], v);
+        below = below || v < 0.0;
       }
-      std::array<double, 6> extrema = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                                       std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                                       -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-      int64_t negative = 0;
-      float* out = rgb.data() + j * 3 * static_cast<size_t>(width);
-      for (int i = 0; i < width; ++i) {
-        const double* ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
-        const double* st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
-        bool below = false;
-        for (int c = 0; c < 3; ++c) {
-          const double* ac = a.data() + c * mc;
-          const double* as = a.data() + (3 + c) * mc;
-          double v = 0.0;
-          for (int m = 0; m < mc; ++m) v += ac[m] * ct[m] + as[m] * st[m];
-          out[3 * i + c] = static_cast<float>(v);
-          if (!(std::abs(v) <= std::numeric_limits<float>::max())) row_overflow[j] = 1;
-          extrema[c] = std::min(extrema[c], v);
-          extrema[3 + c] = std::max(extrema[3 + c], v);
-          below = below || v < 0.0;
-        }
-        negative += below ? 1 : 0;
-      }
-      row_extrema[j] = extrema;
-      row_negative[j] = negative;
+      negative += below ? 1 : 0;
     }
+    row_extrema[j] = extrema;
+    row_negative[j] = negative;
   });
   if (std::find(row_overflow.begin(), row_overflow.end(), 1) != row_overflow.end()) {
     double largest = 0.0;
@@ -459,6 +420,43 @@ std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficien
     *report = r;
   }
   return rgb;
+}
+
+void evaluate_equirect_rows(const std::vector<double>& coefficients, int order, int width, int height,
+                            const std::function<void(int, const double*)>& row) {
+  const int k = sh_count(order), mc = order + 1;
+  const AzimuthTables azimuth(width, mc);
+  parallel_for(static_cast<size_t>(height), 4, [&](size_t j0, size_t j1) {
+    std::vector<double> p(k), a(6 * static_cast<size_t>(mc)), values(3 * static_cast<size_t>(width));
+    for (size_t j = j0; j < j1; ++j) {
+      const double theta = equirect_theta(static_cast<int>(j), height);
+      sh_basis(order, glm::dvec3(std::sin(theta), 0.0, std::cos(theta)), p.data());
+      // a[c mc + m] = Σ_l c_l,+m P̄_lm;  a[(3+c) mc + m] = Σ_l c_l,−m P̄_lm.
+      std::fill(a.begin(), a.end(), 0.0);
+      for (int l = 0; l <= order; ++l) {
+        const int center = l * l + l;
+        for (int m = 0; m <= l; ++m) {
+          const double pl = p[center + m];
+          for (int c = 0; c < 3; ++c) a[c * mc + m] += pl * coefficients[3 * (center + m) + c];
+          if (m > 0) {
+            for (int c = 0; c < 3; ++c) a[(3 + c) * mc + m] += pl * coefficients[3 * (center - m) + c];
+          }
+        }
+      }
+      for (int i = 0; i < width; ++i) {
+        const double* ct = azimuth.cos.data() + static_cast<size_t>(i) * mc;
+        const double* st = azimuth.sin.data() + static_cast<size_t>(i) * mc;
+        for (int c = 0; c < 3; ++c) {
+          const double* ac = a.data() + c * mc;
+          const double* as = a.data() + (3 + c) * mc;
+          double v = 0.0;
+          for (int m = 0; m < mc; ++m) v += ac[m] * ct[m] + as[m] * st[m];
+          values[3 * i + c] = v;
+        }
+      }
+      row(static_cast<int>(j), values.data());
+    }
+  });
 }
 
 glm::dvec3 evaluate_sh_rgb(const std::vector<double>& coeffs, int order, const glm::dvec3& dir) {

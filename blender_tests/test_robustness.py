@@ -7,6 +7,9 @@ that says what happened, and a refused bake changes nothing.
 - the environment: no world, an Environment Texture without an image, an image whose file is
   missing, a file that is no image, an HDRI file path that is empty or missing (each refused with
   a report naming it), a world without an Environment Texture (baked, with a warning);
+- vertices for which Blender has no normal (zero: docs/blender-notes.md, "Zero vertex normals"):
+  baked with their faces' area-weighted normal (+Z without faces), stored as the baked normal,
+  with a warning naming the object and how many;
 - duplicated baked objects (Shift+D and Alt+D): they share the baked mesh; a clear or a rebake
   of either leaves the other's bake intact, and the last one to let go removes the baked mesh;
 - library-linked data (a library written by the test): a linked object and a library override
@@ -165,6 +168,37 @@ def check_environment(checks, package, scene, ball, hdri_path, out):
     result, text = bake()
     checks.check(result == {'FINISHED'} and "Warning" not in text, "the HDRI world bakes without warnings",
                  text.strip())
+
+
+def check_zero_normals(checks, package, scene):
+    # Vertex 0 (at the origin) is the right-angled corner of a large face facing +X and of a small
+    # one facing -X: Blender's angle-weighted normal sums to zero there, and a zero sum at the
+    # origin stays zero (3.4 and 5.0); vertex 5 is a loose vertex at the origin (zero on both).
+    # The faces' area-weighted normal of vertex 0 is +X; vertex 5 has no faces: +Z.
+    mesh = bpy.data.meshes.new("Fan")
+    mesh.from_pydata([(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0.25), (0, 0.25, 0), (0, 0, 0)], [],
+                     [(0, 1, 2), (0, 3, 4)])
+    fan = sdtest.add_object(scene, "Fan", mesh)
+    fan.location = (3.0, 0.0, 0.5)
+    given = package.compat.vertex_normals(mesh)
+    checks.check(np.all(given[[0, 5]] == 0.0) and np.all(np.linalg.norm(given[1:5], axis=1) > 0.99),
+                 "Blender gives the test mesh's vertices 0 and 5 a zero normal", str(given.tolist()))
+    sdtest.bake_settings(scene, 'prt_diffuse', 'LAMBERT', 2, 1, rays=64, select=[fan])
+    result, text = bake()
+    checks.check(result == {'FINISHED'} and "Bake: 2 vertices of Fan had no usable normal; their "
+                 "faces' normal was used" in text, "zero normals: baked, with a warning", text.strip())
+    baked = package.baking.baked_mesh(fan)
+    normals = package.attributes.read_normals(baked) if baked is not None else np.zeros((6, 3))
+    checks.check(np.allclose(normals[0], (1, 0, 0)) and np.allclose(normals[5], (0, 0, 1)) and
+                 np.allclose(normals[1:5], given[1:5]),
+                 "the baked normals are the fallbacks the bake used (+X, +Z), the others Blender's",
+                 str(normals.tolist()))
+    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+                                            320, 240, scene)
+    checks.check(baked is not None and np.isfinite(package.drawing.cpu_reference(scene, fan, view)).all(),
+                 "the repaired bake shades (finite)")
+    package.baking.clear(fan)
+    remove(fan)
 
 
 def check_duplicates(checks, package, scene, ball):
@@ -373,6 +407,7 @@ def main():
 
     check_selection(checks, package, scene, ball)
     check_environment(checks, package, scene, ball, hdri_path, args.out)
+    check_zero_normals(checks, package, scene)
     check_duplicates(checks, package, scene, ball)
     scene = check_library(checks, package, scene, args)
     ball = bpy.data.objects["Ball"]

@@ -40,19 +40,12 @@ class BakeError(Exception):
 # --------------------------------------------------------------------------------------------
 # Geometry
 
-def _unit(normals):
-    """Unit rows; a zero or broken normal becomes +Z."""
-    length = np.linalg.norm(normals, axis=1)
-    bad = ~(length > 1e-12)
-    normals[bad] = (0.0, 0.0, 1.0)
-    length[bad] = 1.0
-    return normals / length[:, None]
-
-
 class Geometry:
     """A mesh as arrays: its positions and polygons in the object's local frame (to rebuild it as
-    the baked mesh), and the vertices, unit normals and triangles that are baked, in the bake frame
-    (transforms.bake_frame: the local frame with the object's scale K applied)."""
+    the baked mesh), and the vertices, normals and triangles that are baked, in the bake frame
+    (transforms.bake_frame: the local frame with the object's scale K applied). The normals are
+    Blender's as they are, zero where Blender finds none (docs/blender-notes.md, "Zero vertex
+    normals"): the native bake gives such a vertex its faces' normal and lists it."""
 
     def __init__(self, mesh, shape):
         """mesh: a temporary mesh (Object.to_mesh()), which this scales by K."""
@@ -71,7 +64,7 @@ class Geometry:
         if np.linalg.det(shape) < 0:
             mesh.flip_normals()
         self.vertices = attributes.read_positions(mesh).astype(np.float64)
-        self.normals = _unit(compat.vertex_normals(mesh).astype(np.float64))
+        self.normals = compat.vertex_normals(mesh).astype(np.float64)
         self.triangles = attributes.read_triangles(mesh)
 
     def build_mesh(self, name):
@@ -246,7 +239,7 @@ class BakeJob:
 
     def __init__(self, tasks, warnings=()):
         self.tasks = tasks
-        self.warnings = list(warnings)   # for the user, with the result (prepare's)
+        self.warnings = list(warnings)   # for the user, with the result (prepare's, run's)
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
@@ -300,6 +293,10 @@ class BakeJob:
                 result = dict(result)
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
+                if len(result["fallback_normals"]):
+                    self.warnings.append("%d vertices of %s had no usable normal; their faces' "
+                                         "normal was used" % (len(result["fallback_normals"]),
+                                                              task.object_name))
             self.fraction = 1.0
         except Exception as exc:
             if sd is not None and isinstance(exc, getattr(sd, "BakeCancelled", ())):
@@ -329,7 +326,7 @@ class BakeJob:
                     raise BakeError("%s was deleted during the bake" % task.object_name)
                 mesh = task.geometry.build_mesh(MESH_PREFIX + task.object_name)
                 built.append((obj, mesh, task))
-                floats = attributes.write(mesh, task.geometry.normals, task.result)
+                floats = attributes.write(mesh, task.result["normals"], task.result)
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))
                 mesh[BAKE] = settings

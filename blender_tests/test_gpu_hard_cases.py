@@ -3,16 +3,16 @@
 As test_gpu_matches_cpu.py (each vertex drawn as one pixel of an RGBA32F target, read back and
 compared with sdnative.shade on the same stored float32 data, view and rotation), on scenes chosen
 to strain float32:
-- sun HDRIs (Blender's sunrise.exr, city.exr, interior.exr: dynamic ranges of 3e4 and more, with
-  slightly negative pixels), every method;
+- sun HDRIs (Blender's sunrise.exr, city.exr, interior.exr: brightest pixel 3.4e4, 7.7e4 - 2.5e5
+  times the median; 500 - 9000 slightly negative pixel values, down to -4e-3), every method;
 - Phong sigma = 0, 2.5, 1000 and 1e4 (every glossy method);
-- views along the normal (the pole of a sphere under an orthographic camera straight above),
+- views along the normal (the pole of a 42-vertex sphere under an orthographic camera straight above),
   grazing and from below the horizon (its equator and lower half: reflected lobe axes below the
   tangent plane);
-- environment rotations at gimbal lock (Euler Y = pi/2 - 1e-7) and an object rotation composed of
-  1e4 small float32 rotations (mathutils);
+- environment rotations at gimbal lock (Euler Y = pi/2 - 1e-7 and -pi/2) and an object rotation
+  composed of 1e4 small float32 rotations (mathutils);
 - objects scaled by 1e-4 and 1e4 (the camera scaled with them) and translated by 1e6 (the camera
-  10 units away);
+  6.7 units away);
 - a constant 1 x 1 environment c: every method returns c times its visibility integral, checked
   against the analytic value too (interior vertices of a lone ground plane see exactly the upper
   hemisphere: B = c for Lambert, c / 2 for ambient occlusion x unshadowed; unshadowed Phong: c);
@@ -197,11 +197,20 @@ def main():
         h.run("Phong sigma = %g" % sigma, pair, phong(sigma))
 
     # Views along the normal, grazing and from below the horizon: an orthographic camera straight
-    # above the sphere (its pole vertex has n = v exactly; its equator grazes; its lower half is
-    # seen from below its tangent planes).
+    # above a sphere (its pole vertex has n = v; its equator vertices graze, n.v = 0; its lower
+    # half is seen from below its tangent planes). Subdivided once (42 vertices), for the equator.
+    ball.location.x += 10.0
+    globe = sdtest.ico_sphere(scene, "Globe", subdivisions=2, location=(0.0, 0.0, 0.9))
     ortho_camera(scene, (0.0, 0.0, 10.0), (0.0, 0.0, -1.0), 4.0)
-    h.run("views: v = n, grazing, below horizon", [ball], phong(20.0), bake_objects=pair,
+    h.run("views: v = n, grazing, below horizon", [globe], phong(20.0), bake_objects=[globe, ground],
           per_pixel=(False, True))
+    n_dot_v = package.attributes.read_normals(package.baking.baked_mesh(globe))[:, 2]  # v = +Z
+    checks.check(n_dot_v.max() > 1.0 - 1e-6 and np.abs(n_dot_v).min() < 1e-6 and n_dot_v.min() < -0.9,
+                 "the views include v = n, grazing (n.v = 0) and below the horizon",
+                 "n.v in [%.2g, %.7g], min |n.v| %.1e" % (n_dot_v.min(), n_dot_v.max(),
+                                                          np.abs(n_dot_v).min()))
+    remove_objects([globe])
+    ball.location.x -= 10.0
     perspective_camera(scene, (0.0, -6.0, 3.0), (0.0, 0.0, 0.7))
 
     # Rotations near gimbal lock, and 1e4 small rotations composed in float32.

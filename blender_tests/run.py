@@ -54,6 +54,7 @@ TESTS = [
     ("test_default_scene", BACKGROUND, 600, [], [], (3, 4, 0)),
     ("test_shader_variants", GPU, 600, [], [], (3, 4, 0)),
     ("test_gpu_matches_cpu", GPU, 600, [], [], (3, 4, 0)),
+    ("test_gpu_hard_cases", GPU, 300, [], [], (3, 4, 0)),
     ("test_background_builds", GPU, 600, [], [], (3, 4, 0)),
     ("test_preview", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_world_orientation", BACKGROUND, 300, [], [], (3, 4, 0)),

@@ -7,6 +7,9 @@ that says what happened, and a refused bake changes nothing.
 - the environment: no world, an Environment Texture without an image, an image whose file is
   missing, a file that is no image, an HDRI file path that is empty or missing (each refused with
   a report naming it), a world without an Environment Texture (baked, with a warning);
+- vertices for which Blender has no normal (zero: docs/blender-notes.md, "Zero vertex normals"):
+  baked with their faces' area-weighted normal (+Z without faces), stored as the baked normal,
+  with a warning naming the object and how many;
 - duplicated baked objects (Shift+D and Alt+D): they share the baked mesh; a clear or a rebake
   of either leaves the other's bake intact, and the last one to let go removes the baked mesh;
 - library-linked data (a library written by the test): a linked object and a library override
@@ -165,6 +168,42 @@ def check_environment(checks, package, scene, ball, hdri_path, out):
     result, text = bake()
     checks.check(result == {'FINISHED'} and "Warning" not in text, "the HDRI world bakes without warnings",
                  text.strip())
+
+
+def check_zero_normals(checks, package, scene):
+    # Vertex 0 (at the origin) is the right-angled corner of a large face facing +X and of a small
+    # one facing -X, both smooth: Blender's angle-weighted normal sums to zero there, and a zero sum
+    # at the origin stays zero (3.4 and 5.0), in its vertex and corner normals alike; vertex 5 is a
+    # loose vertex at the origin (zero on both), which the baked copy leaves out (no face draws it).
+    # The faces' area-weighted normal of vertex 0 is +X.
+    mesh = bpy.data.meshes.new("Fan")
+    mesh.from_pydata([(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0.25), (0, 0.25, 0), (0, 0, 0)], [],
+                     [(0, 1, 2), (0, 3, 4)])
+    mesh.polygons.foreach_set("use_smooth", [True, True])
+    mesh.update()
+    fan = sdtest.add_object(scene, "Fan", mesh)
+    fan.location = (3.0, 0.0, 0.5)
+    given = package.compat.vertex_normals(mesh)
+    corner = package.compat.corner_normals(mesh)
+    checks.check(np.all(given[[0, 5]] == 0.0) and np.all(corner[[0, 3]] == 0.0) and
+                 np.all(np.linalg.norm(given[1:5], axis=1) > 0.99),
+                 "Blender gives the test mesh's vertices 0 and 5 a zero normal", str(given.tolist()))
+    sdtest.bake_settings(scene, 'prt_diffuse', 'LAMBERT', 2, 1, rays=64, select=[fan])
+    result, text = bake()
+    checks.check(result == {'FINISHED'} and "Bake: 1 vertex of Fan had no usable normal; their "
+                 "faces' normal was used" in text, "zero normals: baked, with a warning", text.strip())
+    baked = package.baking.baked_mesh(fan)
+    normals = package.attributes.read_normals(baked) if baked is not None else np.zeros((5, 3))
+    checks.check(len(normals) == 5 and np.allclose(normals[0], (1, 0, 0)) and
+                 np.allclose(normals[1:5], given[1:5]),
+                 "the baked normals are the fallback the bake used (+X), the others Blender's; the "
+                 "loose vertex is left out", str(normals.tolist()))
+    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+                                            320, 240, scene)
+    checks.check(baked is not None and np.isfinite(package.drawing.cpu_reference(scene, fan, view)).all(),
+                 "the repaired bake shades (finite)")
+    package.baking.clear(fan)
+    remove(fan)
 
 
 def check_duplicates(checks, package, scene, ball):
@@ -373,6 +412,7 @@ def main():
 
     check_selection(checks, package, scene, ball)
     check_environment(checks, package, scene, ball, hdri_path, args.out)
+    check_zero_normals(checks, package, scene)
     check_duplicates(checks, package, scene, ball)
     scene = check_library(checks, package, scene, args)
     ball = bpy.data.objects["Ball"]

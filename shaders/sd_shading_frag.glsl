@@ -26,7 +26,7 @@ void main()
 {
 #ifdef SD_PER_PIXEL
   vec3 normal = normalize(sd_normal);
-  vec3 view = sd_view_direction(sd_world_position);
+  vec3 view = sd_view_direction(sd_origin_offset);
   vec3 rgb = vec3(0.0);
   if (sd_bary.x > 0.0) {
     rgb += sd_bary.x * sd_shade(int(sd_corners.x + 0.5), normal, view);

@@ -349,9 +349,13 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
   return rgb;
 }
 
-/* Unit direction from a world-space point to the eye, in the object's local frame. */
-vec3 sd_view_direction(vec3 world_position)
+/* Unit direction to the eye, in the object's local frame, from the point `offset` away from the
+ * object's origin (in world axes: mat3(sd.model) * pos). sd.camera holds the eye relative to that
+ * origin, differenced in float64 on the CPU (gpu_shading.py): the eye minus a float32 world
+ * position lost the view to rounding far from the world origin (a translation of 1e6 rounds
+ * positions to 1/16: B 6e-3 off at 6 units, Phong 8). */
+vec3 sd_view_direction(vec3 offset)
 {
-  vec3 to_eye = (sd.camera.w > 0.5) ? (sd.camera.xyz - world_position) : sd.camera.xyz;
+  vec3 to_eye = (sd.camera.w > 0.5) ? (sd.camera.xyz - offset) : sd.camera.xyz;
   return normalize(mat3(sd.world_to_local) * normalize(to_eye));
 }

@@ -39,11 +39,11 @@ void main()
 #endif
 
 #ifdef SD_PER_PIXEL
-  sd_world_position = world.xyz;
+  sd_origin_offset = mat3(sd.model) * pos;
   sd_normal = nrm;
   sd_bary = bary;
   sd_corners = corners;
 #else
-  sd_color = sd.params.x * sd_shade(gl_VertexID, normalize(nrm), sd_view_direction(world.xyz));
+  sd_color = sd.params.x * sd_shade(gl_VertexID, normalize(nrm), sd_view_direction(mat3(sd.model) * pos));
 #endif
 }

@@ -40,23 +40,26 @@ class BakeError(Exception):
 # --------------------------------------------------------------------------------------------
 # Geometry
 
-def _unit(normals):
-    """Unit rows; a zero or broken normal becomes +Z."""
-    length = np.linalg.norm(normals, axis=1)
-    bad = ~(length > 1e-12)
-    normals[bad] = (0.0, 0.0, 1.0)
-    length[bad] = 1.0
-    return normals / length[:, None]
+def _unit_or_zero(vectors):
+    """Unit rows; zero (and non-finite) rows become zero, for the native bake's fallback."""
+    length = np.linalg.norm(vectors, axis=1)
+    good = np.isfinite(length) & (length > 0.0)
+    out = np.zeros_like(vectors)
+    out[good] = vectors[good] / length[good, None]
+    return out
 
 
 class Geometry:
     """A mesh as arrays: its positions and polygons in the object's local frame (to rebuild it as
-    the baked mesh), and the vertices, unit normals and triangles that are baked, in the bake frame
+    the baked mesh), and the vertices, normals and triangles that are baked, in the bake frame
     (transforms.bake_frame: the local frame with the object's scale K applied).
 
     The vertices are the mesh's split where its corners shade differently (utils/corners.py): each
     carries the corner normal Blender and Cycles shade with, its material slot and, when a material
-    reads an image texture, its UV (`material_slots`, `uvs`: per vertex, or None)."""
+    reads an image texture, its UV (`material_slots`, `uvs`: per vertex, or None). A vertex whose
+    corners have no normal (Blender finds none for degenerate faces: docs/blender-notes.md, "Zero
+    vertex normals") keeps a zero one: the native bake gives it its faces' normal and lists it.
+    Loose vertices (no face) are left out: nothing draws them."""
 
     def __init__(self, mesh, shape, uv_map=None):
         """mesh: a temporary mesh (Object.to_mesh()), which this scales by K; uv_map: the name of
@@ -81,7 +84,7 @@ class Geometry:
         self.positions = positions[split.origin]
         self.loop_vertices = split.loop_vertex
         self.vertices = attributes.read_positions(mesh).astype(np.float64)[split.origin]
-        self.normals = _unit(split.normal_sums)
+        self.normals = _unit_or_zero(split.normal_sums)
         triangle_loops = attributes.read_triangle_loops(mesh)
         self.triangles = split.loop_vertex[triangle_loops[:, ::-1] if mirrored else triangle_loops]
         self.material_slots = None if loop_slots is None else corners.vertex_values(split, loop_slots)
@@ -259,7 +262,7 @@ class BakeJob:
 
     def __init__(self, tasks, warnings=()):
         self.tasks = tasks
-        self.warnings = list(warnings)   # for the user, with the result (prepare's)
+        self.warnings = list(warnings)   # for the user, with the result (prepare's, run's)
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
@@ -313,6 +316,11 @@ class BakeJob:
                 result = dict(result)
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
+                count = len(result["fallback_normals"])
+                if count:
+                    self.warnings.append("%d %s of %s had no usable normal; their faces' normal "
+                                         "was used" % (count, "vertex" if count == 1 else "vertices",
+                                                       task.object_name))
             self.fraction = 1.0
         except Exception as exc:
             if sd is not None and isinstance(exc, getattr(sd, "BakeCancelled", ())):
@@ -342,7 +350,7 @@ class BakeJob:
                     raise BakeError("%s was deleted during the bake" % task.object_name)
                 mesh = task.geometry.build_mesh(MESH_PREFIX + task.object_name)
                 built.append((obj, mesh, task))
-                floats = attributes.write(mesh, task.geometry.normals, task.result)
+                floats = attributes.write(mesh, task.result["normals"], task.result)
                 attributes.write_surface(mesh, task.geometry.material_slots, task.geometry.uvs)
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))

@@ -317,9 +317,14 @@ class ObjectData:
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
         for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
-        the object's materials.object_albedos (none: white)."""
+        the object's materials.object_albedos (none: white). The shader gets the eye relative to
+        the object's origin, differenced here in float64 (far from the world origin float32 world
+        positions would round the view away)."""
         self.refresh_design()
         albedo_rows = self._use_albedos(list(albedos))
+        camera = np.array(camera, dtype=np.float64)
+        if camera[3] > 0.5:
+            camera[:3] -= np.asarray(model, dtype=np.float64)[:3, 3]
         values = {"model": model, "view_projection": view_projection,
                   "world_to_local": transforms.rotation_part(model).T, "camera": camera,
                   "params": (exposure_scale, target[0], target[1], depth_bias),

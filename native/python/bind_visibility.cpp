@@ -113,6 +113,7 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
   }
   const auto repaired = static_cast<py::ssize_t>(bake.fallback_normals.size());
   out["fallback_normals"] = adopt(std::move(bake.fallback_normals), {repaired});
+  out["normals"] = points_array(bake.normals);
   out["rays"] = bake.rays;
   out["seed"] = bake.seed;
   out["ray_origins"] = points_array(bake.ray_origins);
@@ -214,7 +215,8 @@ are design_nodes[design_offsets[i]:design_offsets[i+1]]), "design_nodes" (total,
 "design_weights" (total,), "design_residuals" (N,) (certified moment residual / mass, 0 for an empty
 design), "design_degree" (int); each only when requested; plus "rays", "seed", "ray_origins"
 (N, 3) (where each vertex's rays start: about 1e-3 of the shortest edge around it away from p) and
-"seconds" (wall time), and "fallback_normals" int64 (K,) (the vertices baked with a fallback normal).
+"seconds" (wall time), "fallback_normals" int64 (K,) (the vertices baked with a fallback normal) and
+"normals" (N, 3) (the unit normals the vertices were baked with, fallbacks included).
 Raises ValueError on bad input (and, before allocating, when the bake would need more than
 MAX_CALL_BYTES), BakeCancelled when
 cancelled, RuntimeError naming the vertex if a design cannot be certified. Releases the GIL.)doc");

@@ -69,9 +69,12 @@ def test_the_split_does_not_depend_on_the_frame_or_on_rounding():
         assert np.array_equal(split.origin, base.origin)
 
 
-def test_a_zero_normal_keeps_its_own_copy():
-    split = corners.split([0, 0, 0], [[0, 0, 0], [0, 0, 1], [0, 0, 1]])
-    assert split.count == 2 and np.array_equal(split.loop_vertex, [0, 1, 1])
+def test_corners_without_a_normal_share_one_copy_apart_from_the_others():
+    # Blender's corner normals of a smooth vertex whose faces cancel are zero: the copy keeps a
+    # zero normal, which the native bake replaces by its faces' normal.
+    split = corners.split([0, 0, 0, 0], [[0, 0, 0], [0, 0, 1], [0, 0, 0], [0, 0, 1]])
+    assert split.count == 2 and np.array_equal(split.loop_vertex, [0, 1, 0, 1])
+    assert np.array_equal(split.normal_sums[0], [0, 0, 0])
 
 
 def test_a_mesh_without_loops_has_no_vertices():

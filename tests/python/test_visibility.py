@@ -88,7 +88,7 @@ def test_outputs_equal_direct_sums_over_the_rays(sd):
     out = sd.bake_transfer(v, n, t, rays, seed=6, visibility_order=2, product_orders=(3, 2), transfer_order=3,
                            return_rays=True)
     assert set(out) == {"ambient_occlusion", "visibility", "product_matrices", "transfer", "ray_visibility", "rays",
-                        "seed", "ray_origins", "seconds", "fallback_normals"}
+                        "seed", "ray_origins", "seconds", "fallback_normals", "normals"}
     assert out["visibility"].shape == (len(v), 9) and out["transfer"].shape == (len(v), 16)
     assert out["product_matrices"].shape == (len(v), 16, 9) and out["product_matrices"].dtype == np.float64
     assert out["ray_visibility"].dtype == np.bool_ and out["ray_visibility"].shape == (len(v), rays)
@@ -274,6 +274,9 @@ def test_zero_and_non_finite_normals_get_a_fallback(sd):
     assert repaired["fallback_normals"].dtype == np.int64
     reference = sd.bake_transfer(V, N, T, 64, transfer_order=1)
     assert reference["fallback_normals"].tolist() == []
+    np.testing.assert_allclose(reference["normals"], N / np.linalg.norm(N, axis=1)[:, None], atol=1e-15)
+    np.testing.assert_array_equal(repaired["normals"][[0, 1, 3]], reference["normals"][[0, 1, 3]])
+    assert np.all(np.sum(repaired["normals"][[2, 4]] * reference["normals"][[2, 4]], axis=1) > 0.9)
     np.testing.assert_allclose(repaired["transfer"], reference["transfer"], atol=0.1)
 
 

@@ -64,6 +64,7 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
         starts = np.flatnonzero(np.r_[True, vertex[1:] != vertex[:-1]])
         leader = np.repeat(remaining[starts], np.diff(np.r_[starts, len(remaining)]))
         same = np.einsum("ij,ij->i", units[remaining], units[leader]) >= _COS_TOLERANCE
+        same |= (lengths[remaining] == 0.0) & (lengths[leader] == 0.0)   # no normal: one copy
         if slots is not None:
             same &= slots[remaining] == slots[leader]
         if uvs is not None:

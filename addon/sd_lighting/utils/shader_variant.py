@@ -161,7 +161,7 @@ class Variant:
     def interface(self):
         """What the vertex stage passes on, in location order: (qualifier, GLSL type, name)."""
         if self.per_pixel:
-            out = [("smooth", "vec3", "sd_world_position"), ("smooth", "vec3", "sd_normal"),
+            out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
         else:
             out = [("smooth", "vec3", "sd_color")]
@@ -190,7 +190,7 @@ class Variant:
         fields = [BlockField("model", "mat4"),             # object to world
                   BlockField("view_projection", "mat4"),   # world to clip
                   BlockField("world_to_local", "mat4"),    # the object's rotation, inverted
-                  BlockField("camera", "vec4"),            # eye (w = 1) or direction to it (w = 0)
+                  BlockField("camera", "vec4"),            # eye - object origin (w = 1), or direction to it (w = 0)
                   BlockField("params", "vec4"),            # 2^exposure, target width, height, depth bias
                   BlockField("light", "vec4", (self.light_order + 1) ** 2),  # L(g R x), rgb
                   BlockField("lobe", "vec4", self.lobe_vec4s)]               # Funk-Hecke factors

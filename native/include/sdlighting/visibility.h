@@ -80,6 +80,9 @@ struct TransferBake {
   /// Vertices whose normal was zero or not finite, in increasing order: they were baked with the
   /// area-weighted normal of their faces (+Z without faces) instead of failing the bake.
   std::vector<std::int64_t> fallback_normals;
+  /// [N] the unit normals the vertices were baked with (the fallbacks above included), for the
+  /// caller to store with the results.
+  std::vector<glm::dvec3> normals;
   int rays = 0;
   std::uint64_t seed = 0;
   std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object frame

@@ -296,6 +296,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   bake.transfer_order = options.transfer_order;
   bake.design_degree = plan.design_degree;
   bake.fallback_normals = std::move(fallback_normals);
+  bake.normals = units;
   bake.ambient_occlusion.assign(n, 0.0);
   bake.visibility.assign(n * plan.visibility_count, 0.0);
   bake.product_matrices.assign(n * plan.product_rows * plan.product_cols, 0.0);

@@ -593,6 +593,11 @@ TEST(Visibility, ZeroAndNonFiniteNormalsGetTheirFacesNormal) {
   }
   // Only the sphere 4 radii away blocks its rays: a cone of (1 − cos asin(1/5))/2 ≈ 1 %.
   EXPECT_NEAR(repaired.ambient_occlusion[loose], 0.99, 0.01);
+  // The normals baked with are returned: the given ones unchanged, the fallbacks in their place.
+  ASSERT_EQ(repaired.normals.size(), m.vertices.size());
+  EXPECT_LT(glm::length(repaired.normals[0] - glm::normalize(good.normals[0])), 1e-15);
+  for (std::size_t v : {2, 5, 7}) EXPECT_GT(glm::dot(repaired.normals[v], good.normals[v]), 0.99) << v;
+  EXPECT_EQ(repaired.normals[loose], glm::dvec3(0.0, 0.0, 1.0));
   // NaN positions stay an error.
   m.vertices[0].x = std::nan("");
   EXPECT_THROW(bake_transfer(m.vertices, m.normals, m.triangles, options), std::invalid_argument);

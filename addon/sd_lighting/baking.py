@@ -316,10 +316,10 @@ class BakeJob:
                 result = dict(result)
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
-                count = len(result["fallback_normals"])
-                if count:
+                fallbacks = len(result["fallback_normals"])
+                if fallbacks:
                     self.warnings.append("%d %s of %s had no usable normal; their faces' normal "
-                                         "was used" % (count, "vertex" if count == 1 else "vertices",
+                                         "was used" % (fallbacks, "vertex" if fallbacks == 1 else "vertices",
                                                        task.object_name))
             self.fraction = 1.0
         except Exception as exc:

@@ -387,6 +387,15 @@ def block_averages(image, mask, block):
     return rgb[full]
 
 
+def block_differences(images, reference, mask, block):
+    """Per image, the worst channel's |image - reference| / the reference's largest channel, for
+    each block x block tile wholly inside the mask: a list of [K] arrays."""
+    import numpy as np
+    expected = block_averages(reference, mask, block)
+    scale = expected.max(axis=1)
+    return [np.abs(block_averages(image, mask, block) - expected).max(axis=1) / scale for image in images]
+
+
 def cycles_render(scene, path, size, samples=512):
     """Renders the scene with Cycles as a user comparing with the preview would (direct light
     only, pixel filter off, no denoising - Debian's Cycles has no OpenImageDenoise - transparent

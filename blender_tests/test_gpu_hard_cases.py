@@ -85,7 +85,8 @@ class Harness:
         """GPU against CPU on every object; returns {object name: cpu values}."""
         drawing = self.package.drawing
         view = self.view()
-        l00 = np.abs(drawing.local_light(self.scene, objects[0], 0)[0][0]).max()
+        environment = self.package.environment
+        l00 = np.abs(environment.light_coefficients(environment.source(self.scene), 0)[0]).max()
         out = {}
         for obj in objects:
             cpu = drawing.cpu_reference(self.scene, obj, view)

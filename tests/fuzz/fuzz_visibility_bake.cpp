@@ -1,7 +1,8 @@
 // bake_transfer on meshes decoded from the bytes — vertices and normals with NaN, inf, zero and
 // huge values, triangles with indices out of range, occluders, every output order (now and then
-// out of range) — with few rays on one thread. Every input must give finite outputs with AO in
-// [0, 1] = Ṽ_00 and certified designs, or a std::exception with a message.
+// out of range), cancelled now and then — with few rays on one or two threads. Every input must
+// give finite outputs with AO in [0, 1] = Ṽ_00 and certified designs, or a std::exception with a
+// message (BakeCancelled included).
 #include "fuzz_values.h"
 #include "sdlighting/spherical_design.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -50,7 +51,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
   sd::TransferOptions options;
   options.rays = sd::fuzz::hostile_order(data, 1, 48);
   options.seed = data.ConsumeIntegral<std::uint64_t>();
-  options.threads = 1;
+  options.threads = data.ConsumeIntegralInRange(1, 2);
+  // Now and then a progress callback that cancels at its k-th call (k = 1: before any vertex).
+  const int cancel_at = data.ConsumeIntegralInRange(0, 7) == 0 ? data.ConsumeIntegralInRange(1, 3) : 0;
+  int progress_calls = 0;
+  if (cancel_at > 0) options.progress = [&](std::size_t, std::size_t) { return ++progress_calls < cancel_at; };
   if (data.ConsumeBool()) options.visibility_order = sd::fuzz::hostile_order(data, 0, 3);
   if (data.ConsumeBool()) {
     options.product_order = sd::fuzz::hostile_order(data, 0, 3);

@@ -9,6 +9,7 @@
 #include "sdlighting/visibility.h"
 #include "sdtesting/meshes.h"
 #include "sdtesting/sphere.h"
+#include "bake_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -107,14 +108,7 @@ void expect_consistent(const Mesh& m, const TransferOptions& o, const TransferBa
 
 void expect_same_on_one_and_two_threads(const Mesh& m, TransferOptions o, const TransferBake& two) {
   o.threads = 1;
-  const TransferBake one = bake_transfer(m.vertices, m.normals, m.triangles, o);
-  EXPECT_EQ(one.ambient_occlusion, two.ambient_occlusion);
-  EXPECT_EQ(one.visibility, two.visibility);
-  EXPECT_EQ(one.product_matrices, two.product_matrices);
-  EXPECT_EQ(one.transfer, two.transfer);
-  EXPECT_EQ(one.design_offsets, two.design_offsets);
-  EXPECT_EQ(one.design_weights, two.design_weights);
-  EXPECT_EQ(one.fallback_normals, two.fallback_normals);
+  test::expect_same(bake_transfer(m.vertices, m.normals, m.triangles, o), two);
 }
 
 TEST(BakeProperties, RandomTriangleSoupsGiveConsistentDeterministicBakes) {

@@ -5,6 +5,8 @@
 
 #include <fuzzer/FuzzedDataProvider.h>
 
+#include "sdlighting/mesh.h"
+
 #include <glm/vec3.hpp>
 
 #include <cmath>
@@ -14,6 +16,7 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <vector>
 
 namespace sd::fuzz {
 
@@ -73,6 +76,26 @@ inline int hostile_order(FuzzedDataProvider& data, int lo, int hi) {
     case 1: return hi + 1;
     default: return data.ConsumeIntegralInRange<int>(lo, hi);
   }
+}
+
+/// Points in the cube [-scale, scale]³, one in eight hostile_vec3 unless `finite`.
+inline std::vector<glm::dvec3> points(FuzzedDataProvider& data, std::size_t count, double scale, bool finite) {
+  std::vector<glm::dvec3> out(count);
+  for (auto& p : out) {
+    p = finite || data.ConsumeIntegralInRange(0, 7) != 0
+            ? glm::dvec3(finite_double(data, scale), finite_double(data, scale), finite_double(data, scale))
+            : hostile_vec3(data, scale);
+  }
+  return out;
+}
+
+/// `count` triangles of hostile_index into `vertices` points.
+inline std::vector<sd::Triangle> triangles(FuzzedDataProvider& data, std::size_t count, std::size_t vertices) {
+  std::vector<sd::Triangle> out(count);
+  for (auto& t : out) {
+    for (auto& index : t) index = hostile_index(data, static_cast<std::int64_t>(vertices));
+  }
+  return out;
 }
 
 /// Stops the run, as a crash does, when an output breaks the entry point's contract.

@@ -14,26 +14,6 @@
 
 namespace {
 
-// Points around the unit cube, at a scale picked once per input (1e-4 .. 1e4, as in issue 12).
-std::vector<glm::dvec3> points(FuzzedDataProvider& data, std::size_t count, double scale, bool finite) {
-  std::vector<glm::dvec3> out(count);
-  for (auto& p : out) {
-    p = finite || data.ConsumeIntegralInRange(0, 7) != 0
-            ? glm::dvec3(sd::fuzz::finite_double(data, scale), sd::fuzz::finite_double(data, scale),
-                         sd::fuzz::finite_double(data, scale))
-            : sd::fuzz::hostile_vec3(data, scale);
-  }
-  return out;
-}
-
-std::vector<sd::Triangle> triangles(FuzzedDataProvider& data, std::size_t count, std::size_t vertices) {
-  std::vector<sd::Triangle> out(count);
-  for (auto& t : out) {
-    for (auto& index : t) index = sd::fuzz::hostile_index(data, static_cast<std::int64_t>(vertices));
-  }
-  return out;
-}
-
 void expect_finite(const std::vector<double>& values, const char* what) {
   for (double v : values) {
     if (!std::isfinite(v)) sd::fuzz::contract_broken(what);
@@ -67,14 +47,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
     options.design_visibility_order = sd::fuzz::hostile_order(data, 0, 2);
   }
   options.warm_start_designs = data.ConsumeBool();
-  const auto vertices = points(data, vertex_count, scale, !hostile);
+  const auto vertices = sd::fuzz::points(data, vertex_count, scale, !hostile);
   std::vector<glm::dvec3> normals(vertex_count);
   for (auto& n : normals) n = sd::fuzz::hostile_vec3(data);
-  const auto faces = triangles(data, triangle_count, vertex_count);
+  const auto faces = sd::fuzz::triangles(data, triangle_count, vertex_count);
   sd::OccluderMesh occluders;
   if (data.ConsumeBool()) {
-    occluders.vertices = points(data, data.ConsumeIntegralInRange<std::size_t>(0, 6), scale, !hostile);
-    occluders.triangles = triangles(data, data.ConsumeIntegralInRange<std::size_t>(0, 6), occluders.vertices.size());
+    occluders.vertices = sd::fuzz::points(data, data.ConsumeIntegralInRange<std::size_t>(0, 6), scale, !hostile);
+    occluders.triangles = sd::fuzz::triangles(data, data.ConsumeIntegralInRange<std::size_t>(0, 6), occluders.vertices.size());
   }
   try {
     const sd::TransferBake bake = sd::bake_transfer(vertices, normals, faces, options, occluders);

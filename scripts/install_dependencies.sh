@@ -6,7 +6,8 @@
 # (OpenGL/EGL through libglvnd and Mesa, X11 client libraries, OpenMP). mesa-vulkan-drivers: Mesa's
 # lavapipe, the Vulkan driver on which Blender 5.3 (whose default backend is Vulkan; without a
 # driver it falls back to OpenGL) runs the GPU tests. glslang-tools: the strict GLSL checks of
-# every shader variant (blender_tests/test_shader_variants.py).
+# every shader variant (blender_tests/test_shader_variants.py). clang and libclang-rt-14-dev
+# (libFuzzer and the sanitizers' runtimes for clang 14): the fuzz targets (tests/fuzz).
 set -euo pipefail
 
 packages=(cmake g++ make pkg-config libembree-dev pybind11-dev libglm-dev libopenimageio-dev
@@ -14,7 +15,7 @@ packages=(cmake g++ make pkg-config libembree-dev pybind11-dev libglm-dev libope
           blender xvfb xauth libgl1-mesa-dri
           python3-venv libegl1 libgl1 libegl-mesa0 libx11-6 libxext6 libxfixes3 libxi6 libxrender1
           libxxf86vm1 libxkbcommon0 libsm6 libice6 libgomp1 mesa-vulkan-drivers
-          glslang-tools)
+          glslang-tools clang libclang-rt-14-dev)
 
 missing=()
 for package in "${packages[@]}"; do

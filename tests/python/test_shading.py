@@ -95,3 +95,15 @@ def test_reference_of_a_constant_sky_is_its_radiance(sd):
     assert np.all(np.abs(radiance - [1.0, 2.0, 3.0]) < 4.0 * error)
     with pytest.raises(ValueError, match="views"):
         sd.reference(sky, np.zeros((2, 3)), normals, np.zeros((0, 3), dtype=int), lobe="phong", exponent=8.0)
+
+
+def test_reference_refuses_a_matrix_that_is_no_rotation(sd):
+    # Found by tests/fuzz/fuzz_reference: the reference took any matrix (NaN or silently wrong).
+    sky = sd.environment_from_pixels(np.ones((4, 8, 3)))
+    args = (sky, np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), np.zeros((0, 3), dtype=int))
+    for matrix, match in [(np.full((3, 3), 0.72), "orthogonal"), (np.diag([1.0, 1.0, -1.0]), "reflection"),
+                          (2.0 * np.eye(3), "orthogonal")]:
+        with pytest.raises(ValueError, match=match):
+            sd.reference(*args, rotation=matrix, samples=16)
+    radiance, _ = sd.reference(*args, rotation=np.eye(3, dtype=np.float32), samples=16)
+    assert np.all(np.isfinite(radiance))

@@ -34,7 +34,9 @@ struct ReferenceResult {
 /// so that both a sun and a narrow highlight converge. V is traced with Embree against the
 /// object's triangles and the occluders from the bake's ray origins (src/bake/traced_scene.h). L
 /// is the map's texels (piecewise constant), unfiltered. `views` (unit, vertex → eye) are read for Phong only.
-/// Throws std::invalid_argument on bad input (as bake_transfer does, and samples < 1).
+/// `rotation` must be a rotation (proper_rotation's checks, sh_rotation.h: float32 ones pass).
+/// Throws std::invalid_argument on bad input (as bake_transfer does, samples < 1, a zero or
+/// non-finite view for Phong, a matrix that is no rotation).
 ReferenceResult shade_reference(const Environment& environment, const glm::dmat3& rotation,
                                 const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& normals,
                                 const std::vector<glm::dvec3>& views, const std::vector<Triangle>& triangles,

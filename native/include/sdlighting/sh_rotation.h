@@ -7,6 +7,12 @@
 
 namespace sd {
 
+/// The proper rotation nearest to `rotation` (its polar factor U Vᵀ), after checking that it is one:
+/// finite, orthogonal to 1e-5 (‖RᵀR − I‖_F: float32 rotations pass) and not a reflection (det < 0);
+/// std::invalid_argument otherwise. Every function that takes a rotation (ShRotation, rotated_sh,
+/// shade_reference) checks it with this.
+glm::dmat3 proper_rotation(const glm::dmat3& rotation);
+
 /// The block-diagonal matrix D(R) that rotates SH coefficients, band by band, built with the
 /// Ivanic–Ruedenberg recurrence (J. Phys. Chem. 1996, 100, 6342; errata 1998).
 ///

@@ -104,39 +104,6 @@ std::vector<double> band_from_previous(int l, const std::vector<double>& band1,
   return band;
 }
 
-// The proper rotation nearest to `rotation` (its polar factor U Vᵀ), after checking that it is one up
-// to kRotationTolerance: Blender hands over float32 matrices, orthogonal only to about 1e-7, and
-// the band recurrence would carry such a defect into every band, so the bands are built from the
-// exactly orthogonal polar factor instead.
-glm::dmat3 proper_rotation(const glm::dmat3& rotation) {
-  Eigen::Matrix3d r;
-  for (int col = 0; col < 3; ++col) {
-    for (int row = 0; row < 3; ++row) {
-      if (!std::isfinite(rotation[col][row])) {
-        throw std::invalid_argument("ShRotation: rotation matrix has a non-finite entry");
-      }
-      r(row, col) = rotation[col][row];
-    }
-  }
-  const double defect = (r.transpose() * r - Eigen::Matrix3d::Identity()).norm();  // Frobenius
-  if (!(defect <= kRotationTolerance)) {
-    throw std::invalid_argument("ShRotation: matrix is not orthogonal (||R^T R - I||_F = " + number_string(defect) +
-                                ", tolerance " + number_string(kRotationTolerance) + ")");
-  }
-  const double det = r.determinant();
-  if (det < 0.0) {
-    throw std::invalid_argument("ShRotation: matrix is a reflection (det = " + number_string(det) +
-                                "), not a rotation");
-  }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d polar = svd.matrixU() * svd.matrixV().transpose();
-  glm::dmat3 out;
-  for (int col = 0; col < 3; ++col) {
-    for (int row = 0; row < 3; ++row) out[col][row] = polar(row, col);
-  }
-  return out;
-}
-
 // out = D in, band by band; kChannels > 0 fixes the channel count at compile time, 0 means `channels`.
 template <int kChannels>
 void apply_bands(const std::vector<std::vector<double>>& bands, int order, const double* in,
@@ -161,6 +128,39 @@ void apply_bands(const std::vector<std::vector<double>>& bands, int order, const
 }
 
 }  // namespace
+
+// Blender hands over float32 matrices, orthogonal only to about 1e-7, and the band recurrence would
+// carry such a defect into every band, so the bands are built from the exactly orthogonal polar
+// factor instead.
+glm::dmat3 proper_rotation(const glm::dmat3& rotation) {
+  Eigen::Matrix3d r;
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) {
+      if (!std::isfinite(rotation[col][row])) {
+        throw std::invalid_argument("rotation matrix has a non-finite entry");
+      }
+      r(row, col) = rotation[col][row];
+    }
+  }
+  const double defect = (r.transpose() * r - Eigen::Matrix3d::Identity()).norm();  // Frobenius
+  if (!(defect <= kRotationTolerance)) {
+    throw std::invalid_argument("rotation matrix is not orthogonal (||R^T R - I||_F = " + number_string(defect) +
+                                ", tolerance " + number_string(kRotationTolerance) + ")");
+  }
+  const double det = r.determinant();
+  if (det < 0.0) {
+    throw std::invalid_argument("rotation matrix is a reflection (det = " + number_string(det) +
+                                "), not a rotation");
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d polar = svd.matrixU() * svd.matrixV().transpose();
+  glm::dmat3 out;
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) out[col][row] = polar(row, col);
+  }
+  return out;
+}
+
 
 ShRotation::ShRotation(const glm::dmat3& rotation, int order) : order_(order) {
   check_order("ShRotation: order", order, kMaxShOrder);

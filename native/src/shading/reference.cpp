@@ -1,6 +1,7 @@
 #include "sdlighting/reference.h"
 
 #include "sdlighting/environment_sampler.h"
+#include "sdlighting/sh_rotation.h"
 #include "sdlighting/visibility.h"
 
 #include "bake/traced_scene.h"
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 namespace sd {
 
@@ -30,12 +32,23 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   check_points("occluder vertices", occluders.vertices);
   check_triangles("occluder triangles", occluders.triangles, occluders.vertices.size(), "occluder vertices");
   const ZonalLobe lobe = material.lobe();
+  // A matrix that is no rotation, or a zero or non-finite view, made every value NaN or silently
+  // wrong (found by tests/fuzz/fuzz_reference): refused here, as the bindings refuse them.
+  const glm::dmat3 g = proper_rotation(rotation);
+  if (material.glossy) {
+    for (size_t p = 0; p < views.size(); ++p) {
+      const double length = glm::length(views[p]);
+      if (!std::isfinite(length) || !(length > 0.0)) {
+        throw std::invalid_argument("view " + std::to_string(p) + " is zero or not finite");
+      }
+    }
+  }
 
   const TracedScene traced(vertices, unit, triangles, occluders, ParallelOptions(options.threads));  // the bake's origins
   const EnvironmentSampler sampler(environment);
   // The integrand reads L at g x (rotated_sh, sh_rotation.h, states the convention); a direction y
   // drawn from the map is therefore the object-frame direction x = gᵀ y.
-  const glm::dmat3 g_inverse = glm::transpose(rotation);
+  const glm::dmat3 g_inverse = glm::transpose(g);
 
   ReferenceResult result;
   result.samples = options.samples;
@@ -56,7 +69,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
       // f(x)/(pdf_env + pdf_lobe) for a direction x in the object's frame; L is looked up at g x.
       auto balanced = [&](const glm::dvec3& x) {
         const double w = lobe.value(glm::dot(a, x));
-        const glm::dvec3 y = rotation * x;
+        const glm::dvec3 y = g * x;
         const double pdf = sampler.pdf(y) + w;
         if (w <= 0.0 || pdf <= 0.0 || traced.scene().occluded(origin, x)) return glm::dvec3(0.0);
         return environment.radiance(y) * (w / pdf);

@@ -8,6 +8,7 @@
 #include "sdlighting/visibility.h"
 #include "sdlighting/zonal_lobe.h"
 #include "sdtesting/meshes.h"
+#include "bake_test_support.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -309,18 +310,7 @@ TEST(VisibilityExact, ProductMatrixColumnZeroIsTheVisibility) {
 
 // ---- determinism ----
 
-void expect_same(const TransferBake& a, const TransferBake& b) {
-  EXPECT_EQ(a.ray_origins, b.ray_origins);
-  EXPECT_EQ(a.ambient_occlusion, b.ambient_occlusion);
-  EXPECT_EQ(a.visibility, b.visibility);
-  EXPECT_EQ(a.product_matrices, b.product_matrices);
-  EXPECT_EQ(a.transfer, b.transfer);
-  EXPECT_EQ(a.design_offsets, b.design_offsets);
-  EXPECT_EQ(a.design_weights, b.design_weights);
-  ASSERT_EQ(a.design_nodes.size(), b.design_nodes.size());
-  for (std::size_t i = 0; i < a.design_nodes.size(); ++i) EXPECT_EQ(a.design_nodes[i], b.design_nodes[i]);
-  EXPECT_EQ(a.ray_visibility, b.ray_visibility);
-}
+using test::expect_same;
 
 TEST(VisibilityDeterminism, SameSeedSameResultForAnyThreadCount) {
   const Mesh m = bumpy_sphere(2);

@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 namespace sd {
@@ -104,6 +105,33 @@ TEST(Reference, RejectsBadInput) {
   EXPECT_NO_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 0}}, {}, {}, Material::lambert(), options));
   EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 1}}, {}, {}, Material::phong(8.0), options),
                std::invalid_argument);
+}
+
+TEST(Reference, RefusesZeroViewsAndMatricesThatAreNoRotation) {
+  // Found by tests/fuzz/fuzz_reference: these gave NaN (a zero or NaN view) or silently wrong
+  // radiance (a matrix that is no rotation) instead of an error.
+  const Environment sky = Environment::from_equirect_pixels(8, 4, std::vector<float>(8 * 4 * 3, 1.0f));
+  ReferenceOptions options;
+  options.samples = 16;
+  const Material phong = Material::phong(20.0);
+  for (const glm::dvec3& view : {glm::dvec3(0.0), glm::dvec3(std::nan(""), 0.0, 1.0)}) {
+    EXPECT_THROW(shade_reference(sky, glm::dmat3(1.0), {{0, 0, 0}}, {{0, 0, 1}}, {view}, {}, phong, options),
+                 std::invalid_argument);
+  }
+  glm::dmat3 sheared(1.0), mirror(1.0), singular(0.72);
+  sheared[1][0] = 0.3;
+  mirror[2][2] = -1.0;
+  for (const glm::dmat3& matrix : {sheared, mirror, singular, 2.0 * glm::dmat3(1.0)}) {
+    EXPECT_THROW(shade_reference(sky, matrix, {{0, 0, 0}}, {{0, 0, 1}}, {{0, 0, 1}}, {}, phong, options),
+                 std::invalid_argument);
+  }
+  // A float32 rotation is a rotation; an unnormalised view is normalised.
+  std::mt19937_64 rng(3);
+  glm::dmat3 float32 = test::random_rotation(rng);
+  for (int col = 0; col < 3; ++col)
+    for (int row = 0; row < 3; ++row) float32[col][row] = static_cast<float>(float32[col][row]);
+  const ReferenceResult r = shade_reference(sky, float32, {{0, 0, 0}}, {{0, 0, 1}}, {{0, 0, 5}}, {}, phong, options);
+  for (double v : r.radiance) EXPECT_TRUE(std::isfinite(v));
 }
 
 }  // namespace

@@ -1,14 +1,10 @@
-#include "sdlighting/shading.h"
-#include "sdlighting/spherical_harmonics.h"
-#include "sdlighting/weighted_design.h"
+#include "shading_test_support.h"
 #include "sdlighting/zonal_design.h"
-#include "sdtesting/sphere.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
 #include <cmath>
-#include <random>
 #include <vector>
 
 namespace sd {
@@ -16,56 +12,10 @@ namespace {
 
 constexpr double kEqualFormulas = 1e-9;  // relative: two exact formulas of the same quantity
 
-using test::random_direction;
-
-struct Scene {
-  int s = 4, s_v = 2;
-  std::vector<double> light, normals, views, visibility;
-  size_t count = 0;
-};
-
-Scene random_scene(size_t count, int s, int s_v, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  Scene scene;
-  scene.s = s;
-  scene.s_v = s_v;
-  scene.count = count;
-  scene.light.resize(3 * sh_count(s));
-  for (double& v : scene.light) v = normal(rng);
-  scene.light[0] = scene.light[1] = scene.light[2] = 5.0;
-  scene.visibility.resize(count * sh_count(s_v));
-  for (double& v : scene.visibility) v = 0.3 * normal(rng);
-  for (size_t p = 0; p < count; ++p) {
-    scene.visibility[p * sh_count(s_v)] = 0.7;
-    for (auto* field : {&scene.normals, &scene.views}) {
-      const glm::dvec3 d = random_direction(rng, normal);
-      field->insert(field->end(), {d.x, d.y, d.z});
-    }
-  }
-  return scene;
-}
-
-ShadingInputs inputs(const Scene& scene, Material material) {
-  ShadingInputs in;
-  in.light_order = scene.s;
-  in.light = scene.light.data();
-  in.vertex_count = scene.count;
-  in.normals = scene.normals.data();
-  in.view_dirs = scene.views.data();
-  in.material = material;
-  return in;
-}
-
-void expect_relative_equal(const std::vector<double>& a, const std::vector<double>& b, double tolerance) {
-  double scale = 0.0, error = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    scale = std::max(scale, std::abs(b[i]));
-    error = std::max(error, std::abs(a[i] - b[i]));
-  }
-  EXPECT_GT(scale, 0.0);
-  EXPECT_LE(error, tolerance * scale) << "max error " << error << " of scale " << scale;
-}
+using test::expect_relative_equal;
+using test::inputs;
+using test::random_scene;
+using test::Scene;
 
 const Material kMaterials[] = {Material::lambert(), Material::phong(8.0), Material::phong(32.0)};
 
@@ -85,39 +35,13 @@ TEST(Shading, MsdTheorem21EqualsGauntPrt) {  // (12) = (10)
 
 TEST(Shading, MsdTheorem22EqualsProductMatrixPrt) {  // (13) = (8)-(9)
   const int s = 4, s_v = 2, rays = 400;
-  Scene scene = random_scene(40, s, s_v, 2);
-  std::mt19937_64 rng(3);
-  std::normal_distribution<double> normal;
-  const int k = sh_count(s), kv = sh_count(s_v);
-  std::vector<double> matrices, nodes, weights;
-  std::vector<int64_t> offsets = {0};
-  std::vector<double> y(sh_count(std::max(s, s_v)));
-  for (size_t p = 0; p < scene.count; ++p) {
-    // A visibility function given by rays: escaping where the ray clears a random tilted plane.
-    const glm::dvec3 occluder = random_direction(rng, normal);
-    std::vector<glm::dvec3> escaping;
-    std::vector<double> m(size_t(k) * kv, 0.0);
-    for (int r = 0; r < rays; ++r) {
-      const glm::dvec3 x = random_direction(rng, normal);
-      if (glm::dot(x, occluder) < 0.3) continue;
-      escaping.push_back(x);
-      sh_basis(std::max(s, s_v), x, y.data());
-      for (int i = 0; i < k; ++i)
-        for (int j = 0; j < kv; ++j) m[size_t(i) * kv + j] += y[i] * y[j] / rays;
-    }
-    matrices.insert(matrices.end(), m.begin(), m.end());
-    const SphericalDesign design = weighted_design(escaping, std::vector<double>(escaping.size(), 1.0 / rays), s + s_v);
-    for (int nu = 0; nu < design.size(); ++nu) {
-      nodes.insert(nodes.end(), {design.nodes[nu].x, design.nodes[nu].y, design.nodes[nu].z});
-      weights.push_back(design.weights[nu]);
-    }
-    offsets.push_back(static_cast<int64_t>(weights.size()));
-  }
+  const Scene scene = random_scene(40, s, s_v, 2);
+  const test::RayVisibility rays_v = test::random_ray_visibility(scene.count, s, s_v, rays, 3);
   for (const Material& material : kMaterials) {
     const ShadingInputs in = inputs(scene, material);
     std::vector<double> msd(3 * scene.count), prt(3 * scene.count);
-    shade_msd_visibility_design(in, s_v, VertexDesigns{offsets.data(), nodes.data(), weights.data()}, msd.data());
-    shade_prt_product_matrix(in, s_v, matrices.data(), prt.data());
+    shade_msd_visibility_design(in, s_v, rays_v.designs(), msd.data());
+    shade_prt_product_matrix(in, s_v, rays_v.matrices.data(), prt.data());
     expect_relative_equal(msd, prt, kEqualFormulas);
   }
 }

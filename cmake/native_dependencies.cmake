@@ -1,0 +1,9 @@
+# The libraries the native library (native/) links, found once for the main build and for the
+# fuzzer build (tests/fuzz), which compiles the same sources again with clang's sanitizers.
+find_package(Eigen3 3.3 CONFIG REQUIRED)
+find_package(glm CONFIG REQUIRED)
+find_package(Threads REQUIRED)
+find_package(embree 3 CONFIG REQUIRED)
+# Debian's OpenImageIO CMake target names a non-existent OpenCV include directory; its .pc is clean.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(OpenImageIO REQUIRED IMPORTED_TARGET OpenImageIO)

@@ -45,7 +45,7 @@ class HeldEnvironment:
         self.calls += 1
         if self.error is not None:
             raise self.error
-        self.release.wait(600)
+        self.release.wait(60)   # only a draw that waits for the choice (a bug) waits this long
         return self._env.ringing_window(*args)
 
 

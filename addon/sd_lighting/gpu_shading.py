@@ -179,7 +179,8 @@ def lobe_design_status():
         lines.append("Building the lobe design of %s, degree %d (Gauss rule meanwhile)"
                      % (lobes.label(key.lobe, key.exponent), key.degree))
     for key, why in _lobe_designs.failures().items():
-        lines.append("Lobe design of %s, degree %d failed: %s" % (lobes.label(key.lobe, key.exponent), key.degree, why))
+        lines.append("Lobe design of %s, degree %d failed: %s"
+                     % (lobes.label(key.lobe, key.exponent), key.degree, why))
     return lines
 
 

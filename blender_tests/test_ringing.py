@@ -3,12 +3,19 @@ sun rings the truncated B below zero. The live shading's Automatic window lowers
 error there (and says so in the panel's line), and no pixel or vertex is ever negative: the shader
 clamps B at 0 per channel, as drawing.cpu_reference does, so GPU = CPU holds with the window and
 without.
+
+The choice is made off the main thread: while it is held back (a stand-in environment whose
+ringing_window waits), the first draw returns and shades without a window (GPU = CPU with none),
+the panel says so and the redraw timer runs; once it is let go, the draw shades with the chosen
+window. A choice that fails leaves no window, reported in the panel, never raised into the draw.
 Run (headless, GPU through a Workbench render):
     blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_ringing.py -- --zip Z --out DIR
 """
 
 import os
 import sys
+import threading
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
@@ -19,6 +26,84 @@ import numpy as np  # noqa: E402
 TOLERANCE = 1e-3          # GPU float32 vs CPU float64, as test_gpu_matches_cpu
 TEXTURE_TOLERANCE = 1e-3  # the band-limited texture's bilinear lookup, as test_gpu_matches_cpu
 WIDTH, HEIGHT = 320, 240
+
+
+class HeldEnvironment:
+    """An sdnative Environment whose ringing_window waits until `release` is set (or raises
+    `error` when one is given); counts the calls."""
+
+    def __init__(self, environment, error=None):
+        self._env = environment
+        self.error = error
+        self.release = threading.Event()
+        self.calls = 0
+
+    def __getattr__(self, name):
+        return getattr(self._env, name)
+
+    def ringing_window(self, *args):
+        self.calls += 1
+        if self.error is not None:
+            raise self.error
+        self.release.wait(60)   # only a draw that waits for the choice (a bug) waits this long
+        return self._env.ringing_window(*args)
+
+
+def held_environment(package, scene, error=None):
+    """Empties the environment caches and puts a HeldEnvironment of the scene's in them."""
+    env = package.environment
+    source = env.source(scene)
+    held = HeldEnvironment(env.environment(source), error)
+    env.clear_cache()
+    env._cache[source.key] = held
+    return held
+
+
+def check_choice_in_background(checks, package, scene, ball, view):
+    drawing, env = package.drawing, package.environment
+    settings = scene.sd_lighting
+    settings.ringing_window = 'NONE'
+    without = drawing.cpu_reference(scene, ball, view)
+    settings.ringing_window = 'AUTOMATIC'
+    chosen = drawing.cpu_reference(scene, ball, view)    # waits for the choice
+    differs, _ = sdtest.relative_error(chosen, without)
+
+    held = held_environment(package, scene)
+    start = time.perf_counter()
+    gpu = drawing.gpu_vertex_values(scene, ball, view, wait=False)   # as the viewport's draw
+    seconds = time.perf_counter() - start
+    pending = env.window_choices().pending()
+    checks.check(len(pending) == 1 and held.calls <= 1 and drawing.ringing_choice(scene, ball) is None,
+                 "the first draw returns while the window is chosen", "%.2f s, %s" % (seconds, pending))
+    status = env.ringing_window_status()
+    checks.check(status == ["Choosing the ringing window of Phong sigma 61, s = 16 (none meanwhile)"],
+                 "the panel says the window is being chosen", "; ".join(status))
+    checks.check(bpy.app.timers.is_registered(drawing._poll_background) and drawing._poll_background() == 0.25,
+                 "the redraw timer runs while it is chosen")
+    relative, _ = sdtest.relative_error(gpu, without)
+    checks.check(relative <= TOLERANCE and differs > 100 * TOLERANCE,
+                 "meanwhile no window shades (GPU = CPU without one)",
+                 "max rel %.2e; with the window the CPU differs by %.2e" % (relative, differs))
+
+    held.release.set()
+    checks.check(env.window_choices().wait(600) and drawing._poll_background() is None,
+                 "the window is chosen, the timer redraws and ends")
+    gpu = drawing.gpu_vertex_values(scene, ball, view, wait=False)
+    relative, _ = sdtest.relative_error(gpu, chosen)
+    checks.check(relative <= TOLERANCE and held.calls == 1 and not env.ringing_window_status(),
+                 "then the chosen window shades (GPU = CPU with it), chosen once", "max rel %.2e" % relative)
+
+    held_environment(package, scene, error=RuntimeError("held back for good"))
+    drawing.gpu_vertex_values(scene, ball, view, wait=False)
+    env.window_choices().wait(600)
+    gpu = drawing.gpu_vertex_values(scene, ball, view, wait=False)
+    relative, _ = sdtest.relative_error(gpu, without)
+    status = env.ringing_window_status()
+    checks.check(relative <= TOLERANCE and len(status) == 1 and "held back for good" in status[0],
+                 "a choice that fails leaves no window and the panel says why", "; ".join(status))
+    env.clear_cache()
+    if bpy.app.timers.is_registered(drawing._poll_background):
+        bpy.app.timers.unregister(drawing._poll_background)
 
 
 def main():
@@ -39,7 +124,8 @@ def main():
     view = drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
 
     checks.check(settings.ringing_window == 'AUTOMATIC', "the ringing window is Automatic by default")
-    choice = drawing.ringing_choice(scene, ball)
+    check_choice_in_background(checks, package, scene, ball, view)
+    choice = drawing.ringing_choice(scene, ball, wait=True)
     line = package.utils.ringing.describe(choice, "automatic")
     checks.check(choice["window"] != "none" and choice["error"] < choice["unwindowed_error"] and
                  choice["min_over_max"] > choice["unwindowed_min_over_max"],
@@ -76,7 +162,7 @@ def main():
     settings.band_limited_texture = True
     for setting in ('NONE', 'AUTOMATIC'):
         settings.ringing_window = setting
-        window = drawing.ringing_choice(scene, ball)["window"]
+        window = drawing.ringing_choice(scene, ball, wait=True)["window"]
         cpu = drawing.cpu_reference(scene, ball, view)
         gpu = drawing.gpu_vertex_values(scene, ball, view)
         relative, _ = sdtest.relative_error(gpu, cpu)

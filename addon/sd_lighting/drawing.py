@@ -7,8 +7,12 @@ x -> L(g R x): g the environment rotation (environment.py), R the rotation of th
 (the bake's directions are in the object's bake frame: baking.py). The eye is the viewport's own
 camera.
 
-The lobe designs of MSD (12) are built in a worker thread (gpu_shading.lobe_designs): a draw never
-waits for one; while one builds, a timer redraws the viewports when it is done.
+What takes longer than a frame is computed in worker threads (utils/background.py): the lobe
+designs of MSD (12) (gpu_shading.lobe_designs; the Gauss rule shades meanwhile) and the choice of
+the ringing window (environment.window_choices; no window meanwhile). The interactive draw never
+waits for them; while one is pending, a timer redraws the viewports when it is done. What is not
+interactive - a preview render, cpu_reference and gpu_vertex_values for the tests - waits for the
+ringing window (wait=True), so that its result does not depend on timing.
 
 Colour: the shader writes scene-linear radiance times 2^exposure (the scene's Film/colour
 management exposure); the viewport shows what a POST_VIEW handler draws with the sRGB curve
@@ -29,7 +33,7 @@ DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins ove
 
 _handler = None
 _objects = {}         # object name -> (key, ObjectData)
-_lobe_generation = 0  # the lobe designs' build count the viewports last showed
+_generations = ()     # the background work's generations the viewports last showed
 last_error = ""
 
 
@@ -114,30 +118,32 @@ def ringing_setting(scene):
     return settings.ringing_window.lower() if settings is not None else "automatic"
 
 
-def shading_light(scene, source, lobe, exponent, order):
+def shading_light(scene, source, lobe, exponent, order, wait):
     """The unrotated L of order s the live shading uses for a bake's lobe: windowed against
-    ringing with the scene's setting (environment.windowed_light). [(s+1)^2, 3] float64."""
-    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene))
+    ringing with the scene's setting (environment.windowed_light; wait=False: without a window
+    until it is chosen). [(s+1)^2, 3] float64."""
+    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene), wait)
 
 
-def ringing_choice(scene, obj):
+def ringing_choice(scene, obj, wait=False):
     """The ringing window the live shading uses for the object's bake (its choice dict), or None
-    without a bake. Raises environment.Unavailable without an environment."""
+    without a bake or (wait=False) while it is chosen. Raises environment.Unavailable without an
+    environment."""
     mesh = baking.baked_mesh(obj)
     if mesh is None:
         return None
     bake = mesh[BAKE]
     return environment.ringing_window(environment.source(scene), bake["lobe"], float(bake["exponent"]),
-                                      int(bake["light_order"]), ringing_setting(scene))
+                                      int(bake["light_order"]), ringing_setting(scene), wait)
 
 
-def local_light(scene, obj, data, source=None, rotation=None):
-    """Coefficients of x -> L(g R x) for the object's data (ObjectData), windowed:
+def local_light(scene, obj, data, wait, source=None, rotation=None):
+    """Coefficients of x -> L(g R x) for the object's data (ObjectData), windowed (shading_light):
     [(s+1)^2, 3] float64; and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
     gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
-    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order)
+    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait)
     return native.get().rotated_environment_sh(light, gr), gr
 
 
@@ -147,16 +153,19 @@ def use_band_limited_texture(scene):
     return bool(settings is not None and settings.band_limited_texture)
 
 
-def _frame(scene, obj, data, view, scale, source=None, rotation=None, **kwargs):
-    """(uniform block, band-limited texture or None) of one draw of the object's data."""
-    light, gr = local_light(scene, obj, data, source, rotation)
+def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, **kwargs):
+    """(uniform block, band-limited texture or None) of one draw of the object's data. wait: as
+    shading_light; without waiting, what is still pending is watched (_watch_background)."""
+    light, gr = local_light(scene, obj, data, wait, source, rotation)
     block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
                              light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
     texture = None
     if data.uses_band_limited_texture:
         source = source or environment.source(scene)
         texture = gpu_shading.band_limited_texture(
-            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order))
+            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
+    if not wait:
+        _watch_background()
     return block, texture
 
 
@@ -164,8 +173,9 @@ def exposure_scale(scene):
     return 2.0 ** float(scene.view_settings.exposure)
 
 
-def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
-    """Draws the baked objects into the bound framebuffer with the current GPU state."""
+def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False):
+    """Draws the baked objects into the bound framebuffer with the current GPU state. wait=False
+    (the interactive draw) shades with no ringing window until it is chosen; True waits for it."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
@@ -173,7 +183,7 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0):
         data = object_data(obj, per_pixel=per_pixel, band_limited_texture=band_limited_texture)
         if data is None:
             continue
-        block, texture = _frame(scene, obj, data, view, scale, source, g, depth_bias=depth_bias)
+        block, texture = _frame(scene, obj, data, view, scale, wait, source, g, depth_bias=depth_bias)
         data.draw(block, texture)
 
 
@@ -185,21 +195,27 @@ def _tag_viewports():
                 area.tag_redraw()
 
 
-def _poll_lobe_designs():
-    """Timer while lobe designs build: redraws the viewports (and the panel's status) when one is
-    done; ends when none is pending."""
-    global _lobe_generation
-    designs = gpu_shading.lobe_designs()
-    if designs.generation != _lobe_generation:
-        _lobe_generation = designs.generation
+def _background_work():
+    """What the draw asks worker threads for: the lobe designs and the ringing window choices."""
+    return (gpu_shading.lobe_designs(), environment.window_choices())
+
+
+def _poll_background():
+    """Timer while background work is pending: redraws the viewports (and the panel's status)
+    when some of it is done; ends when none is pending."""
+    global _generations
+    work = _background_work()
+    generations = tuple(w.generation for w in work)
+    if generations != _generations:
+        _generations = generations
         _tag_viewports()
-    return 0.25 if designs.pending() else None
+    return 0.25 if any(w.pending() for w in work) else None
 
 
-def _watch_lobe_designs():
+def _watch_background():
     import bpy
-    if gpu_shading.lobe_designs_building() and not bpy.app.timers.is_registered(_poll_lobe_designs):
-        bpy.app.timers.register(_poll_lobe_designs, first_interval=0.25)
+    if any(w.pending() for w in _background_work()) and not bpy.app.timers.is_registered(_poll_background):
+        bpy.app.timers.register(_poll_background, first_interval=0.25)
 
 
 def _draw_handler():
@@ -222,7 +238,6 @@ def _draw_handler():
         draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
         gpu.state.depth_mask_set(False)
         gpu.state.depth_test_set('NONE')
-        _watch_lobe_designs()
         last_error = ""
     except Exception as exc:  # never raise into Blender's draw loop; the panel shows it
         message = "%s: %s" % (type(exc).__name__, exc)
@@ -236,9 +251,9 @@ def _draw_handler():
 
 def cpu_reference(scene, obj, view):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
-    environment (windowed against ringing) and rotation the live shading uses, clamped at 0 per
-    channel as the shader shows it (displayed radiance is never negative; sdnative.shade itself is
-    the raw formula); exposure not applied. [N, 3]."""
+    environment (windowed against ringing: waits for the window's choice) and rotation the live
+    shading uses, clamped at 0 per channel as the shader shows it (displayed radiance is never
+    negative; sdnative.shade itself is the raw formula); exposure not applied. [N, 3]."""
     mesh = baking.baked_mesh(obj)
     bake = dict(mesh[BAKE])
     method = methods.get(bake["method"])
@@ -247,7 +262,7 @@ def cpu_reference(scene, obj, view):
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     world = transforms.transform_points(matrix, attributes.read_positions(mesh))
     source = environment.source(scene)
-    light = shading_light(scene, source, bake["lobe"], float(bake["exponent"]), int(bake["light_order"]))
+    light = shading_light(scene, source, bake["lobe"], float(bake["exponent"]), int(bake["light_order"]), True)
     g = environment.rotation_matrix(scene)
     r = transforms.rotation_part(matrix)
     kwargs = {key: data[key] for key in method.shade_inputs}
@@ -257,16 +272,18 @@ def cpu_reference(scene, obj, view):
     return np.maximum(shaded, 0.0)
 
 
-def gpu_vertex_values(scene, obj, view, per_pixel=False):
+def gpu_vertex_values(scene, obj, view, per_pixel=False, wait=True):
     """B at every vertex as the shader computes it (exposure not applied): each vertex is drawn
-    as one pixel of an RGBA32F target and read back. Needs a GPU context. [N, 3] float32."""
+    as one pixel of an RGBA32F target and read back. wait: as draw_objects (True: with the ringing
+    window cpu_reference uses; False: as the interactive draw). Needs a GPU context. [N, 3]
+    float32."""
     import gpu
     data = object_data(obj, per_pixel=per_pixel, vertex_target=True,
                        band_limited_texture=use_band_limited_texture(scene))
     n = data.vertex_count
     width = min(n, 1024)
     height = (n + width - 1) // width
-    block, texture = _frame(scene, obj, data, view, 1.0, target=(width, height))
+    block, texture = _frame(scene, obj, data, view, 1.0, wait, target=(width, height))
     offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
     try:
         values = draw_offscreen(offscreen, lambda: data.draw(block, texture), depth_test=False)
@@ -310,6 +327,6 @@ def unregister():
     if _handler is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_handler, 'WINDOW')
         _handler = None
-    if bpy.app.timers.is_registered(_poll_lobe_designs):
-        bpy.app.timers.unregister(_poll_lobe_designs)
+    if bpy.app.timers.is_registered(_poll_background):
+        bpy.app.timers.unregister(_poll_background)
     clear_cache()

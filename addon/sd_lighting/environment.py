@@ -16,7 +16,8 @@ writes the Mapping node when there is one.
 SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
 draw handler asks for them every frame. Every method shades with L windowed against ringing
 (windowed_light; utils/ringing.py): the window of the scene's `ringing_window` setting for the
-bake's lobe and order, chosen once per (source, lobe, order) and cached.
+bake's lobe and order, chosen once per (source, lobe, exponent, order, setting) in a worker thread
+(`window_choices`) and cached; the draw does not wait for it (no window until it is there).
 """
 
 import os
@@ -24,17 +25,20 @@ import os
 import numpy as np
 
 from . import compat, native
-from .utils import ringing, transforms
+from .utils import background, ringing, transforms
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
-_window_cache = {}   # (source key, lobe, exponent, order, window setting) -> choice dict
+_window_choices = None   # background.Background of ringing window choices, made on first use
 
 
 def clear_cache():
+    global _window_choices
     _cache.clear()
     _sh_cache.clear()
-    _window_cache.clear()
+    if _window_choices is not None:
+        _window_choices.close()
+        _window_choices = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -221,22 +225,35 @@ def smallest_order(src, lobe, exponent, target_error, max_order):
     return int(max_order) if order is None else int(order)
 
 
-def ringing_window(src, lobe, exponent, order, setting):
+def window_choices():
+    """The session's ringing window choices (utils/ringing.choice: made in a worker thread)."""
+    global _window_choices
+    if _window_choices is None:
+        _window_choices = background.Background("sd_lighting ringing windows")
+    return _window_choices
+
+
+def ringing_window_status():
+    """Lines for the panel: the ringing windows being chosen or whose choice failed."""
+    return ringing.status(_window_choices) if _window_choices is not None else []
+
+
+def ringing_window(src, lobe, exponent, order, setting, wait):
     """The window against ringing of L for the lobe and order s: sdnative's
-    Environment.ringing_window dict (setting: one of utils/ringing.WINDOWS), cached. The choice does
-    not depend on the strength. A uniform environment (L_00 alone, which no window changes): none."""
+    Environment.ringing_window dict (setting: one of utils/ringing.WINDOWS), chosen in a worker
+    thread and cached. wait=False (the interactive draw, the panel): None until it is there or when
+    its choice failed; wait=True: waits for it (raises background.Failed when it failed). The choice
+    does not depend on the strength. A uniform environment (L_00 alone, which no window changes):
+    none."""
     if src.kind == "uniform":
         return ringing.unwindowed(order)
-    key = (src.key, lobe, float(exponent), int(order), setting)
-    choice = _window_cache.get(key)
-    if choice is None:
-        choice = environment(src).ringing_window(lobe, float(exponent), int(order), setting)
-        _window_cache[key] = choice
-    return choice
+    return ringing.choice(window_choices(), src.key, environment(src), lobe, exponent, order, setting, wait)
 
 
-def windowed_light(src, lobe, exponent, order, setting):
+def windowed_light(src, lobe, exponent, order, setting, wait):
     """light_coefficients with the ringing window's sigma_l on band l: the L every method shades
-    with and the band-limited texture holds."""
-    choice = ringing_window(src, lobe, exponent, order, setting)
-    return ringing.windowed(light_coefficients(src, order), choice["factors"])
+    with and the band-limited texture holds; without a window while its choice is not there
+    (wait=False, ringing_window)."""
+    light = light_coefficients(src, order)
+    choice = ringing_window(src, lobe, exponent, order, setting, wait)
+    return light if choice is None else ringing.windowed(light, choice["factors"])

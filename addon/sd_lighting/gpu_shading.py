@@ -30,7 +30,7 @@ import numpy as np
 
 from . import attributes, materials, native
 from .utils import lobe_designs as lobe_design_cache
-from .utils import methods, transforms
+from .utils import lobes, methods, transforms
 from .utils.bake_data import BAKE
 from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER,
                                    DATA_SAMPLER, GAUNT_SAMPLER, TEXTURE_WIDTH, Variant,
@@ -170,10 +170,6 @@ def lobe_design(lobe, exponent, degree):
     return lobe_designs().get(lobe, exponent, degree)
 
 
-def lobe_designs_building():
-    return _lobe_designs is not None and bool(_lobe_designs.pending())
-
-
 def lobe_design_status():
     """Lines for the panel: the lobe designs being built or whose build failed."""
     if _lobe_designs is None:
@@ -181,14 +177,11 @@ def lobe_design_status():
     lines = []
     for key in _lobe_designs.pending():
         lines.append("Building the lobe design of %s, degree %d (Gauss rule meanwhile)"
-                     % (_lobe_label(key), key.degree))
+                     % (lobes.label(key.lobe, key.exponent), key.degree))
     for key, why in _lobe_designs.failures().items():
-        lines.append("Lobe design of %s, degree %d failed: %s" % (_lobe_label(key), key.degree, why))
+        lines.append("Lobe design of %s, degree %d failed: %s"
+                     % (lobes.label(key.lobe, key.exponent), key.degree, why))
     return lines
-
-
-def _lobe_label(key):
-    return "Lambert" if key.lobe == "lambert" else "Phong sigma %.3g" % key.exponent
 
 
 def make_batch(primitive, content, indices=None):

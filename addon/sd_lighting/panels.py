@@ -106,7 +106,7 @@ class SD_PT_lighting(bpy.types.Panel):
                 box.label(text=str(exc)[:80], icon='ERROR')
         if drawing.last_error:
             box.label(text=drawing.last_error[:80], icon='ERROR')
-        for line in gpu_shading.lobe_design_status():
+        for line in gpu_shading.lobe_design_status() + environment.ringing_window_status():
             box.label(text=line[:100], icon='TIME')
         box.operator("sd_lighting.render_preview", icon='IMAGE_DATA')
 

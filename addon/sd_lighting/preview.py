@@ -2,7 +2,9 @@
 
 What is drawn is what the viewport's live shading shows (drawing.draw_objects, the same shader
 and data), plus the scene's other visible meshes in flat grey (the viewport shows them in
-Blender's own shading), on a transparent background.
+Blender's own shading), on a transparent background. It waits for the ringing window's choice
+(the viewport shades without one until it is made): an image made once shows what the viewport
+ends with, whenever it is asked for.
 
 Files: `.exr` holds the scene-linear radiance B (float, no exposure, like a Cycles EXR); any
 other extension gets 8-bit RGBA PNG with 2^exposure applied and the sRGB transfer curve - the
@@ -48,7 +50,7 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
     others = _other_mesh_batches(scene, depsgraph, view_layer, {o.name for o in objects})
 
     def draw():
-        drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel)
+        drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel, wait=True)
         if others:
             with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
                 from mathutils import Matrix

@@ -1,10 +1,13 @@
-"""The ringing window's pure logic (utils/ringing.py): windowing coefficients per band, and the
-panel's line about the choice."""
+"""The ringing window's pure logic (utils/ringing.py): windowing coefficients per band, the
+choice made off the main thread and cached, and the panel's lines about it."""
+
+import threading
 
 import numpy as np
 import pytest
 
 from sd_lighting.utils import ringing
+from sd_lighting.utils.background import Background, Failed
 
 
 def test_windowed_multiplies_each_band():
@@ -39,3 +42,57 @@ def test_describe():
     assert ringing.describe(none, "automatic") == "None: no window lowers the 7.0 % displayed error"
     assert ringing.describe(none, "none") == "None: 7.0 % displayed error, min/max B +0.0 %"
     assert set(ringing.WINDOWS) == set(ringing.LABELS)
+
+
+class _HeldEnvironment:
+    """An sdnative Environment whose ringing_window waits until `release` is set; counts calls."""
+
+    def __init__(self, environment):
+        self._env = environment
+        self.release = threading.Event()
+        self.calls = 0
+
+    def ringing_window(self, lobe, exponent, s, window):
+        self.calls += 1
+        assert self.release.wait(30)
+        return self._env.ringing_window(lobe, exponent, s, window)
+
+
+@pytest.fixture(scope="module")
+def sun(sdnative):
+    """A small map with a sun: truncated at s = 8 a sigma = 61 lobe rings (a window is chosen)."""
+    pixels = np.full((32, 64, 3), 0.2, dtype=np.float32)
+    pixels[6:8, 20:22] = 2000.0
+    return sdnative.environment_from_pixels(pixels)
+
+
+def test_choice_is_pending_then_made_once(sun):
+    choices = Background("test")
+    held = _HeldEnvironment(sun)
+    assert ringing.choice(choices, "sun", held, "phong", 61.0, 8, "automatic") is None
+    assert ringing.status(choices) == ["Choosing the ringing window of Phong sigma 61, s = 8 (none meanwhile)"]
+    held.release.set()
+    chosen = ringing.choice(choices, "sun", held, "phong", 61.0, 8, "automatic", wait=True)
+    expected = sun.ringing_window("phong", 61.0, 8, "automatic")
+    assert chosen["window"] == expected["window"] != "none"
+    np.testing.assert_array_equal(chosen["factors"], expected["factors"])   # deterministic
+    assert ringing.choice(choices, "sun", held, "phong", 61, 8, "automatic") is chosen and held.calls == 1
+    assert ringing.status(choices) == []
+    # another key (the setting, the order, the environment) is another choice
+    assert ringing.choice(choices, "sun", held, "phong", 61.0, 8, "hanning", wait=True)["window"] == "hanning"
+    assert ringing.choice(choices, "other", held, "phong", 61.0, 8, "automatic") is None
+    assert choices.wait(30) and held.calls == 3
+
+
+def test_a_failed_choice_is_reported_not_raised(sun):
+    choices = Background("test")
+    assert ringing.choice(choices, "sun", sun, "phong", -1.0, 8, "automatic") is None   # sdnative refuses it
+    assert choices.wait(30)
+    assert ringing.choice(choices, "sun", sun, "phong", -1.0, 8, "automatic") is None   # not retried
+    lines = ringing.status(choices)
+    assert len(lines) == 1 and lines[0].startswith("Ringing window of Phong sigma -1, s = 8 failed (none used): ")
+    with pytest.raises(Failed):
+        ringing.choice(choices, "sun", sun, "phong", -1.0, 8, "automatic", wait=True)
+    # the worker goes on with what is asked next
+    assert ringing.choice(choices, "sun", sun, "lambert", 1.0, 4, "sloan", wait=True)["window"] == "sloan"
+    assert ringing.status(choices) == lines

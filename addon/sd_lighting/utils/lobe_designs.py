@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import background
+
 log = logging.getLogger(__name__)
 
 FORMAT = "sd_lighting lobe design"
@@ -188,83 +190,67 @@ def _distance(a, b):
 
 class LobeDesigns:
     """Lobe designs for the draw: `get` never waits for a build; one worker thread builds what is
-    missing, in the order asked. `generation` counts finished builds (the add-on redraws when it
-    changes)."""
+    missing, in the order asked (utils/background.py). `generation` counts finished builds (the
+    add-on redraws when it changes)."""
 
     def __init__(self, sdnative, directory):
         self._sd = sdnative
         self.files = DesignFiles(directory, sdnative)
+        self._builds = background.Background("sd_lighting lobe designs")   # key -> final Design
         self._lock = threading.Lock()
-        self._designs = {}     # key -> final Design
-        self._standins = {}    # key -> Gauss product Design, until the final one is there
-        self._queue = []       # keys to build; the first is being built
-        self._failed = {}      # key -> why its build failed (not retried in this session)
-        self._thread = None
-        self._closed = False
-        self.generation = 0
+        self._standins = {}    # key -> Gauss product Design, once asked before the final one was there
+
+    @property
+    def generation(self):
+        return self._builds.generation
 
     def get(self, lobe, exponent, degree):
         """The design for the lobe and degree: final from memory or disk, else the Gauss product
         rule while the final one builds (a build that failed leaves the Gauss rule for good)."""
         key = design_key(lobe, exponent, degree)
-        with self._lock:
-            design = self._designs.get(key) or self._standins.get(key)
-            building = key in self._queue or key in self._failed
+        design = self._builds.get(key)
         if design is not None:
             return design
-        if not building:
-            design = self.files.load(key)
-            if design is not None:
-                with self._lock:
-                    self._designs[key] = design
-                return design
+        with self._lock:
+            standin = self._standins.get(key)
+        if standin is not None:   # building, or its build failed
+            return standin
+        design = self.files.load(key)
+        if design is not None:
+            self._builds.put(key, design)
+            return design
         nodes, weights = self._sd.zonal_design(key.lobe, key.exponent, key.degree, "gauss")
         standin = Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), False)
         with self._lock:
             self._standins[key] = standin
-            if key not in self._failed and key not in self._queue and not self._closed:
-                self._queue.append(key)
-            if self._thread is None and not self._closed:
-                self._thread = threading.Thread(target=self._work, name="sd_lighting lobe designs",
-                                                daemon=True)
-                self._thread.start()
+        self._builds.get(key, lambda: self._build_stored(key))
         return standin
 
     def pending(self):
         """Keys whose final design is still being built, the one in work first."""
-        with self._lock:
-            return list(self._queue)
+        return self._builds.pending()
 
     def failures(self):
-        """key -> why its build failed."""
-        with self._lock:
-            return dict(self._failed)
+        """key -> why its build failed (not retried in this session)."""
+        return self._builds.failures()
 
     def wait(self, timeout=None):
         """Waits until nothing is pending (True) or the timeout passes (False)."""
-        with self._lock:
-            thread = self._thread
-        if thread is not None:
-            thread.join(timeout)
-        return not self.pending()
+        return self._builds.wait(timeout)
 
     def close(self):
         """Stops taking work: the build in progress (native, not interruptible) ends in its thread
         and its result is dropped."""
-        with self._lock:
-            self._closed = True
-            self._queue.clear()
+        self._builds.close()
 
     def _neighbour(self, key):
         """The final design of the same degree whose lobe is nearest, or None."""
-        with self._lock:
-            candidates = {k for k in self._designs if k.degree == key.degree}
+        known = self._builds.results()
+        candidates = {k for k in known if k.degree == key.degree}
         candidates.update(k for k in self.files.keys() if k.degree == key.degree)
         candidates.discard(key)
         for other in sorted(candidates, key=lambda k: _distance(k, key)):
-            with self._lock:
-                design = self._designs.get(other)
-            design = design or self.files.load(other)
+            design = known.get(other) or self.files.load(other)
             if design is not None:
                 return other, design
         return None
@@ -304,29 +290,8 @@ class LobeDesigns:
             exponent, (nodes, weights) = target, found
         return Design(np.asarray(nodes, dtype=np.float64), np.asarray(weights, dtype=np.float64), True)
 
-    def _work(self):
-        while True:
-            with self._lock:
-                if self._closed or not self._queue:
-                    self._thread = None
-                    return
-                key = self._queue[0]
-            design, failure = None, None
-            try:
-                design = self.build(key)
-            except Exception as exc:  # a failed build keeps the Gauss rule; the panel says why
-                failure = "%s: %s" % (type(exc).__name__, exc)
-                log.error("lobe design %s: %s", key, failure)
-            if design is not None:
-                self.files.save(key, design)
-            with self._lock:
-                if self._closed:
-                    self._thread = None
-                    return
-                self._queue.remove(key)
-                if design is not None:
-                    self._designs[key] = design
-                    self._standins.pop(key, None)
-                else:
-                    self._failed[key] = failure
-                self.generation += 1
+    def _build_stored(self, key):
+        """The worker's step: the key's design built (`build`) and stored on disk."""
+        design = self.build(key)
+        self.files.save(key, design)
+        return design

@@ -27,3 +27,8 @@ def lobe_from_principled(roughness, metallic):
         return ("lambert", 1.0), "rough dielectric -> Lambert"
     sigma = exponent_from_roughness(roughness)
     return ("phong", sigma), "roughness %.2f -> Phong sigma %.1f" % (roughness, sigma)
+
+
+def label(lobe, exponent):
+    """The lobe as the panel names it: "Lambert" or "Phong sigma 61"."""
+    return "Lambert" if lobe == "lambert" else "Phong sigma %.3g" % exponent

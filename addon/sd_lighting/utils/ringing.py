@@ -7,9 +7,17 @@ sums and the band-limited texture alike, shades with the same windowed L. Which 
 sdnative's Environment.ringing_window, per lobe, order s and environment; 'automatic' (the
 default) picks the one with the smallest error of the displayed radiance, none unless a window
 lowers it.
+
+The choice (0.1 - 0.4 s, and the environment's order-64 projection the first time) is made in a
+worker thread (`choice`, utils/background.py) and kept in memory per (environment, lobe, exponent,
+s, setting): the draw shades with no window until it is there, a preview or reference waits.
 """
 
+from collections import namedtuple
+
 import numpy as np
+
+from . import background, lobes
 
 WINDOWS = ("automatic", "none", "hanning", "lanczos", "sloan")
 LABELS = {"automatic": "Automatic", "none": "None", "hanning": "Hanning", "lanczos": "Lanczos",
@@ -47,3 +55,31 @@ def describe(choice, setting):
         return "None: %.1f %% displayed error, min/max B %+.1f %%" % (before, low_before)
     return "%s: %.1f %% -> %.1f %% displayed error, min/max B %+.1f %% -> %+.1f %%" % (
         LABELS[choice["window"]], before, after, low_before, low_after)
+
+
+ChoiceKey = namedtuple("ChoiceKey", "environment lobe exponent order setting")
+
+
+def choice(choices, environment_key, environment, lobe, exponent, order, setting, wait=False):
+    """The window of `setting` for the lobe and order s on an sdnative Environment (its
+    ringing_window dict), computed once per key in the worker thread of `choices` (a
+    background.Background; environment_key names the environment). wait=False (the draw): None
+    until it is there, or when it failed (choices.failures(), the panel's `status`); wait=True:
+    waits for it, raises background.Failed when it failed."""
+    key = ChoiceKey(environment_key, lobe, float(exponent), int(order), setting)
+
+    def compute():
+        return environment.ringing_window(key.lobe, key.exponent, key.order, key.setting)
+
+    return choices.result(key, compute) if wait else choices.get(key, compute)
+
+
+def status(choices):
+    """Lines for the panel: the choices being made (no window meanwhile) and those that failed."""
+    def what(key):
+        return "%s, s = %d%s" % (lobes.label(key.lobe, key.exponent), key.order,
+                                 "" if key.setting == "automatic" else ", " + LABELS[key.setting])
+    lines = ["Choosing the ringing window of %s (none meanwhile)" % what(key) for key in choices.pending()]
+    lines += ["Ringing window of %s failed (none used): %s" % (what(key), why)
+              for key, why in choices.failures().items()]
+    return lines

@@ -311,9 +311,8 @@ class ObjectData:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
         for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
         the object's materials.object_albedos (a slot without one: the 0.8 default surface). The
-        shader gets the eye relative to
-        the object's origin, differenced here in float64 (far from the world origin float32 world
-        positions would round the view away)."""
+        shader gets the eye relative to the object's origin, differenced here in float64 (far from
+        the world origin float32 world positions would round the view away)."""
         self.refresh_design()
         albedo_rows = self._use_albedos(list(albedos))
         camera = np.array(camera, dtype=np.float64)

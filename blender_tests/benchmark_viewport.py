@@ -260,4 +260,5 @@ def main():
     return 0
 
 
-sdtest.run(main)
+if __name__ == "__main__":   # accuracy_report.py imports time_frames
+    sdtest.run(main)

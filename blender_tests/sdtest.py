@@ -396,17 +396,17 @@ def block_differences(images, reference, mask, block):
     return [np.abs(block_averages(image, mask, block) - expected).max(axis=1) / scale for image in images]
 
 
-def cycles_render(scene, path, size, samples=512):
+def cycles_render(scene, path, size, samples=512, seed=1):
     """Renders the scene with Cycles as a user comparing with the preview would (direct light
     only, pixel filter off, no denoising - Debian's Cycles has no OpenImageDenoise - transparent
-    film) at size x size into an EXR; returns load_exr's image."""
+    film) at size x size into an EXR; returns load_exr's image. Two seeds give independent noise."""
     render = scene.render
     render.engine = 'CYCLES'
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False
     if hasattr(scene.cycles, "use_preview_denoising"):
         scene.cycles.use_preview_denoising = False
-    scene.cycles.seed = 1
+    scene.cycles.seed = seed
     scene.cycles.filter_width = 0.01
     scene.cycles.max_bounces = 0
     render.film_transparent = True

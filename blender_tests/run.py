@@ -64,6 +64,8 @@ TESTS = [
     # GPU: the binary runs under Xvfb, with a window, so it has an undo stack to test
     ("test_robustness", GPU, 300, [], [], (3, 4, 0)),
     ("test_viewport", WINDOW, 600, ["--enable-event-simulate"], [], (3, 4, 0)),
+    # the accuracy-cost report's quick variant and its invariants (issue 11)
+    ("accuracy_report", BACKGROUND, 600, [], ["--quick"], (3, 4, 0)),
 ]
 
 

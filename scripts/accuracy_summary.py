@@ -1,0 +1,320 @@
+#!/usr/bin/env python3
+"""The accuracy-cost report's Markdown summary, plots and image strip from its JSON (issue 11).
+
+    /usr/bin/python3 scripts/accuracy_summary.py docs/report [WORK]
+
+reads DIR/accuracy_report.json (blender_tests/accuracy_report.py) and WORK/strip.npz (default
+build/accuracy_report_work) and writes into DIR: report.md, error_vs_frame_<scene>.png and
+error_vs_bake_<scene>.png (every Monte Carlo row, mean over the HDRIs, per material, with the Pareto
+front), strip.png (Cycles, the add-on's previews, the reference and each method at the vertices,
+and error heat maps). Needs matplotlib (python3-matplotlib).
+"""
+
+import json
+import math
+import os
+import sys
+from collections import defaultdict
+
+import numpy as np
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+LABELS = {"unshadowed": "unshadowed", "ambient_occlusion": "AO", "prt_diffuse": "PRT (2)",
+          "prt_matrix": "PRT (8)", "prt_gaunt": "PRT (10)", "msd_lobe": "MSD (12)",
+          "msd_visibility": "MSD (13)"}
+COLOURS = {"unshadowed": "#999999", "ambient_occlusion": "#8c564b", "prt_diffuse": "#2ca02c",
+           "prt_matrix": "#1f77b4", "prt_gaunt": "#17becf", "msd_lobe": "#ff7f0e",
+           "msd_visibility": "#d62728"}
+MATERIALS = ["lambert", "phong4", "phong16", "phong64", "mix"]
+
+
+def setting(row):
+    parts = ["s = %d" % row["s"]]
+    if row.get("s_v") is not None:
+        parts.append("s' = %d" % row["s_v"])
+    if row.get("rays"):
+        parts.append("%d rays" % row["rays"])
+    return "%s, %s" % (LABELS[row["method"]], ", ".join(parts))
+
+
+def mean_over_hdris(rows):
+    """{(scene, material, method, s, s', rays): averaged row} over the HDRIs."""
+    groups = defaultdict(list)
+    for row in rows:
+        if row["reference"] == "monte_carlo":
+            groups[row["scene"], row["material"], row["method"], row["s"], row.get("s_v"), row.get("rays")].append(row)
+    out = {}
+    for key, group in groups.items():
+        mean = dict(group[0])
+        for field in ("rel_rms", "p99", "reference_se", "rel_rms_without_reference_noise"):
+            mean[field] = float(np.mean([r[field] for r in group]))
+        mean["hdris"] = len(group)
+        out[key] = mean
+    return out
+
+
+def pareto(points):
+    """Indices of the points (cost, error) no other point beats in both."""
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front, best = [], math.inf
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def plot(report, averaged, cost, label, name, out):
+    scenes = report["config"]["scenes"]
+    files = []
+    for scene in scenes:
+        fig, axes = plt.subplots(1, len(MATERIALS), figsize=(4.2 * len(MATERIALS), 4.0), sharey=True)
+        for ax, material in zip(axes, MATERIALS):
+            rows = [r for k, r in averaged.items() if k[0] == scene and k[1] == material and r.get(cost)]
+            if not rows:
+                ax.set_visible(False)
+                continue
+            points = [(r[cost], r["rel_rms"]) for r in rows]
+            for method in LABELS:
+                xs = [p for p, r in zip(points, rows) if r["method"] == method]
+                if xs:
+                    ax.scatter(*zip(*xs), s=10, alpha=0.6, color=COLOURS[method], label=LABELS[method])
+            front = pareto(points)
+            ax.plot([points[i][0] for i in front], [points[i][1] for i in front], "k-", lw=1.0, label="Pareto front")
+            ax.scatter([points[i][0] for i in front], [points[i][1] for i in front], s=26, facecolors="none",
+                       edgecolors="k")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_title("%s, %s" % (scene, material))
+            ax.set_xlabel(label)
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0].set_ylabel("relative RMS error (mean over %d HDRIs)" % len(report["hdris"]))
+        axes[0].legend(fontsize=7, loc="lower left")
+        fig.tight_layout()
+        path = "%s_%s.png" % (name, scene)
+        fig.savefig(os.path.join(out, path), dpi=80)
+        plt.close(fig)
+        files.append(path)
+    return files
+
+
+def strip(work, out):
+    path = os.path.join(work, "strip.npz")
+    if not os.path.isfile(path):
+        return None
+    data = np.load(path)
+    images = {k[6:]: data[k] for k in data.files if k.startswith("image:")}
+    vertex = {k[7:]: data[k] for k in data.files if k.startswith("vertex:")}
+    reference = data["vertex_reference"]
+    clip = data["vertex_clip"]
+    ndc = clip[:, :2] / clip[:, 3:4]
+    scale = float(np.percentile(reference.mean(axis=1), 99)) or 1.0
+    cycles = images.pop("Cycles", None)
+    panels_top = ([("Cycles", cycles)] if cycles is not None else []) + sorted(images.items())
+    panels_bottom = [("reference (vertices)", reference)] + sorted(vertex.items())
+    columns = max(len(panels_top), len(panels_bottom))
+    fig, axes = plt.subplots(4, columns, figsize=(2.2 * columns, 9.0))
+    for ax in axes.ravel():
+        ax.axis("off")
+    rms = math.sqrt(float(np.mean(reference ** 2)))
+    for j, (title, image) in enumerate(panels_top):
+        axes[0, j].imshow(np.clip(image[..., :3] / scale, 0, 1) ** (1 / 2.2))
+        axes[0, j].set_title(title, fontsize=7)
+        if cycles is not None and title != "Cycles":
+            mask = (image[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+            error = np.where(mask, np.abs(image[..., :3] - cycles[..., :3]).mean(axis=2), np.nan) / scale
+            axes[1, j].imshow(error, cmap="magma", vmin=0, vmax=0.3)
+            axes[1, j].set_title("|preview - Cycles| / B99", fontsize=7)
+    for j, (title, values) in enumerate(panels_bottom):
+        colours = np.clip(values / scale, 0, 1) ** (1 / 2.2)
+        axes[2, j].scatter(ndc[:, 0], ndc[:, 1], c=colours, s=3)
+        axes[2, j].set_title(title, fontsize=7)
+        axes[2, j].set_aspect("equal")
+        if j:
+            error = np.sqrt(np.mean((values - reference) ** 2, axis=1)) / rms
+            axes[3, j].scatter(ndc[:, 0], ndc[:, 1], c=error, cmap="magma", vmin=0, vmax=0.5, s=3)
+            axes[3, j].set_title("error / RMS B: %.1f %%" % (100 * math.sqrt(float(np.mean((values - reference) ** 2))) / rms),
+                                 fontsize=7)
+            axes[3, j].set_aspect("equal")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "strip.png"), dpi=80)
+    plt.close(fig)
+    return "strip.png"
+
+
+def percent(x):
+    return "%.1f %%" % (100 * x) if x is not None else "-"
+
+
+def best_settings(averaged, scene, material, tolerance=1.1):
+    """(the smallest error of the grid, the cheapest setting by CPU frame cost within `tolerance`
+    of it)."""
+    rows = [r for k, r in averaged.items() if k[0] == scene and k[1] == material and r.get("frame_ns_per_vertex")]
+    if not rows:
+        return None, None
+    best = min(r["rel_rms"] for r in rows)
+    good = [r for r in rows if r["rel_rms"] <= tolerance * best]
+    return best, min(good, key=lambda r: (r["frame_ns_per_vertex"], r["bake_seconds"]))
+
+
+def markdown(report, averaged, plots, strip_file):
+    lines = ["# Accuracy against cost: the measured report (issue 11)", ""]
+    lines.append("Generated by `scripts/accuracy_report.sh` (blender_tests/accuracy_report.py, then "
+                 "scripts/accuracy_summary.py) in %.0f s on Blender %s, %d CPU threads%s. Every row is in "
+                 "[`accuracy_report.json`](accuracy_report.json); the cost model fitted from it is its "
+                 "`cost_model`." % (report["wall_seconds"], report["blender"], report["cpu_threads"],
+                                    ", GPU: " + report["gpu"] if report["gpu"] else ""))
+    lines.append("")
+    lines.append("Scenes (vertices measured): %s. HDRIs: %s. Materials: Lambert, Phong sigma = 4, 16, 64 and "
+                 "the mix %g Lambert + %g Phong 16. Errors are relative RMS over the probe vertices (the "
+                 "Monte Carlo reference, eq. 1, at %d probes, %d sample pairs for Lambert, %d for Phong; "
+                 "glossy from %d views, front-facing points only) or over 4 x 4-pixel blocks (Cycles); "
+                 "p99 is the 99th percentile of the per-point error over the RMS of B." % (
+                     ", ".join("%s (%d)" % kv for kv in report["vertices"].items()), ", ".join(report["hdris"]),
+                     report["mix"]["weights"][0], report["mix"]["weights"][1], report["config"]["probes"],
+                     report["config"]["samples"], report["config"]["phong_samples"], 2))
+    lines += ["", "## Invariants", ""]
+    for check in report["invariants"]:
+        lines.append("- %s %s (%s)" % ("PASS" if check["ok"] else "FAIL", check["check"], check["detail"]))
+    worst = max((e["max_relative_difference"] for e in report["equalities"]), default=float("nan"))
+    lines.append("- MSD (13) against PRT (8) and MSD (12) against PRT (10), same orders and rays, measured on "
+                 "%d cases: largest max |dB| / max |B| = %.2g." % (len(report["equalities"]), worst))
+
+    lines += ["", "## Which settings to pick", "",
+              "Per scene and material, mean over the HDRIs: the smallest error anywhere in the grid, and the "
+              "cheapest setting (CPU frame cost) within 10 % of it; then the error of the add-on's defaults "
+              "(MSD (13), s = 4, s' = 2) for comparison.", "",
+              "| scene | material | best error | cheapest within 10 % | its error | frame ns/vertex | bake s | bytes/vertex | MSD (13) 4, 2 |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for scene in report["config"]["scenes"]:
+        for material in MATERIALS:
+            best, pick = best_settings(averaged, scene, material)
+            if pick is None:
+                continue
+            default = averaged.get((scene, material, "msd_visibility", 4, 2, report["config"]["full_rays"]))
+            lines.append("| %s | %s | %s | %s | %s | %.0f | %.2f | %d | %s |" % (
+                scene, material, percent(best), setting(pick), percent(pick["rel_rms"]), pick["frame_ns_per_vertex"],
+                pick["bake_seconds"], pick["bytes_per_vertex"], percent(default["rel_rms"]) if default else "-"))
+    lines += ["", "Per HDRI (every scene averaged), the cheapest setting within 10 % of the best:", "",
+              "| HDRI | " + " | ".join(MATERIALS) + " |", "|---|" + "---|" * len(MATERIALS)]
+    by_hdri = defaultdict(list)
+    for row in report["rows"]:
+        if row["reference"] == "monte_carlo":
+            by_hdri[row["hdri"], row["material"], row["method"], row["s"], row.get("s_v"), row.get("rays")].append(row)
+    for hdri in report["hdris"]:
+        cells = []
+        for material in MATERIALS:
+            rows = [(np.mean([r["rel_rms"] for r in group]), np.mean([r["frame_ns_per_vertex"] for r in group]), group[0])
+                    for k, group in by_hdri.items() if k[0] == hdri and k[1] == material
+                    and all(r.get("frame_ns_per_vertex") for r in group) and len(group) == len(report["config"]["scenes"])]
+            if not rows:
+                cells.append("-")
+                continue
+            best = min(e for e, _, _ in rows)
+            error, _, pick = min((r for r in rows if r[0] <= 1.1 * best), key=lambda r: r[1])
+            cells.append("%s: %s" % (setting(pick), percent(error)))
+        lines.append("| %s | %s |" % (hdri, " | ".join(cells)))
+
+    gpu = report["gpu_rows"]
+    if gpu:
+        lines += ["", "## MSD against PRT: frame time and memory", "",
+                  "GPU frame time (1280 x 720, software rasteriser: %s) at s = 4, s' = 2, Lambert, 256 rays; "
+                  "ratios to PRT (8) for MSD (13) and to PRT (10) for MSD (12):" % report["gpu"], "",
+                  "| scene | method | shading | L~ | frame ms | ns/vertex | bytes/vertex | design nodes mean/max | / PRT |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for row in gpu:
+            base = "prt_matrix" if row["method"] == "msd_visibility" else "prt_gaunt" if row["method"] == "msd_lobe" else None
+            ref = next((r for r in gpu if base and r["scene"] == row["scene"] and r["method"] == base
+                        and r["shading"] == row["shading"]), None)
+            lines.append("| %s | %s | %s | %s | %.1f | %.0f | %d | %s | %s |" % (
+                row["scene"], LABELS[row["method"]], row["shading"], row["light"], row["frame_ms"], row["ns_per_vertex"],
+                row["bytes_per_vertex"],
+                "%.1f / %d" % (row["design_nodes_mean"], row["design_nodes_max"]) if row.get("design_nodes_mean") else "-",
+                "%.2f" % (row["frame_ms"] / ref["frame_ms"]) if ref else "-"))
+
+    lines += ["", "## The seed's Table 1 (s = 4, s' = 2) with measured costs", "",
+              "The seed counts terms per vertex and floats per vertex; beside them the measured CPU cost "
+              "(sdnative.shade, ns per vertex, median over the scenes), the floats the add-on stores "
+              "(without the normal) and the design nodes.", "",
+              "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) | stored floats | design nodes mean / max |",
+              "|---|---|---|---|---|---|"]
+    frame = defaultdict(list)
+    for row in report["rows"]:
+        if row["reference"] == "monte_carlo" and row["s"] == 4 and row.get("s_v") in (2, None) \
+                and row["material"] in ("lambert", "phong16") and row.get("frame_ns_per_vertex"):
+            frame[row["method"], row["material"]].append(row)
+    seed = {"prt_gaunt": ("659", "9"), "msd_lobe": ("18 x 9 = 162", "9"), "prt_matrix": ("25 x 9 = 225", "225"),
+            "msd_visibility": ("18 x 3 = 54", "72")}
+    for method, (terms, floats) in seed.items():
+        lam, pho = frame.get((method, "lambert"), []), frame.get((method, "phong16"), [])
+        rows = lam or pho
+        if not rows:
+            continue
+        nodes = [r for r in rows if r.get("design_nodes_mean")]
+        lines.append("| %s | %s | %s | %.0f, %.0f | %d | %s |" % (
+            LABELS[method], terms, floats, np.median([r["frame_ns_per_vertex"] for r in lam]) if lam else float("nan"),
+            np.median([r["frame_ns_per_vertex"] for r in pho]) if pho else float("nan"),
+            int(np.median([r["bytes_per_vertex"] for r in rows]) // 4),
+            "%.1f / %d" % (np.mean([r["design_nodes_mean"] for r in nodes]), max(r["design_nodes_max"] for r in nodes))
+            if nodes else "-"))
+
+    cycles = [r for r in report["rows"] if r["reference"] == "cycles"]
+    if cycles:
+        lines += ["", "## How far from Cycles", "",
+                  "The add-on's preview (bake, live shading with its ringing window and clamp) against Cycles from the "
+                  "same camera, Lambert (white Diffuse BSDF), relative RMS over 4 x 4 blocks (Cycles' own noise, from "
+                  "two seeds, beside it):", "",
+                  "| scene | HDRI | setting | s | shading | L~ | error | p99 | Cycles noise | bake s |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for row in cycles:
+            lines.append("| %s | %s | %s | %d | %s | %s | %s | %s | %s | %.2f |" % (
+                row["scene"], row["hdri"], row["setting"] if row["material"] == "lambert" else row["material"],
+                row["s"], row["shading"], row["light"], percent(row["rel_rms"]), percent(row["p99"]),
+                percent(row["reference_se"]), row["bake_seconds"]))
+
+    lines += ["", "## Plots", ""]
+    lines += ["![%s](%s)" % (p, p) for p in plots]
+    if strip_file:
+        lines += ["", "## Image strip (Suzanne, forest.exr, Lambert)", "",
+                  "Top: Cycles and the add-on's previews, then |preview - Cycles|; below: the reference at the "
+                  "vertices and each method (s = 4, s' = 2, 1024 rays) at the vertices, then its error.", "",
+                  "![strip](%s)" % strip_file]
+    model = report["cost_model"]
+    lines += ["", "## The fitted cost model", "",
+              "frame ns per vertex = intercept + ns_per_term x terms (per method and lobe); bake seconds = "
+              "vertices x rays x seconds_per_vertex_per_ray (per kind of data), a design bake's seconds per vertex "
+              "at its orders (1024 rays).", "",
+              "| method | lobe | terms | intercept ns | ns/term |", "|---|---|---|---|---|"]
+    for method, lobes in model["frame_ns_per_vertex"].items():
+        for lobe, fit in lobes.items():
+            lines.append("| %s | %s | %s | %.1f | %.3f |" % (LABELS[method], lobe, fit["terms"], fit["intercept_ns"],
+                                                            fit["ns_per_term"]))
+    lines += ["", "| bake data | seconds per vertex per ray (median) |", "|---|---|"]
+    for kind, fit in model["bake_seconds_per_vertex_per_ray"].items():
+        lines.append("| %s | %.3g |" % (kind, fit["median"]))
+    for orders, fit in model["design_bake_seconds_per_vertex"].items():
+        lines.append("| design (s, s') = (%s) | %.3g (%.3g s per vertex) |" % (
+            orders, fit["median_seconds_per_vertex_per_ray"], fit["median_seconds_per_vertex"]))
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    out = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else "docs/report")
+    work = os.path.abspath(sys.argv[2] if len(sys.argv) > 2 else "build/accuracy_report_work")
+    with open(os.path.join(out, "accuracy_report.json")) as f:
+        report = json.load(f)
+    averaged = mean_over_hdris(report["rows"])
+    plots = plot(report, averaged, "frame_ns_per_vertex", "CPU frame cost (ns per vertex)", "error_vs_frame", out)
+    plots += plot(report, averaged, "bake_seconds", "bake time (s)", "error_vs_bake", out)
+    strip_file = strip(work, out)
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write(markdown(report, averaged, plots, strip_file))
+    print("accuracy summary: %s (%d plots%s)" % (os.path.join(out, "report.md"), len(plots),
+                                                 ", strip.png" if strip_file else ""))
+
+
+if __name__ == "__main__":
+    main()

@@ -29,6 +29,7 @@ from . import bake_time, methods as method_table
 
 SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
 REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
+REFERENCE_TRIANGLES = 16     # sampled triangles per reference call (cancel granularity)
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
 SAME_AS = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}   # equal results (see above)
 
@@ -113,11 +114,8 @@ class ErrorTable:
         self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
         views = sample.views if sample.views is not None else sample.normals
         self._views = views if lobe != "lambert" else None
-        self.reference, error = sdnative.reference(
-            environment, sample.vertices, sample.normals, sample.triangles, views=self._views,
-            rotation=rotation, lobe=lobe, exponent=self.exponent, samples=REFERENCE_SAMPLES,
-            seed=seed, **sample.occluders)
-        self.reference_variance = np.asarray(error) ** 2
+        self.reference, error = self._reference(environment, seed, stop)
+        self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
         measured = [method_table.get(m) for m in sorted({SAME_AS.get(m, m) for m in self.methods})]
@@ -138,6 +136,24 @@ class ErrorTable:
                     total = relative_error(first, self.reference, self.reference_variance)
                     self.measured[(method.id, s, sv)] = Measured(
                         float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays)
+    def _reference(self, environment, seed, stop):
+        """sdnative.reference on the sample, a few triangles at a time so that a cancel (stop)
+        takes effect within about a second."""
+        sample = self._sample
+        radiance, error = np.zeros((len(sample.vertices), 3)), np.zeros((len(sample.vertices), 3))
+        for first in range(0, len(sample.triangles), REFERENCE_TRIANGLES):
+            if stop is not None and stop():
+                raise InterruptedError("cancelled")
+            used, local = np.unique(sample.triangles[first:first + REFERENCE_TRIANGLES],
+                                    return_inverse=True)
+            views = None if self._views is None else self._views[used]
+            radiance[used], error[used] = self._sd.reference(
+                environment, sample.vertices[used], sample.normals[used],
+                local.reshape(-1, 3).astype(np.int32), views=views, rotation=self._rotation,
+                lobe=self.lobe, exponent=self.exponent, samples=REFERENCE_SAMPLES, seed=seed,
+                **sample.occluders)
+        return radiance, error
+
     def _bake(self, methods, seed, stop):
         arguments = {}
         for method in methods:

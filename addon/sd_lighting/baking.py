@@ -25,7 +25,7 @@ import uuid
 
 import numpy as np
 
-from . import attributes, compat, environment, materials, native
+from . import analysis, attributes, compat, environment, materials, native
 from .utils import corners, methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
@@ -135,33 +135,60 @@ def world_triangles(obj, depsgraph, view_layer):
 class BakeTask:
     """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
 
-    def __init__(self, obj_name, geometry, occluders, settings):
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs=None):
         self.object_name = obj_name
         self.geometry = geometry
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
+        self.analysis = analysis_inputs   # the automatic mode's analysis.Inputs, or None
         self.result = None
+
+    def occluders(self):
+        """bake_transfer's occluder keywords ({} without occluders)."""
+        if self.occluder_vertices is None:
+            return {}
+        return {"occluder_vertices": self.occluder_vertices,
+                "occluder_triangles": self.occluder_triangles}
+
+    def choose(self, stop):
+        """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
+        choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
+                                 self.settings["lobe"], self.settings["exponent"], stop)
+        self.settings.update(
+            method=choice.setting.method, light_order=choice.setting.light_order,
+            visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
+            automatic="\n".join(choice.reasons), predicted_error=float(choice.error),
+            frame_terms=int(choice.frame_terms))
 
     def bake_arguments(self):
         s = self.settings
         method = methods.get(s["method"])
         kwargs = {"rays": int(s["rays"]), "seed": int(s["seed"])}
         kwargs.update(method.bake_arguments(int(s["light_order"]), int(s["visibility_order"])))
-        if self.occluder_vertices is not None:
-            kwargs["occluder_vertices"] = self.occluder_vertices
-            kwargs["occluder_triangles"] = self.occluder_triangles
+        kwargs.update(self.occluders())
         return kwargs
 
 
 def bake_settings(scene, obj, env_source):
-    """The settings dict of a bake of `obj` under the scene's panel settings."""
+    """The settings dict of a bake of `obj` under the scene's panel settings and the object's
+    overrides (properties.ObjectOverrides). The automatic mode's dict says method "automatic":
+    the bake's worker fills in the choice (analysis.choose), with the lines saying why."""
     settings = scene.sd_lighting
-    method = methods.get(settings.method)
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    method_id = fixed.get("method", settings.method)
     lobe, exponent = materials.lobe_for(obj, settings)
+    common = {"lobe": lobe, "exponent": float(exponent), "seed": int(settings.seed),
+              "environment": env_source.description}
+    if method_id == analysis.AUTOMATIC:
+        return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
+                    rays=int(fixed.get("rays", settings.rays)))
+    method = methods.get(method_id)
     if method.lambert_only and lobe != "lambert":
         raise BakeError("%s needs a Lambert material; %s is Phong (sigma %.3g)"
                         % (method.label, obj.name, exponent))
-    if settings.automatic_orders:
+    if "light_order" in fixed:
+        order = fixed["light_order"]
+    elif settings.automatic_orders:
         try:
             order = environment.smallest_order(env_source, lobe, exponent, settings.target_error,
                                                settings.max_automatic_order)
@@ -169,13 +196,24 @@ def bake_settings(scene, obj, env_source):
             raise BakeError("cannot choose s automatically: %s" % exc) from exc
     else:
         order = settings.light_order
-    v_order = settings.visibility_order if method.uses_visibility_order else 0
-    return {
-        "method": method.id, "lobe": lobe, "exponent": float(exponent),
-        "light_order": int(order), "visibility_order": int(v_order),
-        "rays": int(settings.rays), "seed": int(settings.seed),
-        "environment": env_source.description,
-    }
+    v_order = fixed.get("visibility_order", settings.visibility_order) if method.uses_visibility_order else 0
+    return dict(common, method=method.id, light_order=int(order), visibility_order=int(v_order),
+                rays=int(fixed.get("rays", settings.rays)))
+
+
+def _analysis_inputs(scene, obj, env_source, settings, to_frame):
+    """What the automatic mode measures the object with (analysis.Inputs), in its bake frame."""
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
+    eye = None
+    if scene.camera is not None:
+        eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    fixed.pop("method", None)
+    panel = scene.sd_lighting
+    return analysis.gather(scene, env_source, settings["lobe"], settings["exponent"], rotation, eye,
+                           panel.target_error, panel.max_automatic_order, fixed,
+                           panel.ringing_window.lower())
 
 
 def _refusal(obj):
@@ -243,7 +281,9 @@ def prepare(context, objects):
         occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
         settings = bake_settings(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        tasks.append(BakeTask(obj.name, geometry, occluders, settings))
+        inputs = (_analysis_inputs(scene, obj, env_source, settings, to_frame)
+                  if settings["method"] == analysis.AUTOMATIC else None)
+        tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
                         "select one or more mesh objects to bake")
@@ -266,6 +306,7 @@ class BakeJob:
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
+        self.choosing = False         # the automatic mode is measuring the current object
         self.cancelled = False
         self.error = None             # message when the bake failed
         self.finished = False
@@ -289,8 +330,8 @@ class BakeJob:
         if not self.tasks:
             return ""
         task = self.tasks[min(self.current, len(self.tasks) - 1)]
-        return "SD Lighting: baking %s (%d/%d), %d %%  -  Esc to cancel" % (
-            task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
+        return "SD Lighting: %s %s (%d/%d), %d %%  -  Esc to cancel" % (
+            "choosing the settings of" if self.choosing else "baking", task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
             int(100 * self.fraction))
 
     # -- work
@@ -310,6 +351,10 @@ class BakeJob:
                     return not self.cancel_requested
 
                 geometry = task.geometry
+                if task.analysis is not None:
+                    self.choosing = True
+                    task.choose(lambda: self.cancel_requested)
+                    self.choosing = False
                 t0 = time.perf_counter()
                 result = sd.bake_transfer(geometry.vertices, geometry.normals, geometry.triangles,
                                           progress=progress, **task.bake_arguments())

@@ -21,10 +21,11 @@ _requested = None         # the key a timer will start, if any
 
 def settings_key(context):
     """What the bake's time depends on: the bake settings, the environment (automatic s) and the
-    selected meshes (names and sizes); None without a selected mesh."""
+    selected meshes (names, sizes and overrides); None without a selected mesh."""
     scene = context.scene
     settings = scene.sd_lighting
-    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers))
+    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers),
+                           tuple(sorted(o.sd_lighting.fixed().items())))
                           for o in context.selected_objects if o.type == 'MESH'))
     if not meshes:
         return None
@@ -37,19 +38,25 @@ def settings_key(context):
 
 def sample_jobs(tasks):
     """The sampling jobs of baking.prepare's tasks: each object's own mesh joins its occluders,
-    so that a sampled triangle's vertices see the rest of the object."""
-    jobs = []
-    for task in tasks:
+    so that a sampled triangle's vertices see the rest of the object. An automatic task chooses
+    its settings first, in the predictor's worker (its reasons and predicted error are then in
+    task.settings, for the panel)."""
+    def arguments(task, stop):
+        if task.analysis is not None:
+            task.choose(stop)
         geometry = task.geometry
-        arguments = task.bake_arguments()
+        kwargs = task.bake_arguments()
         vertices, triangles = [geometry.vertices], [geometry.triangles]
-        if "occluder_vertices" in arguments:
-            vertices.append(arguments["occluder_vertices"])
-            triangles.append(arguments["occluder_triangles"] + len(geometry.vertices))
-        arguments["occluder_vertices"] = np.concatenate(vertices)
-        arguments["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
-        jobs.append(bake_time.SampleJob(geometry.vertices, geometry.normals, geometry.triangles, arguments))
-    return jobs
+        if "occluder_vertices" in kwargs:
+            vertices.append(kwargs["occluder_vertices"])
+            triangles.append(kwargs["occluder_triangles"] + len(geometry.vertices))
+        kwargs["occluder_vertices"] = np.concatenate(vertices)
+        kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
+        return kwargs
+
+    return [bake_time.SampleJob(task.geometry.vertices, task.geometry.normals, task.geometry.triangles,
+                                lambda stop, task=task: arguments(task, stop), task)
+            for task in tasks]
 
 
 def start(context):
@@ -103,6 +110,16 @@ def current(context):
     if _sampling(predictor) and not bpy.app.timers.is_registered(_redraw_while_sampling):
         bpy.app.timers.register(_redraw_while_sampling, first_interval=0.5)
     return predictor.prediction()
+
+
+def automatic_choices(context):
+    """[(object name, settings dict)] of the automatic mode's choices for the panel's selection,
+    once the predictor has made them (empty before)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return []
+    return [(job.task.object_name, job.task.settings) for job in predictor.jobs
+            if job.task.analysis is not None and "automatic" in job.task.settings]
 
 
 def _start_requested():

@@ -25,11 +25,13 @@ for every method at s = 4, s' = 2. The fitted per-method cost constants are in t
 
 Run (docs/report holds the committed full run; scripts/accuracy_report.sh also makes the plots):
     xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/accuracy_report.py -- \
-        --zip build/sd_lighting.zip --out docs/report [--quick] [--work DIR] [--scenes sphere,bowl]
+        --zip build/sd_lighting.zip --out docs/report [--quick] [--work DIR]
+        [--scenes sphere,bowl] [--hdris forest.exr,city.exr]
 --quick (the test command, through blender_tests/run.py): two scenes, two HDRIs, a few settings,
 no Cycles; checks the report's invariants (and that each check fails on deliberately broken rows).
 """
 
+import importlib
 import json
 import math
 import os
@@ -56,7 +58,8 @@ FULL = {
     "design_scenes": {(6, 2): ["sphere"]},   # a degree-8 design fit takes ~50 ms per vertex here
     "probes": 64, "samples": 16384, "phong_samples": 2048,
     "cycles_hdris": ["forest.exr", "sunrise.exr", "interior.exr"], "cycles_size": 160,
-    "cycles_samples": 256, "gpu_frames": 3,
+    "cycles_samples": 256, "gpu_frames": 3, "predicted_hdris": ["forest.exr", "sunrise.exr"],
+    "predicted_rays": [256, 1024],
 }
 QUICK = {
     "scenes": ["sphere", "suzanne"], "hdris": ["forest.exr", "sunrise.exr"],
@@ -64,23 +67,26 @@ QUICK = {
     "orders": [1, 2, 4, 6], "visibility_orders": [0, 2],
     "rays": [64, 1024], "full_rays": 1024, "sweep_visibility_order": 2,
     "designs": [(4, 2)], "probes": 48, "samples": 16384, "phong_samples": 2048,
-    "cycles_hdris": [], "gpu_frames": 0,
+    "cycles_hdris": [], "gpu_frames": 0, "predicted_hdris": ["forest.exr"],
+    "predicted_rays": [64, 1024],
 }
 BLOCK = 4
-RECOMMENDED = "MSD (13), automatic s (5 %), s' = 2, 256 rays"   # the add-on's defaults
+RECOMMENDED = "MSD (13), s = 4, s' = 2, 256 rays"   # the seed's orders, the main job's setting
 
 
 def options():
-    """(quick, work folder or None, scenes or None) from the arguments after --."""
+    """(quick, work folder or None, scenes or None, HDRIs or None) from the arguments after --."""
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     quick = "--quick" in argv
-    work = scenes = None
+    work = scenes = hdris = None
     for i, arg in enumerate(argv[:-1]):
         if arg == "--work":
             work = argv[i + 1]
         elif arg == "--scenes":
             scenes = argv[i + 1].split(",")
-    return quick, work, scenes
+        elif arg == "--hdris":
+            hdris = argv[i + 1].split(",")
+    return quick, work, scenes, hdris
 
 
 class Progress:
@@ -162,6 +168,7 @@ class SceneData:
             turned = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1], offset[2]])
             eyes.append(package.drawing.View(view.view_projection, tuple(centre + turned) + (1.0,)))
         self.views = [v.view_directions(self.world, self.rotation.T) for v in eyes]
+        self.eye, self.to_world = eyes[0], np.linalg.inv(to_frame)
         self.view_projection = view.view_projection
         rng = np.random.default_rng(11)
         n = len(self.vertices)
@@ -263,6 +270,7 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
             sdnative.shade(method, light[:(s + 1) ** 2], data.normals, views=views, rotation=data.g,
                            lobe=lobe, exponent=exponent, **kwargs)
             costs["frame"][key] = 1e9 * (time.perf_counter() - start) / n
+            costs["floats"][data.name, method, s, sv] = stored_floats(package, method, kwargs)
     progress.step("%s: CPU frame cost of every setting" % data.name, 2.0)
 
     probe_normals = data.normals[p]
@@ -314,18 +322,25 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
                         costs["equalities"].append({
                             "scene": data.name, "hdri": hdri, "material": key, "methods": [msd, prt], "s": s, "s_v": sv,
                             "max_relative_difference": float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-30))})
-        for key, (truth, se, shaded, front) in values.items():
-            truth, se = truth[front], se[front]
+        for key, (truth_views, se_views, shaded, front) in values.items():
+            truth, se = truth_views[front], se_views[front]
             scale = math.sqrt(float(np.mean(truth ** 2))) or 1e-30
             se_rel = math.sqrt(float(np.mean(se ** 2))) / scale
+            # As utils/accuracy.py measures (for the comparison with its prediction): the first
+            # view, every probe, the reference's noise removed.
+            scale_first = math.sqrt(float(np.mean(truth_views[0] ** 2))) or 1e-30
+            se_first = math.sqrt(float(np.mean(se_views[0] ** 2))) / scale_first
             for (method, s, sv, rays), b in shaded.items():
                 rms, p99 = relative_errors(np.broadcast_to(b, front.shape + (3,))[front], truth)
+                first, _ = relative_errors(b[0], truth_views[0])
                 rows.append({"reference": "monte_carlo", "scene": data.name, "hdri": hdri, "material": key,
                              "method": method, "s": s, "s_v": sv if method not in ("unshadowed",
                                                                                  "ambient_occlusion", "prt_diffuse") else None,
                              "rays": rays or None, "shading": "vertex", "light": "sh",
                              "rel_rms": rms, "rel_rms_without_reference_noise": math.sqrt(max(rms ** 2 - se_rel ** 2, 0.0)),
-                             "p99": p99, "reference_se": se_rel, "points": int(len(truth))})
+                             "p99": p99, "reference_se": se_rel, "points": int(len(truth)),
+                             "rel_rms_first_view_every_point": math.sqrt(max(first ** 2 - se_first ** 2, 0.0)),
+                             "reference_se_first_view_every_point": se_first})
         progress.step("%s: %s, reference and grid" % (data.name, hdri), 3.0)
     return bakes, designs
 
@@ -354,16 +369,13 @@ def strip_vertices(package, sdnative, data, bakes, designs, hdri_path, config, s
     strip["vertex_values"] = values
 
 
-def floats_per_vertex(package, method, s, sv, design_nodes_max=None):
-    """The floats per vertex the add-on stores for this method and orders, counted as its
-    bake's floats_per_vertex (sd_ambient_occlusion and the method's vec4 groups; sd_normal not)."""
+def stored_floats(package, method, arrays):
+    """The floats per vertex a bake of the method stores, counted as its floats_per_vertex
+    (attributes.write: the ambient occlusion and the method's vec4 groups; sd_normal not), from
+    the arrays it would store (shade_inputs' keywords)."""
     data = package.utils.methods.get(method).data
-    floats = 1
-    if data is None or data.keys == ("ambient_occlusion",):
-        return floats
-    if data.packing == "design":
-        return floats + 4 * int(design_nodes_max)
-    return floats + 4 * int(math.ceil(np.prod(data.shape(s, sv)) / 4.0))
+    groups = data.texels(arrays).shape[1] if data is not None and data.grouped else 0
+    return 1 + 4 * groups
 
 
 # ----------------------------------------------------------------------------------------------
@@ -371,7 +383,7 @@ def floats_per_vertex(package, method, s, sv, design_nodes_max=None):
 
 CYCLES_SETTINGS = [
     # (label, method, automatic s, s, s', rays)
-    (RECOMMENDED, "msd_visibility", True, 4, 2, 256),
+    (RECOMMENDED, "msd_visibility", False, 4, 2, 256),
     ("unshadowed, s = 4", "unshadowed", False, 4, 0, 16),
     ("AO, s = 4, 256 rays", "ambient_occlusion", False, 4, 0, 256),
     ("PRT (8), s = 6, s' = 4, 1024 rays", "prt_matrix", False, 6, 4, 1024),
@@ -459,7 +471,6 @@ def glossy_case(package, name, scene, objects, config, work, progress, rows):
     size = config["cycles_size"]
     cycles, noise = cycles_pair(scene, work, name + "_glossy", size, 4 * config["cycles_samples"])
     sdtest.bake_settings(scene, "msd_visibility", 'MATERIAL', 4, 2, rays=256, select=objects)
-    scene.sd_lighting.automatic_orders = True
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
         raise RuntimeError("the glossy bake failed")
     info = dict(objects[0]["sd_bake"])
@@ -512,35 +523,61 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
 
 
 # ----------------------------------------------------------------------------------------------
+# The panel's predicted error (utils/accuracy.py) against the measured one
+
+def predictions(package, sdnative, data, hdris, config, rows, progress):
+    """utils/accuracy.ErrorTable - the automatic mode's and the panel's prediction, from its own
+    sample of the object, measured with the bake's rays - for each HDRI of `hdris`, Lambert and
+    Phong 16 and each ray count of config["predicted_rays"], against this report's measured error
+    of the same settings. The table shades with the same unwindowed L as the grid. A table's
+    prediction for other ray counts (its noise model, 1/sqrt(rays)) is recorded as extrapolated.
+    [records]"""
+    accuracy = importlib.import_module(package.__name__ + ".utils.accuracy")
+    views = lambda points: data.eye.view_directions(  # noqa: E731
+        package.utils.transforms.transform_points(data.to_world, points), data.rotation.T)
+    sample = accuracy.Sample.of_mesh(data.vertices, data.normals, data.triangles, data.occluders or None, views)
+    max_order = max(config["orders"])
+    out = []
+    for path in hdris:
+        hdri = os.path.basename(path)
+        light = sdnative.load_environment(path).sh(max_order)
+        for lobe, exponent in (("lambert", 1.0), ("phong", 16.0)):
+            material = lobe_key(lobe, exponent)
+            for table_rays in config["predicted_rays"]:
+                table = accuracy.ErrorTable(sdnative, sample, sdnative.load_environment(path),
+                                            lambda s: light[:(s + 1) ** 2], lobe, exponent, data.g,
+                                            [m.id for m in package.utils.methods.METHODS], max_order, table_rays)
+                for row in rows:
+                    if (row["reference"], row["scene"], row["hdri"], row["material"]) != ("monte_carlo", data.name, hdri, material) \
+                            or row["method"] not in table.methods or (row["s_v"] or 0) > accuracy.MAX_VISIBILITY_ORDER:
+                        continue
+                    if row["rays"] is None and table_rays != config["predicted_rays"][0]:
+                        continue   # unshadowed: no rays, once
+                    extrapolated = row["rays"] not in (None, table_rays)
+                    if extrapolated and table_rays != config["full_rays"]:
+                        continue
+                    predicted = table.error(accuracy.Setting(row["method"], row["s"], row["s_v"] or 0, row["rays"] or table_rays))
+                    # Like with like: the table's sample sees one view and counts every point, also
+                    # those facing away from the eye; what the user sees is the front-facing error.
+                    measured = row["rel_rms_first_view_every_point"]
+                    front = row["rel_rms_without_reference_noise"]
+                    out.append({"scene": data.name, "hdri": hdri, "material": material, "method": row["method"],
+                                "s": row["s"], "s_v": row["s_v"], "rays": row["rays"], "table_rays": table_rays,
+                                "extrapolated": extrapolated, "predicted": predicted, "measured": measured,
+                                "ratio": predicted / measured if measured > 0 else float("inf"),
+                                "measured_front_facing": front,
+                                "ratio_front_facing": predicted / front if front > 0 else float("inf"),
+                                "noise_limited": measured < 2.0 * row["reference_se_first_view_every_point"]})
+        progress.step("%s: %s, the predicted errors" % (data.name, hdri), 2.0)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
 # Costs: per row, and the fitted cost model
 
 BAKE_KIND = {"unshadowed": "ambient_occlusion", "ambient_occlusion": "ambient_occlusion",
              "prt_diffuse": "transfer", "prt_matrix": "product_matrix", "prt_gaunt": "visibility",
              "msd_lobe": "visibility", "msd_visibility": "design"}
-TERMS = {   # the terms per vertex each formula sums (what the frame cost is fitted against)
-    "unshadowed": "(s+1)^2", "ambient_occlusion": "(s+1)^2", "prt_diffuse": "(s+1)^2",
-    "prt_matrix": "(s+1)^2 (s'+1)^2", "prt_gaunt": "(s+1)^2 (s'+1)^2",
-    "msd_visibility": "N_V (s+1)^2 (N_V: the vertex design's mean nodes)",
-    "msd_lobe": "N_lobe ((s+1)^2 + (s'+1)^2) (N_lobe: the lobe design's nodes)",
-}
-
-
-def terms(method, s, sv, design_nodes=None, lobe_nodes=None):
-    k, kv = (s + 1) ** 2, (sv + 1) ** 2
-    if method in ("prt_matrix", "prt_gaunt"):
-        return k * kv
-    if method == "msd_visibility":
-        return design_nodes * k
-    if method == "msd_lobe":
-        return lobe_nodes * (k + kv)
-    return k
-
-
-def lobe_design_nodes(sdnative, lobe, exponent, degree, cache={}):
-    key = (lobe, exponent, degree)
-    if key not in cache:
-        cache[key] = len(sdnative.zonal_design(lobe, exponent, degree)[1])
-    return cache[key]
 
 
 def fit_line(x, y):
@@ -564,13 +601,14 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
             design_seconds[record["scene"], record["light_order"], record["visibility_order"]] = record
         elif record["kind"] != "grid":
             per_ray[record["scene"], record["kind"]] = record["seconds"] / (n * rays)
+    # Each timing against its method's frame_terms (utils/methods.py, the automatic mode's cost
+    # model): ns per vertex = intercept + ns_per_term x frame_terms.
+    methods = package.utils.methods
+    cost = importlib.import_module(package.__name__ + ".utils.cost")
+    gaunt = lambda s, sv: cost.gaunt_terms(sdnative, s, sv)  # noqa: E731
     frame_points = {}
     for (scene, method, s, sv, lobe), ns in costs["frame"].items():
-        nodes = None
-        if method == "msd_visibility":
-            nodes = design_seconds[scene, s, sv]["design_nodes_mean"]
-        lobe_nodes = lobe_design_nodes(sdnative, lobe, 16.0 if lobe == "phong" else 1.0, s + sv) if method == "msd_lobe" else None
-        frame_points.setdefault((method, lobe), []).append((terms(method, s, sv, nodes, lobe_nodes), ns))
+        frame_points.setdefault((method, lobe), []).append((methods.get(method).frame_terms(s, sv, gaunt), ns))
     for row in rows:
         if row["reference"] != "monte_carlo":
             continue
@@ -588,13 +626,13 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
             row["bake_seconds"] = per_ray[scene, BAKE_KIND[method]] * n * (row["rays"] or 16)
         row["bake_seconds_kind"] = "timed" if method == "msd_visibility" else "per ray of its kind, timed at s = 4, s' = 2"
         row["vertices"] = n
-        row["bytes_per_vertex"] = 4 * floats_per_vertex(package, method, s, sv, row.get("design_nodes_max"))
+        row["bytes_per_vertex"] = 4 * costs["floats"][scene, method, s, sv]
     model = {"frame_ns_per_vertex": {}, "bake_seconds_per_vertex_per_ray": {},
              "design_bake_seconds_per_vertex": {}, "bytes_per_vertex": {}}
     for (method, lobe), points in sorted(frame_points.items()):
         a, b = fit_line(*zip(*points))
         model["frame_ns_per_vertex"].setdefault(method, {})[lobe] = {
-            "intercept_ns": a, "ns_per_term": b, "terms": TERMS[method], "points": len(points)}
+            "intercept_ns": a, "ns_per_term": b, "terms": "utils/methods.py frame_terms", "points": len(points)}
     for kind in sorted({k for _, k in per_ray}):
         values = [v for (scene, k), v in per_ray.items() if k == kind]
         model["bake_seconds_per_vertex_per_ray"][kind] = {
@@ -608,6 +646,17 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
         per_vertex = [v["seconds_per_vertex"] for v in entry["scenes"].values()]
         entry["median_seconds_per_vertex"] = float(np.median(per_vertex))
         entry["median_seconds_per_vertex_per_ray"] = float(np.median(per_vertex)) / entry["rays"]
+    # In the automatic mode's units (utils/cost.py: RAY_SECONDS per ray per core, DESIGN_MS per
+    # vertex per core by degree s + s', the rays' share taken out): the bakes ran on every core.
+    threads = os.cpu_count()
+    ray_seconds = [v * threads for (scene, kind), v in per_ray.items() if kind == "ambient_occlusion"]
+    model["ray_seconds_per_core"] = float(np.median(ray_seconds))
+    design_ms = {}
+    for (scene, s, sv), record in design_seconds.items():
+        rays_part = per_ray[scene, "ambient_occlusion"] * record["vertices"] * record["rays"]
+        design_ms.setdefault(s + sv, []).append(1e3 * max(record["seconds"] - rays_part, 0.0) * threads / record["vertices"])
+    model["design_ms_per_vertex_per_core"] = {str(k): float(np.median(v)) for k, v in sorted(design_ms.items())}
+    model["threads"] = threads
     model["bytes_per_vertex"] = {
         "unshadowed": "4 (AO)", "ambient_occlusion": "4 (AO)",
         "prt_diffuse": "4 + 16 ceil((s+1)^2 / 4)", "prt_gaunt": "4 + 16 ceil((s'+1)^2 / 4)",
@@ -629,7 +678,7 @@ def _cases(rows, **match):
     return out
 
 
-def invariants(rows, equalities, config):
+def invariants(rows, equalities, predicted, config):
     """[(what, ok, detail)] for the report's invariants on these rows."""
     out = []
     s_lo, s_hi = min(config["orders"]), max(config["orders"])
@@ -684,13 +733,26 @@ def invariants(rows, equalities, config):
     out.append(("the reference's standard error is at most 1/3 of the error at s = 4, s' = 2",
                 not bad and bool(recommended), "largest ratio %.2f over %d cases%s" % (
                     ratio, len(recommended), ("; not: %s" % bad[:3]) if bad else "")))
+    # The panel's predicted error (utils/accuracy.py) is within a factor 2 of the measured one,
+    # where the measurement is not limited by the reference's noise.
+    compared = [p for p in predicted if not p["noise_limited"] and not p["extrapolated"]]
+    bad = [p for p in compared if not 0.5 <= p["ratio"] <= 2.0]
+    ratios = [p["ratio"] for p in compared]
+    out.append(("the predicted error (utils/accuracy.py, measured with the bake's rays) is within a factor 2 of the measured one",
+                not bad and bool(compared), "%d of %d settings; ratio predicted / measured %.2f .. %.2f (median %.2f)%s" % (
+                    len(compared) - len(bad), len(compared), min(ratios, default=float("nan")),
+                    max(ratios, default=float("nan")), float(np.median(ratios)) if ratios else float("nan"),
+                    ("; outside: %s" % ["%s %s %s %s s=%d s'=%s %s: %.2f" % (p["scene"], p["hdri"], p["material"], p["method"],
+                                                                          p["s"], p["s_v"], p["rays"], p["ratio"])
+                                        for p in bad[:4]]) if bad else "")))
     return out
 
 
-def broken(rows, equalities, what):
-    """Copies of the rows (and equalities) with one invariant deliberately broken."""
+def broken(rows, equalities, predicted, what):
+    """Copies of the rows, equalities and predictions with one invariant deliberately broken."""
     rows = [dict(r) for r in rows]
     equalities = [dict(e) for e in equalities]
+    predicted = [dict(p, ratio=3.0 * p["ratio"]) if what == "prediction" else dict(p) for p in predicted]
     for row in rows:
         if what == "orders" and row["method"] == "prt_matrix" and row["rays"] is not None:
             row["rel_rms"] = 0.01 * row["s"]
@@ -703,7 +765,7 @@ def broken(rows, equalities, what):
     if what == "msd":
         for e in equalities:
             e["max_relative_difference"] = 1e-3
-    return rows, equalities
+    return rows, equalities, predicted
 
 
 # ----------------------------------------------------------------------------------------------
@@ -713,16 +775,20 @@ STRIP = {"scene": "suzanne", "hdri": "forest.exr"}
 
 def planned_work(config, hdris):
     per_scene = (2 * len(config["rays"]) + 2 * len(config["designs"]) + 2 + 3 * len(hdris)
-                 + (4 + len(CYCLES_SETTINGS)) * len(config["cycles_hdris"]) + (3 if config["gpu_frames"] else 0))
+                 + (4 + len(CYCLES_SETTINGS)) * len(config["cycles_hdris"]) + 2 * len(config["predicted_hdris"]) + (3 if config["gpu_frames"] else 0))
     return per_scene * len(config["scenes"]) + (4 if config["cycles_hdris"] else 0)
 
 
 def main():
-    quick, work, scenes = options()
+    quick, work, scenes, only_hdris = options()
     args = sdtest.arguments()
     config = dict(QUICK if quick else FULL)
     if scenes:
         config["scenes"] = [name for name in config["scenes"] if name in scenes]
+    if only_hdris:   # a part of the report (the committed one has all)
+        config["hdris"] = only_hdris
+        for key in ("cycles_hdris", "predicted_hdris"):
+            config[key] = [h for h in config[key] if h in only_hdris]
     work = os.path.abspath(work or os.path.join(args.out, "work"))
     os.makedirs(work, exist_ok=True)
     start = time.perf_counter()
@@ -737,7 +803,7 @@ def main():
         renderer = "%s, %s" % (gpu.platform.renderer_get(), gpu.platform.version_get())
     progress = Progress(planned_work(config, hdris))
     rows, gpu_rows = [], []
-    costs = {"bakes": [], "frame": {}, "equalities": []}
+    costs = {"bakes": [], "frame": {}, "floats": {}, "equalities": [], "predictions": []}
     vertex_counts = {}
     strip = {"hdri": STRIP["hdri"], "images": {}}
     for name in config["scenes"]:
@@ -747,6 +813,8 @@ def main():
         print("%s: %d vertices measured at %d probes; %d triangles, %d in the scene"
               % (name, len(data.vertices), len(data.probes), len(data.triangles), len(data.scene_triangles)), flush=True)
         bakes, designs = vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs)
+        costs["predictions"] += predictions(package, sdnative, data, [sdtest.hdri(h) for h in config["predicted_hdris"]],
+                                            config, rows, progress)
         if name == STRIP["scene"] and not quick:
             strip_vertices(package, sdnative, data, bakes, designs, sdtest.hdri(STRIP["hdri"]), config, strip)
         del bakes, designs
@@ -764,12 +832,12 @@ def main():
     model = attach_costs(package, sdnative, rows, costs, vertex_counts)
 
     checks = sdtest.Checks("accuracy_report")
-    results = invariants(rows, costs["equalities"], config)
+    results = invariants(rows, costs["equalities"], costs["predictions"], config)
     for what, ok, detail in results:
         checks.check(ok, what, detail)
-    for what, index in (("orders", 0), ("rays", 3), ("msd", 4), ("reference", 7)):
-        broken_rows, broken_equalities = broken(rows, costs["equalities"], what)
-        failed = [w for w, ok, _ in invariants(broken_rows, broken_equalities, config) if not ok]
+    for what, index in (("orders", 0), ("rays", 3), ("msd", 4), ("reference", 7), ("prediction", 8)):
+        failed = [w for w, ok, _ in invariants(*broken(rows, costs["equalities"], costs["predictions"], what), config)
+                  if not ok]
         checks.check(results[index][0] in failed, "the check fails on rows with a broken %s invariant" % what,
                      "; ".join(failed)[:200])
     seconds = time.perf_counter() - start
@@ -778,7 +846,7 @@ def main():
         "gpu": renderer, "cpu_threads": os.cpu_count(), "config": {k: v for k, v in config.items()},
         "hdris": hdri_names, "vertices": vertex_counts, "mix": {"weights": [MIX[0], MIX[2]], "lobes": [MIX[1], MIX[3]]},
         "recommended": RECOMMENDED, "rows": rows, "gpu_rows": gpu_rows, "bakes": costs["bakes"],
-        "equalities": costs["equalities"], "cost_model": model,
+        "equalities": costs["equalities"], "predictions": costs["predictions"], "cost_model": model,
         "invariants": [{"check": w, "ok": ok, "detail": d} for w, ok, d in results],
     }
     path = os.path.join(args.out, "accuracy_report.json")

@@ -58,7 +58,7 @@ FULL = {
     "design_scenes": {(6, 2): ["sphere"]},   # a degree-8 design fit takes ~50 ms per vertex here
     "probes": 64, "samples": 16384, "phong_samples": 2048,
     "cycles_hdris": ["forest.exr", "sunrise.exr", "interior.exr"], "cycles_size": 160,
-    "cycles_samples": 256, "gpu_frames": 3, "predicted_hdris": ["forest.exr", "sunrise.exr"],
+    "cycles_samples": 128, "gpu_frames": 2, "predicted_hdris": ["forest.exr", "sunrise.exr"],
     "predicted_rays": [256, 1024],
 }
 QUICK = {
@@ -253,7 +253,7 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
     for s, sv in designs_for(config, data.name):
         settings += [("msd_visibility", s, sv, full_rays), ("msd_lobe", s, sv, full_rays)]
 
-    # CPU cost: every setting on all vertices, once per lobe kind (forest).
+    # CPU cost: every setting on all vertices, once per lobe kind (one HDRI: the cost does not depend on it).
     light = sdnative.load_environment(hdris[0]).sh(s_max)
     for lobe, exponent in (("lambert", 1.0), ("phong", 16.0)):
         views = data.views[0] if lobe == "phong" else None
@@ -489,10 +489,13 @@ def glossy_case(package, name, scene, objects, config, work, progress, rows):
     accuracy_scenes.white(objects)
 
 
+PER_PIXEL_FRAMES = ("msd_visibility", "prt_matrix")   # per pixel costs minutes under llvmpipe: two
+
+
 def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
     """Frame time under the software rasteriser (1280 x 720, benchmark_viewport.time_frames) of
-    every method at s = 4, s' = 2, 256 rays, Lambert, per vertex and per pixel, the MSD methods
-    also with the band-limited texture."""
+    every method at s = 4, s' = 2, 256 rays, Lambert, per vertex (PER_PIXEL_FRAMES also per
+    pixel), the MSD methods also with the band-limited texture."""
     from benchmark_viewport import HEIGHT, WIDTH, time_frames
     depsgraph = bpy.context.evaluated_depsgraph_get()
     view = package.drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
@@ -504,7 +507,7 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
         info = dict(objects[0]["sd_bake"])
         for texture in ((False, True) if method.band_limited_texture else (False,)):
             settings.band_limited_texture = texture
-            for per_pixel in (False, True):
+            for per_pixel in (False, True) if method.id in PER_PIXEL_FRAMES else (False,):
                 seconds = time_frames(lambda: package.drawing.draw_objects(scene, objects[:1], view, 1.0, per_pixel,
                                                                            wait=True), config["gpu_frames"])
                 gpu_rows.append({"scene": name, "method": method.id, "s": 4, "s_v": 2, "rays": 256,
@@ -807,11 +810,13 @@ def main():
     vertex_counts = {}
     strip = {"hdri": STRIP["hdri"], "images": {}}
     for name in config["scenes"]:
-        scene, objects, camera, texture = accuracy_scenes.build(name, hdris[0])
+        scene, objects, camera, texture = accuracy_scenes.build(name, sdtest.hdri("forest.exr"))
         data = SceneData(package, name, scene, objects, camera, config)
         vertex_counts[name] = len(data.vertices)
         print("%s: %d vertices measured at %d probes; %d triangles, %d in the scene"
               % (name, len(data.vertices), len(data.probes), len(data.triangles), len(data.scene_triangles)), flush=True)
+        if config["gpu_frames"]:   # under forest.exr, the scenes' first HDRI
+            gpu_frames(package, name, scene, objects, config, progress, gpu_rows)
         bakes, designs = vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs)
         costs["predictions"] += predictions(package, sdnative, data, [sdtest.hdri(h) for h in config["predicted_hdris"]],
                                             config, rows, progress)
@@ -824,9 +829,6 @@ def main():
             if name == "sphere":
                 accuracy_scenes.set_hdri(texture, sdtest.hdri("forest.exr"))
                 glossy_case(package, name, scene, objects, config, work, progress, rows)
-        if config["gpu_frames"]:
-            accuracy_scenes.set_hdri(texture, sdtest.hdri("forest.exr"))
-            gpu_frames(package, name, scene, objects, config, progress, gpu_rows)
         for obj in objects:
             package.baking.clear(obj)
     model = attach_costs(package, sdnative, rows, costs, vertex_counts)

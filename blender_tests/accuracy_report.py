@@ -727,8 +727,10 @@ def invariants(rows, equalities, predicted, config):
     worst = max((e["max_relative_difference"] for e in equalities), default=float("inf"))
     out.append(("MSD (13) = PRT (8) and MSD (12) = PRT (10) at the same orders and rays (max |dB| / max |B| <= 1e-6)",
                 worst <= 1e-6 and bool(equalities), "worst %.2g over %d comparisons" % (worst, len(equalities))))
+    index = {(r["scene"], r["hdri"], r["material"], r["method"], r["s"], r["s_v"], r["rays"]): r
+             for r in rows if r["reference"] == "monte_carlo"}
     for msd, prt in (("msd_visibility", "prt_matrix"), ("msd_lobe", "prt_gaunt")):
-        pairs = [(row, _cases(rows, method=prt, s=row["s"], s_v=row["s_v"], rays=row["rays"]).get(key))
+        pairs = [(row, index.get(key[:3] + (prt, row["s"], row["s_v"], row["rays"])))
                  for key, row in ((k, r) for s, sv in config["designs"]
                                   for k, r in _cases(rows, method=msd, s=s, s_v=sv, rays=full).items())]
         bad = [a["scene"] for a, b in pairs if b is None or abs(a["rel_rms"] - b["rel_rms"]) > 1e-4 * b["rel_rms"] + 1e-9]
@@ -854,7 +856,8 @@ def main():
     seconds = time.perf_counter() - start
     report = {
         "issue": 11, "quick": quick, "wall_seconds": seconds, "blender": bpy.app.version_string,
-        "gpu": renderer, "cpu_threads": os.cpu_count(), "config": {k: v for k, v in config.items()},
+        "gpu": renderer, "cpu_threads": os.cpu_count(),
+        "config": {k: ({"%d,%d" % d: v for d, v in v.items()} if k == "design_scenes" else v) for k, v in config.items()},
         "hdris": hdri_names, "vertices": vertex_counts, "mix": {"weights": [MIX[0], MIX[2]], "lobes": [MIX[1], MIX[3]]},
         "recommended": RECOMMENDED, "rows": rows, "gpu_rows": gpu_rows, "bakes": costs["bakes"],
         "equalities": costs["equalities"], "predictions": costs["predictions"], "cost_model": model,

@@ -63,6 +63,8 @@ TESTS = [
     ("test_ringing", GPU, 300, [], [], (3, 4, 0)),
     # GPU: the binary runs under Xvfb, with a window, so it has an undo stack to test
     ("test_robustness", GPU, 300, [], [], (3, 4, 0)),
+    # GPU: the shading is checked per vertex; under Xvfb the binary also has an undo stack
+    ("test_live_rebake", GPU, 300, [], [], (3, 4, 0)),
     ("test_viewport", WINDOW, 600, ["--enable-event-simulate"], [], (3, 4, 0)),
 ]
 

@@ -110,7 +110,10 @@ def registration_state():
             "panel": hasattr(bpy.types, "SD_PT_lighting"),
             "bake_operator": operator_exists("bake"),
             "preview_operator": operator_exists("render_preview"),
-            "load_post": len(bpy.app.handlers.load_post)}
+            "load_post": len(bpy.app.handlers.load_post),
+            # the live re-bake's, while a scene has it on
+            "handlers": {name: len(getattr(bpy.app.handlers, name))
+                         for name in ("depsgraph_update_post", "undo_post", "redo_post")}}
 
 
 class Checks:

@@ -19,6 +19,7 @@ A bake runs in three steps:
    cancelled or failed bake leaves the file as it was.
 """
 
+import hashlib
 import threading
 import time
 import uuid
@@ -141,6 +142,24 @@ class BakeTask:
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
         self.result = None
+        self._inputs = None
+
+    def inputs_hash(self):
+        """A digest of everything the bake's result depends on: the geometry (as baked and as
+        stored in the baked mesh) and sdnative.bake_transfer's arguments. Recorded as `inputs`: an
+        equal digest later means that baking again would give the same bake."""
+        if self._inputs is None:
+            digest = hashlib.blake2b(digest_size=16)
+            g = self.geometry
+            for value in (g.positions, g.loop_vertices, g.loop_starts, g.loop_totals, g.vertices,
+                          g.normals, g.triangles, g.material_slots, g.uvs):
+                digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
+            for key, value in sorted(self.bake_arguments().items()):
+                digest.update(key.encode())
+                digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
+                              else repr(value).encode())
+            self._inputs = digest.hexdigest()
+        return self._inputs
 
     def bake_arguments(self):
         s = self.settings
@@ -153,8 +172,14 @@ class BakeTask:
         return kwargs
 
 
+# The keys of a bake's settings (bake_settings), which `sd_bake` records with a summary of the result
+# (_result_summary) and the bake frame's "shape" (prepare).
+SETTINGS_KEYS = ("method", "lobe", "exponent", "light_order", "visibility_order", "rays", "seed",
+                 "environment")
+
+
 def bake_settings(scene, obj, env_source):
-    """The settings dict of a bake of `obj` under the scene's panel settings."""
+    """The settings dict of a bake of `obj` under the scene's panel settings (SETTINGS_KEYS)."""
     settings = scene.sd_lighting
     method = methods.get(settings.method)
     lobe, exponent = materials.lobe_for(obj, settings)
@@ -176,6 +201,18 @@ def bake_settings(scene, obj, env_source):
         "rays": int(settings.rays), "seed": int(settings.seed),
         "environment": env_source.description,
     }
+
+
+def recorded_settings(scene, obj, env_source):
+    """The settings dict the object's bake recorded (a re-bake uses them, not the panel's);
+    BakeError for an object without a bake."""
+    info = bake_info(obj)
+    if info is None:
+        raise BakeError("%s has no bake" % obj.name)
+    missing = [key for key in SETTINGS_KEYS if key not in info]
+    if missing:
+        raise BakeError("the bake of %s does not record %s: bake it again" % (obj.name, ", ".join(missing)))
+    return {key: info[key] for key in SETTINGS_KEYS}
 
 
 def _refusal(obj):
@@ -204,10 +241,12 @@ def _occluders(others, to_frame):
     return np.concatenate(verts), np.concatenate(tris).astype(np.int32)
 
 
-def prepare(context, objects):
+def prepare(context, objects, settings_of=bake_settings):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
-    BakeError when none is left or the bake cannot start (no sdnative, no environment)."""
+    BakeError when none is left or the bake cannot start (no sdnative, no environment).
+    settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
+    panel's; recorded_settings: those of its last bake)."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
@@ -241,7 +280,7 @@ def prepare(context, objects):
             skipped.append(reason)
             continue
         occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
-        settings = bake_settings(scene, obj, env_source)
+        settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
         tasks.append(BakeTask(obj.name, geometry, occluders, settings))
     if not tasks:
@@ -385,6 +424,7 @@ def _result_summary(task, floats):
         "floats_per_vertex": int(floats),
         "bytes_per_vertex": int(4 * floats),
         "bake_id": uuid.uuid4().hex,
+        "inputs": task.inputs_hash(),
     }
     offsets = result.get("design_offsets")
     if offsets is not None:

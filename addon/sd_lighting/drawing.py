@@ -187,7 +187,8 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, w
         data.draw(block, texture)
 
 
-def _tag_viewports():
+def tag_viewports():
+    """Redraws every 3D viewport (and its sidebar)."""
     import bpy
     for window in bpy.context.window_manager.windows:
         for area in window.screen.areas:
@@ -208,7 +209,7 @@ def _poll_background():
     generations = tuple(w.generation for w in work)
     if generations != _generations:
         _generations = generations
-        _tag_viewports()
+        tag_viewports()
     return 0.25 if any(w.pending() for w in work) else None
 
 

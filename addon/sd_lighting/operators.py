@@ -3,7 +3,7 @@
 import bpy
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
-from . import baking, drawing, prediction, preview
+from . import baking, drawing, live_rebake, prediction, preview
 
 active_job = None     # the BakeJob running in the UI, for the panel and poll()
 
@@ -45,6 +45,7 @@ class SD_OT_bake(bpy.types.Operator):
 
     def _prepare(self, context):
         prediction.stop_sampling()
+        live_rebake.stop()   # this bake's result replaces what a running re-bake would give
         try:
             return baking.BakeJob(*baking.prepare(context, context.selected_objects))
         except baking.BakeError as exc:
@@ -152,16 +153,19 @@ class SD_OT_bake(bpy.types.Operator):
 
 
 class SD_OT_cancel_bake(bpy.types.Operator):
-    """Cancel the running bake"""
+    """Cancel the running bake, or the running live re-bake (its object keeps its bake)"""
     bl_idname = "sd_lighting.cancel_bake"
     bl_label = "Cancel Bake"
 
     @classmethod
     def poll(cls, context):
-        return active_job is not None
+        return active_job is not None or live_rebake.running() is not None
 
     def execute(self, context):
-        active_job.cancel()
+        if active_job is not None:
+            active_job.cancel()
+        else:
+            live_rebake.cancel()
         return {'FINISHED'}
 
 

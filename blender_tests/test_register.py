@@ -61,7 +61,11 @@ def main():
         checks.check(not bpy.app.timers.is_registered(live._tick) and not live.pending(),
                      "live re-bake timer and changes removed (cycle %d)" % cycle)
         addon_utils.enable("sd_lighting")
-        # the scene still has Live Re-bake on: registering installs its handlers again
+        # The scene still has Live Re-bake on: its handlers come back at the first timer (bpy.data
+        # is not readable while an add-on registers).
+        checks.check(bpy.app.timers.is_registered(live.sync) and
+                     sdtest.registration_state() == on, "registered; Live Re-bake waits for a timer")
+        live.sync()
         again = sdtest.registration_state()
         checks.check(again == dict(on, handlers=handlers), "registers again (cycle %d)" % cycle,
                      str(again))

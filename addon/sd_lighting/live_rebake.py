@@ -246,14 +246,14 @@ def _remove(join_seconds):
 
 
 def register():
-    try:
-        sync()
-    except AttributeError:   # bpy.data is not readable while Blender starts: load_post syncs
-        pass
+    # bpy.data is not readable while an add-on registers: the first timer (or load_post) syncs
+    bpy.app.timers.register(sync, first_interval=0.0)
 
 
 def unregister():
     global message, last_seconds
+    if bpy.app.timers.is_registered(sync):
+        bpy.app.timers.unregister(sync)
     for name, handler in HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
         if handler in handlers:

@@ -8,8 +8,9 @@ A bake runs in three steps:
    transforms.bake_frame), the lobe, the orders s and s' and what the method needs. Nothing in
    the .blend changes.
 2. `BakeJob.run` (a worker thread in the UI, or the caller's thread): sdnative.bake_transfer for
-   each object, with progress and cancellation; it only reads the arrays of step 1 (bpy is never
-   touched off the main thread), and the native bake releases the GIL.
+   each object, with progress and cancellation; it only reads the arrays of step 1 and computes
+   what follows from them (the corner split: Geometry), bpy is never touched off the main
+   thread, and the native bake releases the GIL.
 3. `BakeJob.apply` (main thread, only after every object baked): for each object a new mesh
    datablock "SD <object>", a copy of the evaluated geometry carrying the results as `sd_`
    attributes (attributes.py), with a fake user so it persists; the object links it in the custom
@@ -19,6 +20,7 @@ A bake runs in three steps:
    cancelled or failed bake leaves the file as it was.
 """
 
+import functools
 import hashlib
 import threading
 import time
@@ -65,31 +67,67 @@ class Geometry:
     def __init__(self, mesh, shape, uv_map=None):
         """mesh: a temporary mesh (Object.to_mesh()), which this scales by K; uv_map: the name of
         the UV layer an albedo texture is read through ("" for the active render layer), or None."""
-        positions = attributes.read_positions(mesh)
-        loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
-        mesh.loops.foreach_get('vertex_index', loop_vertices)
+        self._local_positions = attributes.read_positions(mesh)
+        self._loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
+        mesh.loops.foreach_get('vertex_index', self._loop_vertices)
         self.loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_start', self.loop_starts)
         self.loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_total', self.loop_totals)
-        loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
-        loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
+        self._loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
+        self._loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
         # The scale applied as Object > Apply > Scale does (normals recomputed from the scaled
         # faces); a mirror's normals and triangles turned outside out (the bake reads their winding).
         matrix = np.eye(4)
         matrix[:3, :3] = shape
         mesh.transform([list(row) for row in matrix])
-        mirrored = np.linalg.det(shape) < 0
+        self._mirrored = bool(np.linalg.det(shape) < 0)
         normals = compat.corner_normals(mesh).astype(np.float64)
-        split = corners.split(loop_vertices, -normals if mirrored else normals, loop_slots, loop_uvs)
-        self.positions = positions[split.origin]
-        self.loop_vertices = split.loop_vertex
-        self.vertices = attributes.read_positions(mesh).astype(np.float64)[split.origin]
-        self.normals = _unit_or_zero(split.normal_sums)
-        triangle_loops = attributes.read_triangle_loops(mesh)
-        self.triangles = split.loop_vertex[triangle_loops[:, ::-1] if mirrored else triangle_loops]
-        self.material_slots = None if loop_slots is None else corners.vertex_values(split, loop_slots)
-        self.uvs = None if loop_uvs is None else corners.vertex_values(split, loop_uvs)
+        self._corner_normals = -normals if self._mirrored else normals
+        self._scaled_positions = attributes.read_positions(mesh).astype(np.float64)
+        self._triangle_loops = attributes.read_triangle_loops(mesh)
+        self.triangle_count = len(self._triangle_loops)
+
+    def inputs(self):
+        """What was read from the mesh: everything the other arrays are computed from."""
+        return (self._local_positions, self._loop_vertices, self.loop_starts, self.loop_totals,
+                self._loop_slots, self._loop_uvs, np.array(self._mirrored), self._corner_normals,
+                self._scaled_positions, self._triangle_loops)
+
+    # The split and what follows from it are computed when first read - for a bake from the UI in
+    # its worker thread (BakeJob.run), not on the main thread - and kept.
+    @functools.cached_property
+    def _split(self):
+        return corners.split(self._loop_vertices, self._corner_normals, self._loop_slots, self._loop_uvs)
+
+    @functools.cached_property
+    def positions(self):
+        return self._local_positions[self._split.origin]
+
+    @property
+    def loop_vertices(self):
+        return self._split.loop_vertex
+
+    @functools.cached_property
+    def vertices(self):
+        return self._scaled_positions[self._split.origin]
+
+    @functools.cached_property
+    def normals(self):
+        return _unit_or_zero(self._split.normal_sums)
+
+    @functools.cached_property
+    def triangles(self):
+        loops = self._triangle_loops
+        return self._split.loop_vertex[loops[:, ::-1] if self._mirrored else loops]
+
+    @functools.cached_property
+    def material_slots(self):
+        return None if self._loop_slots is None else corners.vertex_values(self._split, self._loop_slots)
+
+    @functools.cached_property
+    def uvs(self):
+        return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
@@ -145,14 +183,12 @@ class BakeTask:
         self._inputs = None
 
     def inputs_hash(self):
-        """A digest of everything the bake's result depends on: the geometry (as baked and as
-        stored in the baked mesh) and sdnative.bake_transfer's arguments. Recorded as `inputs`: an
-        equal digest later means that baking again would give the same bake."""
+        """A digest of everything the bake's result depends on: the arrays read from the mesh
+        (Geometry.inputs) and sdnative.bake_transfer's arguments. Recorded as `inputs`: an equal
+        digest later means that baking again would give the same bake."""
         if self._inputs is None:
             digest = hashlib.blake2b(digest_size=16)
-            g = self.geometry
-            for value in (g.positions, g.loop_vertices, g.loop_starts, g.loop_totals, g.vertices,
-                          g.normals, g.triangles, g.material_slots, g.uvs):
+            for value in self.geometry.inputs():
                 digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
             for key, value in sorted(self.bake_arguments().items()):
                 digest.update(key.encode())
@@ -274,7 +310,7 @@ def prepare(context, objects, settings_of=bake_settings):
                 reason = "%s has a zero scale" % obj.name
         if reason is None:
             geometry = _evaluated_arrays(obj, depsgraph, shape)
-            if geometry is None or len(geometry.triangles) == 0:
+            if geometry is None or geometry.triangle_count == 0:
                 reason = "%s has no faces" % obj.name
         if reason is not None:
             skipped.append(reason)

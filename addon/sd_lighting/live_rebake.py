@@ -30,7 +30,6 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import baking, drawing
-from .utils.bake_data import BAKE
 from .utils.rebake_schedule import Scheduler
 
 log = logging.getLogger(__name__)
@@ -39,8 +38,8 @@ DELAY = 0.25          # seconds after an object's last change before its re-bake
 MESSAGE_SECONDS = 5.0  # how long the status bar shows a re-bake's outcome
 
 _scheduler = Scheduler(DELAY)
+_bake_from_panel = None   # the BakeJob of a modal bake: no re-bake starts while it runs
 message = ""          # the last re-bake's outcome, for the panel and the tests
-last_seconds = None   # how long the last completed re-bake took (prepare to apply)
 
 
 def enabled(scene):
@@ -162,7 +161,6 @@ def _show_progress():
 
 def _finish(name, job):
     """Applies a re-bake that ended, or reports why it did not."""
-    global last_seconds
     if job.cancelled:
         _report("re-bake of %s cancelled; its previous bake stays" % name, logging.WARNING)
         return
@@ -180,17 +178,15 @@ def _finish(name, job):
         return
     drawing.clear_cache()
     drawing.tag_viewports()
-    last_seconds = time.perf_counter() - job.started
-    info = baking.bake_info(obj)
-    _report("re-baked %s (%d vertices) in %.2f s" % (name, info["vertices"], last_seconds))
+    _report("re-baked %s (%d vertices) in %.2f s" % (
+        name, baking.bake_info(obj)["vertices"], time.perf_counter() - job.started))
 
 
 def _tick():
     """The timer: acts on the state machine until it says to wait; None (the timer ends) once
     there is nothing left to do."""
-    from . import operators   # operators imports this module
-    if operators.active_job is not None:
-        return 0.5            # a bake from the panel has the cores; its objects get its result
+    if _bake_from_panel is not None and not _bake_from_panel.finished:
+        return 0.5            # it has the cores; its objects get its result
     while True:
         action = _scheduler.poll(time.monotonic())
         if action is None:
@@ -210,6 +206,13 @@ def _tick():
 
 # --------------------------------------------------------------------------------------------
 # Control
+
+def wait_for(job):
+    """A bake from the panel started in the background (after `stop`): no re-bake starts until
+    `job` has finished."""
+    global _bake_from_panel
+    _bake_from_panel = job
+
 
 def cancel():
     """The user's cancel: stops the running re-bake (reported when it ends), forgets the rest."""
@@ -251,7 +254,7 @@ def register():
 
 
 def unregister():
-    global message, last_seconds
+    global message, _bake_from_panel
     if bpy.app.timers.is_registered(sync):
         bpy.app.timers.unregister(sync)
     for name, handler in HANDLERS:
@@ -259,4 +262,4 @@ def unregister():
         if handler in handlers:
             handlers.remove(handler)
     _remove(join_seconds=5.0)
-    message, last_seconds = "", None
+    message, _bake_from_panel = "", None

@@ -104,6 +104,7 @@ class SD_OT_bake(bpy.types.Operator):
         wm = context.window_manager
         self._job = job
         active_job = job
+        live_rebake.wait_for(job)
         job.start()
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)

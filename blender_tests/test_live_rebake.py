@@ -8,8 +8,9 @@ is the evaluated geometry (vertex count, positions), that the live shading of ea
 each vertex drawn as a pixel) equals sdnative.shade's of the bake, and that a re-bake equals a
 fresh bake of the same geometry. Re-bakes that must be caught running use a held sdnative whose
 bake waits until it is let go (or cancelled). Undo: Blender's own (memfile) undo where it has an
-undo stack (the binary under Xvfb), and everywhere the undo_post handler after the geometry was
-put back without its bake, as an undo to a step before a re-bake does.
+undo stack (the binary under Xvfb, the 5.0 module), in object mode (memfile undo) and in edit
+mode, and everywhere the undo_post handler after the geometry was put back without its bake, as
+an undo to a step before a re-bake does.
 Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/test_live_rebake.py -- --zip Z
 """
 
@@ -38,6 +39,7 @@ class HeldNative:
         self.release = threading.Event()
         self.failure = None
         self.calls = 0
+        self.ignore_cancel = False   # as a bake that ends just when it is cancelled
 
     def __getattr__(self, name):
         return getattr(self._sd, name)
@@ -45,10 +47,12 @@ class HeldNative:
     def bake_transfer(self, *args, progress=None, **kwargs):
         self.calls += 1
         while not self.release.wait(0.01):
-            if not progress(0, 1):
+            if not progress(0, 1) and not self.ignore_cancel:
                 raise self._sd.BakeCancelled("cancelled")
         if self.failure:
             raise RuntimeError(self.failure)
+        if self.ignore_cancel:
+            progress = lambda done, total: True  # noqa: E731
         return self._sd.bake_transfer(*args, progress=progress, **kwargs)
 
 
@@ -191,6 +195,34 @@ def check_superseded(c, held):
     held.release.clear()
 
 
+def check_superseded_result_dropped(c, held):
+    """A re-bake that ends with a result just as a newer change comes is not applied."""
+    modifier = c.ball.modifiers["Subdivision"]
+    before = c.baked_count()
+    held.ignore_cancel = True
+    modifier.levels = 2
+    c.run_timer(until=lambda: c.live.running() is not None)
+    _, job = c.live.running()
+    modifier.levels = 1
+    bpy.context.view_layer.update()
+    held.release.set()
+    counts, messages = set(), set()
+
+    def watch():
+        counts.add(c.baked_count())
+        messages.add(c.live.message)
+        return False
+    c.run_timer(until=watch)
+    n = len(c.evaluated_positions())
+    c.checks.check(job.finished and not job.cancelled and counts <= {before, n} and c.baked_count() == n,
+                   "a superseded re-bake's result is dropped, the newest state's applied",
+                   "baked vertex counts seen %s, then %d" % (sorted(counts), n))
+    c.checks.check(not any("cancelled" in m for m in messages), "a superseded re-bake is not reported as cancelled")
+    c.consistent("after a dropped result")
+    held.ignore_cancel = False
+    held.release.clear()
+
+
 def check_cancel_and_failure(c, held):
     modifier = c.ball.modifiers["Subdivision"]
     kept = sdtest.snapshot()
@@ -205,7 +237,7 @@ def check_cancel_and_failure(c, held):
 
     held.failure = "simulated failure"
     held.release.set()
-    modifier.levels = 1
+    modifier.levels = 3
     c.run_timer()
     c.checks.check(sdtest.snapshot() == kept and "failed" in c.live.message and "simulated" in c.live.message,
                    "a failed re-bake changes nothing and says why", c.live.message)
@@ -261,6 +293,26 @@ def check_blender_undo(c):
                    "redo brings the change back (without its re-bake), which is re-baked")
     c.consistent("after redo")
 
+    # Edit mode: its undo restores the edit mesh alone; the restored geometry is re-baked.
+    bpy.ops.object.mode_set(mode='EDIT')
+    c.run_timer()
+    ed("undo_push", message="edit mode")
+    step, original = c.bake_id(), c.evaluated_positions()
+    bm = bmesh.from_edit_mesh(c.ball.data)
+    for vertex in bm.verts:
+        vertex.co.z += 0.2 if vertex.co.z > 0.5 else 0.0
+    bmesh.update_edit_mesh(c.ball.data)
+    ed("undo_push", message="move")
+    c.run_timer()
+    moved = c.bake_id()
+    ed("undo")
+    c.run_timer()
+    c.checks.check(moved != step and c.bake_id() not in (step, moved) and
+                   np.allclose(c.evaluated_positions(), original),
+                   "undo in edit mode restores the edit mesh, which is re-baked")
+    c.consistent("after undo in edit mode")
+    bpy.ops.object.mode_set(mode='OBJECT')
+
 
 def main():
     checks = sdtest.Checks("test_live_rebake")
@@ -287,6 +339,7 @@ def main():
     package.native._module = held
     try:
         check_superseded(c, held)
+        check_superseded_result_dropped(c, held)
         check_cancel_and_failure(c, held)
     finally:
         package.native._module = held._sd

@@ -295,11 +295,17 @@ def prepare(context, objects, settings_of=bake_settings):
     except environment.Unavailable as exc:
         raise BakeError(str(exc)) from exc
 
-    visible = []
-    for other in scene.objects:
-        tris = world_triangles(other, depsgraph, view_layer)
-        if tris is not None:
-            visible.append((other, tris))
+    # The other objects' world triangles, each read when first needed: an object baked alone (a
+    # live re-bake) never reads its own.
+    triangles = {}
+
+    def occluders_of(obj):
+        for other in scene.objects:
+            if other != obj:
+                if other.name_full not in triangles:
+                    triangles[other.name_full] = world_triangles(other, depsgraph, view_layer)
+                if triangles[other.name_full] is not None:
+                    yield triangles[other.name_full]
 
     tasks, skipped = [], []
     for obj in objects:
@@ -315,7 +321,7 @@ def prepare(context, objects, settings_of=bake_settings):
         if reason is not None:
             skipped.append(reason)
             continue
-        occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
+        occluders = _occluders(occluders_of(obj), to_frame)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
         tasks.append(BakeTask(obj.name, geometry, occluders, settings))

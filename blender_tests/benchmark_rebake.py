@@ -6,7 +6,8 @@ on, one of its vertices is moved in edit mode (bmesh) and the add-on's timer is 
 runs it (a script holds the event loop) until the re-bake is applied. Printed per method:
 - total: from the edit to the new bake in place, less the debounce delay (live_rebake.DELAY);
 - main thread: the time Blender is busy in the timer (the re-bake's prepare: evaluated mesh,
-  occluders, digest; and its apply: the new baked mesh), i.e. how long the UI freezes;
+  occluders, digest; and its apply: the new baked mesh), in all and in its longest call (the
+  longest the UI freezes);
 - worker: sdnative.bake_transfer in the worker thread.
 Then the cancel latency: a re-bake is started, and 0.3 s later the mesh is edited again; printed is
 the time from that edit until the running (superseded) bake has stopped.
@@ -43,16 +44,17 @@ def options():
 
 
 def run_timer(live, until=None):
-    """Runs the add-on's timer until it ends (or until() holds); returns the seconds spent in it."""
-    busy = 0.0
+    """Runs the add-on's timer until it ends (or until() holds); returns the seconds spent in it
+    in all and in its longest call."""
+    calls = [0.0]
     while until is None or not until():
         start = time.perf_counter()
         interval = live._tick()
-        busy += time.perf_counter() - start
+        calls.append(time.perf_counter() - start)
         if interval is None:
             break
         time.sleep(min(interval, 0.01))
-    return busy
+    return sum(calls), max(calls)
 
 
 def edit(obj, offset):
@@ -92,13 +94,13 @@ def main():
         run_timer(live)                       # entering edit mode changes nothing to bake
         first = package.baking.bake_info(suzanne)["bake_id"]
         changed = edit(suzanne, 0.05)
-        busy = run_timer(live)
+        busy, longest = run_timer(live)
         total = time.perf_counter() - changed - live.DELAY
         info = package.baking.bake_info(suzanne)
         assert info["bake_id"] != first, live.message
-        print("%-28s %6d vertices: bake %.2f s; re-bake total %.2f s, main thread %.2f s, worker %.2f s"
-              % (package.utils.methods.get(method).label, info["vertices"], bake, total, busy,
-                 info["seconds"]), flush=True)
+        print("%-28s %6d vertices: bake %.2f s; re-bake total %.2f s, main thread %.2f s (longest "
+              "call %.2f s), worker %.2f s" % (package.utils.methods.get(method).label, info["vertices"],
+                                                bake, total, busy, longest, info["seconds"]), flush=True)
 
     edit(suzanne, 0.05)
     run_timer(live, until=lambda: live.running() is not None and live.running()[1].fraction > 0.0)

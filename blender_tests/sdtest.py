@@ -116,6 +116,25 @@ def registration_state():
                          for name in ("depsgraph_update_post", "undo_post", "redo_post")}}
 
 
+class LayoutStub:
+    """Accepts any layout call, to run a panel's draw() without a visible sidebar; `texts` collects
+    the text= of every call (labels, operator buttons)."""
+
+    def __init__(self, texts=None):
+        object.__setattr__(self, "texts", [] if texts is None else texts)
+
+    def __getattr__(self, name):
+        return LayoutStub(self.texts)
+
+    def __call__(self, *args, **kwargs):
+        if "text" in kwargs:
+            self.texts.append(kwargs["text"])
+        return LayoutStub(self.texts)
+
+    def __setattr__(self, name, value):
+        pass
+
+
 class Checks:
     """Collects named checks; `summary()` prints one line and returns the exit code."""
 

@@ -89,6 +89,12 @@ class Context:
             time.sleep(min(interval, 0.05))
         return False
 
+    def panel_texts(self):
+        """The texts the panel draws now."""
+        panel = sdtest.LayoutStub()
+        bpy.types.SD_PT_lighting.draw(panel, bpy.context)
+        return panel.texts
+
     def evaluated_positions(self):
         """The object's evaluated vertex positions (edit mode: the edit mesh with its modifiers)."""
         depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -106,8 +112,7 @@ class Context:
         mesh = package.baking.baked_mesh(ball)
         data = package.attributes.read(mesh)
         n = len(mesh.vertices)
-        whole = (package.baking.bake_info(ball)["vertices"] == n and len(data["normals"]) == n and
-                 all(len(value) == n for key, value in data.items() if isinstance(value, np.ndarray)))
+        whole = package.baking.bake_info(ball)["vertices"] == n and len(data["normals"]) == n
         self.checks.check(whole, what + ": baked mesh and attributes agree", "%d vertices" % n)
         gpu = package.drawing.gpu_vertex_values(self.scene, ball, self.view)
         cpu = package.drawing.cpu_reference(self.scene, ball, self.view)
@@ -164,6 +169,8 @@ def check_modifier(c):
     c.checks.check(c.bake_id() != first and n == len(c.evaluated_positions()) and n > before,
                    "adding a modifier re-bakes the subdivided mesh", "%d vertices" % n)
     c.consistent("modifier added")
+    c.checks.check(c.live.message in c.panel_texts() and c.live.message.startswith("re-baked"),
+                   "the panel shows how long the last re-bake took", c.live.message)
 
 
 def check_superseded(c, held):
@@ -173,6 +180,9 @@ def check_superseded(c, held):
     modifier.levels = 2
     c.checks.check(c.run_timer(until=lambda: c.live.running() is not None), "a re-bake runs")
     _, job = c.live.running()
+    texts = c.panel_texts()
+    c.checks.check("Re-baking %s, 0 %%" % c.name in texts and "Cancel" in texts,
+                   "the panel shows the running re-bake, with Cancel")
     modifier.levels = 3
     bpy.context.view_layer.update()
     c.checks.check(job.cancel_requested, "a newer change cancels the running re-bake")
@@ -314,6 +324,29 @@ def check_blender_undo(c):
     bpy.ops.object.mode_set(mode='OBJECT')
 
 
+def check_slow_method(c):
+    """MSD (13) re-bakes as it bakes (a design per vertex): the panel says so."""
+    c.ball.modifiers.remove(c.ball.modifiers["Subdivision"])
+    sdtest.bake_settings(c.scene, "msd_visibility", "LAMBERT", 2, 2, rays=64, select=[c.ball])
+    c.checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake MSD (13)")
+    c.checks.check(any("builds a design per vertex" in text for text in c.panel_texts()),
+                   "the panel says that MSD (13) re-bakes slowly")
+    first = c.bake_id()
+    c.ball.location.x += 0.5        # a move is no change of geometry
+    bpy.context.view_layer.update()
+    c.checks.check(not c.live.pending(), "moving the object is no change to re-bake")
+    bpy.ops.object.mode_set(mode='EDIT')
+    bm = bmesh.from_edit_mesh(c.ball.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[0].co.z += 0.3
+    bmesh.update_edit_mesh(c.ball.data)
+    c.run_timer()
+    c.checks.check(c.bake_id() != first and c.package.baking.bake_info(c.ball)["method"] == "msd_visibility",
+                   "an MSD (13) bake re-bakes with its own method", c.live.message)
+    c.consistent("MSD (13) re-baked")
+    bpy.ops.object.mode_set(mode='OBJECT')
+
+
 def main():
     checks = sdtest.Checks("test_live_rebake")
     args = sdtest.arguments()
@@ -345,6 +378,7 @@ def main():
         package.native._module = held._sd
     check_undo_handler(c)
     check_blender_undo(c)
+    check_slow_method(c)
     return checks.summary()
 
 

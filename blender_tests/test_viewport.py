@@ -39,19 +39,6 @@ def boundary_vertices(triangles, count):
     return out
 
 
-class Stub:
-    """Accepts any layout call (to run the panel's draw() without a visible sidebar)."""
-
-    def __getattr__(self, name):
-        return Stub()
-
-    def __call__(self, *args, **kwargs):
-        return Stub()
-
-    def __setattr__(self, name, value):
-        pass
-
-
 class Test:
     def __init__(self):
         self.checks = sdtest.Checks("test_viewport")
@@ -146,7 +133,7 @@ class Test:
                      "%s cancels a modal bake and nothing changes" % how)
 
         # The panel draws without errors.
-        panel = Stub()
+        panel = sdtest.LayoutStub()
         try:
             with self.override():
                 bpy.types.SD_PT_lighting.draw(panel, bpy.context)

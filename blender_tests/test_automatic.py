@@ -10,7 +10,8 @@ measured at every vertex against sdnative.reference. Its diffuse material compil
 variant without the glossy path. An override of the object (method and s') is kept while the rest
 is still chosen. A cancel while the settings are being chosen stops within a second and leaves
 every bake as it was.
-Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
+Run (headless, GPU through a Workbench render):
+    blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
 """
 
 import os
@@ -104,6 +105,7 @@ def main():
     checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
                  "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
 
+    package.gpu_context.ensure()
     data = package.drawing.object_data(resting)
     checks.check(not data.variant.glossy and "SD_GLOSSY" not in data.variant.defines(
         package.native.get().sh_recurrence_constants), "a diffuse material compiles no glossy path")

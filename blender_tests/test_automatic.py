@@ -100,6 +100,11 @@ def main():
                  "both meet the target", "%.4f, %.4f" % (lone_info["predicted_error"],
                                                          resting_info["predicted_error"]))
 
+    checks.check(all(("Evaluation: per pixel" in info["automatic"]) == bool(info["per_pixel"])
+                     for info in (lone_info, resting_info)),
+                 "per-vertex or per-pixel evaluation chosen from the triangles' size on screen",
+                 "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
+
     measured = measured_error(package, scene, resting)
     ratio = measured / resting_info["predicted_error"]
     checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",

@@ -24,9 +24,11 @@ class Inputs:
     target_error: float
     max_order: int
     fixed: dict = field(default_factory=dict)   # the object's overrides (automatic.choose)
+    triangle_pixels: object = None   # its triangles' mean area on screen (None: no camera)
 
 
-def gather(scene, src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting):
+def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
+           triangle_pixels):
     """Inputs for an object: src an environment.Source, rotation g R, eye in the bake frame."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
@@ -41,7 +43,8 @@ def gather(scene, src, lobe, exponent, rotation, eye, target_error, max_order, f
         def light(order):   # the reference reads the map without the strength: so does this
             return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True)
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
-    return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed))
+    return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
+                  triangle_pixels)
 
 
 def choose(inputs, geometry, occluders, lobe, exponent, stop):

@@ -26,7 +26,7 @@ import uuid
 import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
-from .utils import corners, methods, transforms
+from .utils import automatic, corners, methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -154,10 +154,12 @@ class BakeTask:
         """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
                                  self.settings["lobe"], self.settings["exponent"], stop)
+        per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
+            per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
             method=choice.setting.method, light_order=choice.setting.light_order,
             visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
-            automatic="\n".join(choice.reasons), predicted_error=float(choice.error),
+            predicted_error=float(choice.error),
             frame_terms=int(choice.frame_terms))
 
     def bake_arguments(self):
@@ -201,19 +203,27 @@ def bake_settings(scene, obj, env_source):
                 rays=int(fixed.get("rays", settings.rays)))
 
 
-def _analysis_inputs(scene, obj, env_source, settings, to_frame):
+def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
     """What the automatic mode measures the object with (analysis.Inputs), in its bake frame."""
+    from .drawing import View   # drawing imports this module
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
-    eye = None
+    eye = triangle_pixels = None
     if scene.camera is not None:
         eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+        render = scene.render
+        width = render.resolution_x * render.resolution_percentage // 100
+        height = render.resolution_y * render.resolution_percentage // 100
+        view = View.from_camera(scene.camera, depsgraph, width, height, scene)
+        triangle_pixels = automatic.projected_triangle_pixels(
+            transforms.transform_points(matrix, geometry.positions), geometry.triangles,
+            view.view_projection, width, height)
     fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
     fixed.pop("method", None)
     panel = scene.sd_lighting
-    return analysis.gather(scene, env_source, settings["lobe"], settings["exponent"], rotation, eye,
+    return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
                            panel.target_error, panel.max_automatic_order, fixed,
-                           panel.ringing_window.lower())
+                           panel.ringing_window.lower(), triangle_pixels)
 
 
 def _refusal(obj):
@@ -281,7 +291,7 @@ def prepare(context, objects):
         occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
         settings = bake_settings(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        inputs = (_analysis_inputs(scene, obj, env_source, settings, to_frame)
+        inputs = (_analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
                   if settings["method"] == analysis.AUTOMATIC else None)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:

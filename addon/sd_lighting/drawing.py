@@ -174,13 +174,17 @@ def exposure_scale(scene):
 
 
 def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False):
-    """Draws the baked objects into the bound framebuffer with the current GPU state. wait=False
-    (the interactive draw) shades with no ringing window until it is chosen; True waits for it."""
+    """Draws the baked objects into the bound framebuffer with the current GPU state. per_pixel:
+    every object per pixel (the panel's Per Pixel), else those whose automatic choice says so.
+    wait=False (the interactive draw) shades with no ringing window until it is chosen; True
+    waits for it."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
     for obj in objects:
-        data = object_data(obj, per_pixel=per_pixel, band_limited_texture=band_limited_texture)
+        info = baking.bake_info(obj) or {}
+        data = object_data(obj, per_pixel=per_pixel or bool(info.get("per_pixel", False)),
+                           band_limited_texture=band_limited_texture)
         if data is None:
             continue
         block, texture = _frame(scene, obj, data, view, scale, wait, source, g, depth_bias=depth_bias)

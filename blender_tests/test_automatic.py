@@ -39,7 +39,7 @@ def measured_error(package, scene, obj):
     occluder_triangles = package.attributes.read_triangle_loops(ground.data)
     ground_loops = np.empty(len(ground.data.loops), dtype=np.int32)
     ground.data.loops.foreach_get("vertex_index", ground_loops)
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
     shaded = package.drawing.cpu_reference(scene, obj, view)
     env = package.environment.environment(package.environment.source(scene))
     reference, error = sd.reference(env, positions, data["normals"], loops[triangles], samples=4096,

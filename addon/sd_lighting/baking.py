@@ -26,6 +26,7 @@ import uuid
 import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
+from .view import View
 from .utils import automatic, corners, methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
@@ -205,7 +206,6 @@ def bake_settings(scene, obj, env_source):
 
 def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
     """What the automatic mode measures the object with (analysis.Inputs), in its bake frame."""
-    from .drawing import View   # drawing imports this module
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
     eye = triangle_pixels = None

@@ -7,7 +7,8 @@ resting on a ground plane, both white Diffuse BSDF, baked together with the defa
 method with visibility; so the two get different choices, each recorded with its reasons and
 predicted error. The resting sphere's predicted error is within a factor 2 of its bake's error
 measured at every vertex against sdnative.reference. Its diffuse material compiles a shader
-variant without the glossy path. An override of the object (method and s') is kept while the rest
+variant without the glossy path. Before a bake, the bake-time predictor measures a chosen
+method's error too (the panel's line). An override of the object (method and s') is kept while the rest
 is still chosen. A cancel while the settings are being chosen stops within a second and leaves
 every bake as it was.
 Run (headless, GPU through a Workbench render):
@@ -114,6 +115,18 @@ def main():
     data = package.drawing.object_data(resting)
     checks.check(not data.variant.glossy and "SD_GLOSSY" not in data.variant.defines(
         package.native.get().sh_recurrence_constants), "a diffuse material compiles no glossy path")
+
+    # Before a bake, the predictor measures the chosen method's error too, for the panel.
+    settings.method = "prt_diffuse"
+    sdtest.select_only([resting])
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    predicted = package.prediction.predicted_errors(bpy.context)
+    checks.check(predictor.finished and len(predicted) == 1 and predicted[0][0] == "Resting" and
+                 0.0 < predicted[0][2] < 0.2,
+                 "the panel's prediction measures a chosen method's error before the bake",
+                 str([(name, error) for name, _, error in predicted]))
+    settings.method = "automatic"
 
     # An override is kept per object; the rest is still chosen.
     resting.sd_lighting.use_method = True

@@ -136,13 +136,19 @@ def world_triangles(obj, depsgraph, view_layer):
 class BakeTask:
     """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
 
-    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs=None):
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs):
         self.object_name = obj_name
         self.geometry = geometry
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
-        self.analysis = analysis_inputs   # the automatic mode's analysis.Inputs, or None
+        self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
+        self.predicted_error = None   # of a chosen method's settings, once predicted
         self.result = None
+
+    @property
+    def automatic(self):
+        """Whether the automatic mode chooses its settings (choose(), before the bake)."""
+        return self.settings["method"] == analysis.AUTOMATIC
 
     def occluders(self):
         """bake_transfer's occluder keywords ({} without occluders)."""
@@ -162,6 +168,12 @@ class BakeTask:
             visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
             predicted_error=float(choice.error),
             frame_terms=int(choice.frame_terms))
+        self.predicted_error = float(choice.error)
+
+    def predict(self, stop):
+        """The predicted error of its settings (any thread; the bake-time predictor's)."""
+        self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
+                                                self.settings, stop)
 
     def bake_arguments(self):
         s = self.settings
@@ -205,7 +217,7 @@ def bake_settings(scene, obj, env_source):
 
 
 def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
-    """What the automatic mode measures the object with (analysis.Inputs), in its bake frame."""
+    """What the object's error is measured with (analysis.Inputs), in its bake frame."""
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
     eye = triangle_pixels = None
@@ -291,8 +303,7 @@ def prepare(context, objects):
         occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
         settings = bake_settings(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        inputs = (_analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
-                  if settings["method"] == analysis.AUTOMATIC else None)
+        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
@@ -361,7 +372,7 @@ class BakeJob:
                     return not self.cancel_requested
 
                 geometry = task.geometry
-                if task.analysis is not None:
+                if task.automatic:
                     self.choosing = True
                     task.choose(lambda: self.cancel_requested)
                     self.choosing = False

@@ -98,8 +98,11 @@ class SD_PT_lighting(bpy.types.Panel):
                 layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')
             elif prediction.settings_key(context) is not None:
                 layout.label(text="Predicting the bake time...", icon='TIME')
-            for name, chosen in prediction.automatic_choices(context):
-                _draw_choice(layout.box(), "Automatic for %s (before the bake)" % name, chosen)
+            for name, chosen, error in prediction.predicted_errors(context):
+                if "automatic" in chosen:
+                    _draw_choice(layout.box(), "Automatic for %s (before the bake)" % name, chosen)
+                else:
+                    layout.label(text="%s: predicted error %.1f %%" % (name, 100 * error), icon='INFO')
 
         # Live shading
         box = layout.box()

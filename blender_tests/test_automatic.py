@@ -127,6 +127,21 @@ def main():
                  "the panel's prediction measures a chosen method's error before the bake",
                  str([(name, error) for name, _, error in predicted]))
     settings.method = "automatic"
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    chosen = package.prediction.automatic_choices(bpy.context)["Resting"][0]["automatic"]
+    package.baking.clear(resting)
+    measure = package.analysis.choose
+
+    def measured_again(*args, **kwargs):
+        raise AssertionError("measured again")
+    package.analysis.choose = measured_again
+    try:
+        checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
+                     dict(resting["sd_bake"])["automatic"] == chosen,
+                     "a bake after the prediction takes over its choice (not measured again)")
+    finally:
+        package.analysis.choose = measure
 
     # An override is kept per object; the rest is still chosen.
     resting.sd_lighting.use_method = True

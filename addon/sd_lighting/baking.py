@@ -170,6 +170,12 @@ class BakeTask:
             frame_terms=int(choice.frame_terms))
         self.predicted_error = float(choice.error)
 
+    def adopt(self, settings, predicted_error):
+        """Takes over an automatic choice already made for this object (the prediction's), with
+        this bake's own shape."""
+        self.settings = dict(settings, shape=self.settings["shape"])
+        self.predicted_error = predicted_error
+
     def predict(self, stop):
         """The predicted error of its settings (any thread; the bake-time predictor's)."""
         self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),

@@ -124,6 +124,18 @@ def predicted_errors(context):
             for job in predictor.jobs if job.task.predicted_error is not None]
 
 
+def automatic_choices(context):
+    """{object name: (settings dict, predicted error)} of the automatic choices the prediction for
+    the panel's settings and selection has made, for the bake to take over (the
+    environment's rotation and the camera they were measured at may have changed since: what
+    they change is small next to a second measurement's seconds)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return {}
+    return {job.task.object_name: (dict(job.task.settings), job.task.predicted_error)
+            for job in predictor.jobs if "automatic" in job.task.settings}
+
+
 def _start_requested():
     global _requested
     import bpy

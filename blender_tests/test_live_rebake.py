@@ -131,7 +131,7 @@ class Context:
 
 def check_edit_mode(c):
     before = c.package.drawing.cpu_reference(c.scene, c.ball, c.view)
-    first = c.bake_id()
+    first, asked = c.bake_id(), recorded(c)
     bpy.ops.object.mode_set(mode='EDIT')
     bm = bmesh.from_edit_mesh(c.ball.data)
     moved = 0
@@ -146,6 +146,7 @@ def check_edit_mode(c):
     c.checks.check(c.run_timer() and c.bake_id() != first, "the timer re-bakes it",
                    c.live.message)
     after = c.consistent("edit mode: moved %d vertices" % moved)
+    c.checks.check(recorded(c) == asked, "the re-bake has the settings of the bake it replaces")
     changed = np.abs(after - before).max(axis=1) > 1e-3 * np.abs(before).max()
     c.checks.check(after.shape == before.shape and changed.sum() >= moved,
                    "the shading follows the edit", "%d of %d vertices shade differently"
@@ -347,6 +348,27 @@ def check_slow_method(c):
     bpy.ops.object.mode_set(mode='OBJECT')
 
 
+def recorded(c):
+    """What the object's bake was asked for (sd_bake without the result's summary)."""
+    return {key: value for key, value in c.package.baking.bake_info(c.ball).items()
+            if key not in c.package.baking.SUMMARY_KEYS and key != "shape"}
+
+
+def check_automatic(c):
+    """A bake of the automatic mode re-bakes with its choice (method, orders, rays, per-pixel
+    evaluation and the reasons), not by choosing again."""
+    sdtest.bake_settings(c.scene, "automatic", "LAMBERT", 2, 2, rays=64, select=[c.ball])
+    c.checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake with the automatic mode")
+    chosen, first = recorded(c), c.bake_id()
+    c.ball.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+    c.run_timer()
+    c.checks.check(c.bake_id() != first and recorded(c) == chosen and "automatic" in chosen and
+                   chosen["method"] != "automatic", "an automatic bake re-bakes with its choice",
+                   "%s, s = %d, s' = %d, %d rays" % (chosen["method"], chosen["light_order"],
+                                                   chosen["visibility_order"], chosen["rays"]))
+    c.consistent("automatic bake re-baked")
+
+
 def main():
     checks = sdtest.Checks("test_live_rebake")
     args = sdtest.arguments()
@@ -379,6 +401,7 @@ def main():
     check_undo_handler(c)
     check_blender_undo(c)
     check_slow_method(c)
+    check_automatic(c)
     return checks.summary()
 
 

@@ -33,8 +33,8 @@ def main():
                  package.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
                  "shaders are the zip's copy", package.gpu_shading.shader_directory())
     settings = bpy.context.scene.sd_lighting
-    checks.check(settings.method == "msd_visibility" and settings.visibility_order == 2,
-                 "default settings: MSD Theorem 2.2, s' = 2")
+    checks.check(settings.method == "automatic" and settings.visibility_order == 2,
+                 "default settings: the automatic mode, s' = 2 for a chosen method")
     drawing = package.drawing
     live = package.live_rebake
     checks.check(not settings.live_rebake and on["handlers"] == before["handlers"],

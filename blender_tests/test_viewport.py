@@ -85,7 +85,7 @@ class Test:
                 buffer = framebuffer.read_color(0, 0, region.width, region.height, 4, 0, 'FLOAT')
                 buffer.dimensions = region.width * region.height * 4
                 self.samples = np.array(buffer, dtype=np.float32).reshape(region.height, region.width, 4)
-                self.view = self.package.drawing.View.from_region(bpy.context.region_data)
+                self.view = self.package.view.View.from_region(bpy.context.region_data)
         return bpy.types.SpaceView3D.draw_handler_add(grab, (), 'WINDOW', 'POST_PIXEL')
 
     # -- the test, one step per timer tick

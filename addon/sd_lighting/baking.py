@@ -28,8 +28,9 @@ import uuid
 
 import numpy as np
 
-from . import attributes, compat, environment, materials, native
-from .utils import corners, methods, transforms
+from . import analysis, attributes, compat, environment, materials, native
+from .view import View
+from .utils import automatic, corners, methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -93,6 +94,17 @@ class Geometry:
         return (self._local_positions, self._loop_vertices, self.loop_starts, self.loop_totals,
                 self._loop_slots, self._loop_uvs, np.array(self._mirrored), self._corner_normals,
                 self._scaled_positions, self._triangle_loops)
+
+    @property
+    def mesh_positions(self):
+        """The mesh's own vertex positions in the local frame (before the split)."""
+        return self._local_positions
+
+    @property
+    def mesh_triangles(self):
+        """`triangles` over the mesh's own vertices: the same faces, without computing the split."""
+        loops = self._triangle_loops
+        return self._loop_vertices[loops[:, ::-1] if self._mirrored else loops]
 
     # The split and what follows from it are computed when first read - for a bake from the UI in
     # its worker thread (BakeJob.run), not on the main thread - and kept.
@@ -174,11 +186,13 @@ def world_triangles(obj, depsgraph, view_layer):
 class BakeTask:
     """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
 
-    def __init__(self, obj_name, geometry, occluders, settings):
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs):
         self.object_name = obj_name
         self.geometry = geometry
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
+        self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
+        self.predicted_error = None   # of a chosen method's settings, once predicted
         self.result = None
         self._inputs = None
 
@@ -197,32 +211,71 @@ class BakeTask:
             self._inputs = digest.hexdigest()
         return self._inputs
 
+    @property
+    def automatic(self):
+        """Whether the automatic mode chooses its settings (choose(), before the bake)."""
+        return self.settings["method"] == analysis.AUTOMATIC
+
+    def occluders(self):
+        """bake_transfer's occluder keywords ({} without occluders)."""
+        if self.occluder_vertices is None:
+            return {}
+        return {"occluder_vertices": self.occluder_vertices,
+                "occluder_triangles": self.occluder_triangles}
+
+    def choose(self, stop):
+        """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
+        choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
+                                 self.settings["lobe"], self.settings["exponent"], stop)
+        per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
+        self.settings.update(
+            per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
+            method=choice.setting.method, light_order=choice.setting.light_order,
+            visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
+            predicted_error=float(choice.error),
+            frame_terms=int(choice.frame_terms))
+        self.predicted_error = float(choice.error)
+
+    def adopt(self, settings, predicted_error):
+        """Takes over an automatic choice already made for this object (the prediction's), with
+        this bake's own shape."""
+        self.settings = dict(settings, shape=self.settings["shape"])
+        self.predicted_error = predicted_error
+
+    def predict(self, stop):
+        """The predicted error of its settings (any thread; the bake-time predictor's)."""
+        self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
+                                                self.settings, stop)
+
     def bake_arguments(self):
         s = self.settings
         method = methods.get(s["method"])
         kwargs = {"rays": int(s["rays"]), "seed": int(s["seed"])}
         kwargs.update(method.bake_arguments(int(s["light_order"]), int(s["visibility_order"])))
-        if self.occluder_vertices is not None:
-            kwargs["occluder_vertices"] = self.occluder_vertices
-            kwargs["occluder_triangles"] = self.occluder_triangles
+        kwargs.update(self.occluders())
         return kwargs
 
 
-# The keys of a bake's settings (bake_settings), which `sd_bake` records with a summary of the result
-# (_result_summary) and the bake frame's "shape" (prepare).
-SETTINGS_KEYS = ("method", "lobe", "exponent", "light_order", "visibility_order", "rays", "seed",
-                 "environment")
-
-
 def bake_settings(scene, obj, env_source):
-    """The settings dict of a bake of `obj` under the scene's panel settings (SETTINGS_KEYS)."""
+    """The settings dict of a bake of `obj` under the scene's panel settings and the object's
+    overrides (properties.ObjectOverrides). The automatic mode's dict says method "automatic":
+    the bake's worker fills in the choice (analysis.choose), with the lines saying why."""
     settings = scene.sd_lighting
-    method = methods.get(settings.method)
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    method_id = fixed.get("method", settings.method)
     lobe, exponent = materials.lobe_for(obj, settings)
+    common = {"lobe": lobe, "exponent": float(exponent), "seed": int(settings.seed),
+              "environment": env_source.description}
+    if method_id == analysis.AUTOMATIC:
+        return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
+                    rays=int(fixed.get("rays", settings.rays)))
+    method = methods.get(method_id)
     if method.lambert_only and lobe != "lambert":
         raise BakeError("%s needs a Lambert material; %s is Phong (sigma %.3g)"
                         % (method.label, obj.name, exponent))
-    if settings.automatic_orders:
+    if "light_order" in fixed:
+        order = fixed["light_order"]
+    elif settings.automatic_orders:
         try:
             order = environment.smallest_order(env_source, lobe, exponent, settings.target_error,
                                                settings.max_automatic_order)
@@ -230,25 +283,40 @@ def bake_settings(scene, obj, env_source):
             raise BakeError("cannot choose s automatically: %s" % exc) from exc
     else:
         order = settings.light_order
-    v_order = settings.visibility_order if method.uses_visibility_order else 0
-    return {
-        "method": method.id, "lobe": lobe, "exponent": float(exponent),
-        "light_order": int(order), "visibility_order": int(v_order),
-        "rays": int(settings.rays), "seed": int(settings.seed),
-        "environment": env_source.description,
-    }
+    v_order = fixed.get("visibility_order", settings.visibility_order) if method.uses_visibility_order else 0
+    return dict(common, method=method.id, light_order=int(order), visibility_order=int(v_order),
+                rays=int(fixed.get("rays", settings.rays)))
+
+
+def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
+    """What the object's error is measured with (analysis.Inputs), in its bake frame."""
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
+    eye = triangle_pixels = None
+    if scene.camera is not None:
+        eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+        render = scene.render
+        width = render.resolution_x * render.resolution_percentage // 100
+        height = render.resolution_y * render.resolution_percentage // 100
+        view = View.from_camera(scene.camera, depsgraph, width, height, scene)
+        triangle_pixels = automatic.projected_triangle_pixels(
+            transforms.transform_points(matrix, geometry.mesh_positions), geometry.mesh_triangles,
+            view.view_projection, width, height)
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    fixed.pop("method", None)
+    panel = scene.sd_lighting
+    return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
+                           panel.target_error, panel.max_automatic_order, fixed,
+                           panel.ringing_window.lower(), triangle_pixels)
 
 
 def recorded_settings(scene, obj, env_source):
-    """The settings dict the object's bake recorded (a re-bake uses them, not the panel's);
-    BakeError for an object without a bake."""
-    info = bake_info(obj)
-    if info is None:
+    """The settings the object's bake recorded - what it was asked for and, from the automatic
+    mode, what was chosen - for a re-bake (not the panel's); BakeError without a bake."""
+    mesh = baked_mesh(obj)
+    if mesh is None:
         raise BakeError("%s has no bake" % obj.name)
-    missing = [key for key in SETTINGS_KEYS if key not in info]
-    if missing:
-        raise BakeError("the bake of %s does not record %s: bake it again" % (obj.name, ", ".join(missing)))
-    return {key: info[key] for key in SETTINGS_KEYS}
+    return {key: value for key, value in mesh[BAKE].to_dict().items() if key not in SUMMARY_KEYS}
 
 
 def _refusal(obj):
@@ -324,7 +392,8 @@ def prepare(context, objects, settings_of=bake_settings):
         occluders = _occluders(occluders_of(obj), to_frame)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        tasks.append(BakeTask(obj.name, geometry, occluders, settings))
+        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
+        tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
                         "select one or more mesh objects to bake")
@@ -347,6 +416,7 @@ class BakeJob:
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
+        self.choosing = False         # the automatic mode is measuring the current object
         self.cancelled = False
         self.error = None             # message when the bake failed
         self.finished = False
@@ -370,8 +440,8 @@ class BakeJob:
         if not self.tasks:
             return ""
         task = self.tasks[min(self.current, len(self.tasks) - 1)]
-        return "SD Lighting: baking %s (%d/%d), %d %%  -  Esc to cancel" % (
-            task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
+        return "SD Lighting: %s %s (%d/%d), %d %%  -  Esc to cancel" % (
+            "choosing the settings of" if self.choosing else "baking", task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
             int(100 * self.fraction))
 
     # -- work
@@ -391,6 +461,10 @@ class BakeJob:
                     return not self.cancel_requested
 
                 geometry = task.geometry
+                if task.automatic:
+                    self.choosing = True
+                    task.choose(lambda: self.cancel_requested)
+                    self.choosing = False
                 t0 = time.perf_counter()
                 result = sd.bake_transfer(geometry.vertices, geometry.normals, geometry.triangles,
                                           progress=progress, **task.bake_arguments())
@@ -457,7 +531,14 @@ class BakeJob:
         return [obj.name for obj, _, _ in built]
 
 
+# The keys _result_summary adds to a bake's settings in `sd_bake`: what the bake found, not what it
+# was asked for.
+SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
+                "design_nodes_max", "design_nodes_mean")
+
+
 def _result_summary(task, floats):
+    """The summary of a task's result for `sd_bake` (SUMMARY_KEYS)."""
     result = task.result
     n = len(task.geometry.vertices)
     summary = {

@@ -44,13 +44,18 @@ class SD_OT_bake(bpy.types.Operator):
         return True
 
     def _prepare(self, context):
+        chosen = prediction.automatic_choices(context)
         prediction.stop_sampling()
         live_rebake.stop()   # this bake's result replaces what a running re-bake would give
         try:
-            return baking.BakeJob(*baking.prepare(context, context.selected_objects))
+            tasks, warnings = baking.prepare(context, context.selected_objects)
         except baking.BakeError as exc:
             self.report({'ERROR'}, "Bake: %s" % exc)
-        return None
+            return None
+        for task in tasks:   # what the prediction chose is not measured again
+            if task.automatic and task.object_name in chosen:
+                task.adopt(*chosen[task.object_name])
+        return baking.BakeJob(tasks, warnings)
 
     def _finish(self, context, job):
         if job.cancelled:

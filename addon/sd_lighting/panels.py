@@ -2,8 +2,8 @@
 
 import bpy
 
-from . import (baking, drawing, environment, gpu_shading, live_rebake, materials, native, operators,
-               prediction)
+from . import (analysis, baking, drawing, environment, gpu_shading, live_rebake, materials, native,
+               operators, prediction)
 from .utils import methods, ringing
 
 
@@ -43,17 +43,29 @@ class SD_PT_lighting(bpy.types.Panel):
         box.prop(scene.view_settings, "exposure")
         box.label(text="Live shading uses the Standard view transform", icon='INFO')
 
-        # Orders
+        # Method and orders
         box = layout.box()
-        box.label(text="SH Orders", icon='SPHERE')
-        box.prop(settings, "automatic_orders")
-        if settings.automatic_orders:
+        box.label(text="Method", icon='SPHERE')
+        box.prop(settings, "method", text="")
+        if settings.method == analysis.AUTOMATIC:
             row = box.row(align=True)
             row.prop(settings, "target_error")
             row.prop(settings, "max_automatic_order")
         else:
-            box.prop(settings, "light_order")
-        box.prop(settings, "visibility_order")
+            box.prop(settings, "automatic_orders")
+            if settings.automatic_orders:
+                row = box.row(align=True)
+                row.prop(settings, "target_error")
+                row.prop(settings, "max_automatic_order")
+            else:
+                box.prop(settings, "light_order")
+            box.prop(settings, "visibility_order")
+        row = box.row(align=True)
+        row.prop(settings, "rays")
+        row.prop(settings, "seed")
+        obj = context.active_object
+        if obj is not None and obj.type == 'MESH':
+            _draw_overrides(box, obj)
 
         # Material and method
         box = layout.box()
@@ -66,10 +78,6 @@ class SD_PT_lighting(bpy.types.Panel):
         if context.active_object is not None:
             for line in materials.albedo_summary(context.active_object):
                 box.label(text=line[:100])
-        box.prop(settings, "method", text="")
-        row = box.row(align=True)
-        row.prop(settings, "rays")
-        row.prop(settings, "seed")
 
         # Bake
         job = operators.active_job
@@ -90,6 +98,11 @@ class SD_PT_lighting(bpy.types.Panel):
                 layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')
             elif prediction.settings_key(context) is not None:
                 layout.label(text="Predicting the bake time...", icon='TIME')
+            for name, chosen, error in prediction.predicted_errors(context):
+                if "automatic" in chosen:
+                    _draw_choice(layout.box(), "Automatic for %s (before the bake)" % name, chosen)
+                else:
+                    layout.label(text="%s: predicted error %.1f %%" % (name, 100 * error), icon='INFO')
         layout.prop(settings, "live_rebake")
         rebake = live_rebake.running()
         if rebake is not None:
@@ -142,6 +155,8 @@ class SD_PT_lighting(bpy.types.Panel):
             col.label(text="Design nodes per vertex: %.1f mean, %d max" % (
                 info.get("design_nodes_mean", 0.0), info.get("design_nodes_max", 0)))
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
+        if "automatic" in info:
+            _draw_choice(box, "Automatic choice", info)
         if settings.live_rebake and method is not None and method.designs_per_vertex:
             col.label(text="%s builds a design per vertex: each live re-bake takes about as long"
                       % method.label, icon='ERROR')
@@ -151,6 +166,32 @@ class SD_PT_lighting(bpy.types.Panel):
             col.label(text="The image texture needs UVs the bake did not keep: bake again",
                       icon='ERROR')
         box.operator("sd_lighting.clear_bake", icon='X')
+
+
+def _draw_overrides(layout, obj):
+    """The active object's overrides: each ticked one replaces the scene's or automatic setting."""
+    overrides = obj.sd_lighting
+    col = layout.column(align=True)
+    col.label(text="Overrides for %s" % obj.name)
+    for name in ("method", "light_order", "visibility_order", "rays"):
+        row = col.row(align=True)
+        row.prop(overrides, "use_" + name, text="")
+        sub = row.row(align=True)
+        sub.enabled = getattr(overrides, "use_" + name)
+        sub.prop(overrides, name)
+
+
+def _draw_choice(layout, title, chosen):
+    """The automatic mode's choice (a bake's settings dict) with its reasons, one line each."""
+    method = methods.BY_ID.get(chosen.get("method"))
+    col = layout.column(align=True)
+    col.label(text="%s: %s, s = %d, s' = %d, %d rays" % (
+        title, method.label if method else chosen.get("method"), chosen.get("light_order", 0),
+        chosen.get("visibility_order", 0), chosen.get("rays", 0)), icon='AUTO')
+    col.label(text="Predicted error %.1f %%, %d frame terms per vertex" % (
+        100 * chosen.get("predicted_error", 0.0), chosen.get("frame_terms", 0)))
+    for line in str(chosen.get("automatic", "")).split("\n"):
+        col.label(text=line[:100])
 
 
 CLASSES = (SD_PT_lighting,)

@@ -21,10 +21,11 @@ _requested = None         # the key a timer will start, if any
 
 def settings_key(context):
     """What the bake's time depends on: the bake settings, the environment (automatic s) and the
-    selected meshes (names and sizes); None without a selected mesh."""
+    selected meshes (names, sizes and overrides); None without a selected mesh."""
     scene = context.scene
     settings = scene.sd_lighting
-    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers))
+    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers),
+                           tuple(sorted(o.sd_lighting.fixed().items())))
                           for o in context.selected_objects if o.type == 'MESH'))
     if not meshes:
         return None
@@ -37,19 +38,27 @@ def settings_key(context):
 
 def sample_jobs(tasks):
     """The sampling jobs of baking.prepare's tasks: each object's own mesh joins its occluders,
-    so that a sampled triangle's vertices see the rest of the object."""
-    jobs = []
-    for task in tasks:
+    so that a sampled triangle's vertices see the rest of the object. First, in the predictor's
+    worker, an automatic task chooses its settings (its reasons are then in task.settings) and
+    a chosen method's are measured: either way task.predicted_error, for the panel."""
+    def arguments(task, stop):
+        if task.automatic:
+            task.choose(stop)
+        else:
+            task.predict(stop)
         geometry = task.geometry
-        arguments = task.bake_arguments()
+        kwargs = task.bake_arguments()
         vertices, triangles = [geometry.vertices], [geometry.triangles]
-        if "occluder_vertices" in arguments:
-            vertices.append(arguments["occluder_vertices"])
-            triangles.append(arguments["occluder_triangles"] + len(geometry.vertices))
-        arguments["occluder_vertices"] = np.concatenate(vertices)
-        arguments["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
-        jobs.append(bake_time.SampleJob(geometry.vertices, geometry.normals, geometry.triangles, arguments))
-    return jobs
+        if "occluder_vertices" in kwargs:
+            vertices.append(kwargs["occluder_vertices"])
+            triangles.append(kwargs["occluder_triangles"] + len(geometry.vertices))
+        kwargs["occluder_vertices"] = np.concatenate(vertices)
+        kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
+        return kwargs
+
+    return [bake_time.SampleJob(task.geometry.vertices, task.geometry.normals, task.geometry.triangles,
+                                lambda stop, task=task: arguments(task, stop), task)
+            for task in tasks]
 
 
 def start(context):
@@ -103,6 +112,28 @@ def current(context):
     if _sampling(predictor) and not bpy.app.timers.is_registered(_redraw_while_sampling):
         bpy.app.timers.register(_redraw_while_sampling, first_interval=0.5)
     return predictor.prediction()
+
+
+def predicted_errors(context):
+    """[(object name, its task's settings dict, predicted error)] for the panel's selection, as
+    the predictor has measured them (empty before)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return []
+    return [(job.task.object_name, job.task.settings, job.task.predicted_error)
+            for job in predictor.jobs if job.task.predicted_error is not None]
+
+
+def automatic_choices(context):
+    """{object name: (settings dict, predicted error)} of the automatic choices the prediction for
+    the panel's settings and selection has made, for the bake to take over (the
+    environment's rotation and the camera they were measured at may have changed since: what
+    they change is small next to a second measurement's seconds)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return {}
+    return {job.task.object_name: (dict(job.task.settings), job.task.predicted_error)
+            for job in predictor.jobs if "automatic" in job.task.settings}
 
 
 def _start_requested():

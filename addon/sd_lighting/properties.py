@@ -9,7 +9,7 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        IntProperty, PointerProperty, StringProperty)
 
-from . import environment, live_rebake, native
+from . import analysis, environment, live_rebake, native
 from .utils import limits, methods, ringing
 
 log = logging.getLogger(__name__)
@@ -56,6 +56,30 @@ def _sync_live_rebake(self, context):
     live_rebake.sync()
 
 
+_AUTOMATIC_ITEM = [(analysis.AUTOMATIC, "Automatic",
+                    "Per object, the method, s, s' and rays of the lowest frame cost whose error, "
+                    "measured on sampled vertices before the bake, is within the target error")]
+
+
+class ObjectOverrides(bpy.types.PropertyGroup):
+    """An object's own bake settings, each used instead of the scene's (and of the automatic
+    choice) when its `use_` box is ticked; kept with the object."""
+    use_method: BoolProperty(name="Method", default=False)
+    method: EnumProperty(name="Method", items=methods.enum_items(), default='prt_diffuse')
+    use_light_order: BoolProperty(name="s", default=False)
+    light_order: IntProperty(name="s", default=4, min=0, **limits.maximum(LIMITS.light_order))
+    use_visibility_order: BoolProperty(name="s'", default=False)
+    visibility_order: IntProperty(name="s'", default=2, min=0,
+                                  **limits.maximum(LIMITS.visibility_order))
+    use_rays: BoolProperty(name="Rays", default=False)
+    rays: IntProperty(name="Rays", default=256, min=16, **limits.maximum(LIMITS.rays))
+
+    def fixed(self):
+        """The overridden settings: utils/accuracy.Setting field -> value."""
+        return {name: getattr(self, name) for name in
+                ("method", "light_order", "visibility_order", "rays") if getattr(self, "use_" + name)}
+
+
 class SceneSettings(bpy.types.PropertyGroup):
     environment_source: EnumProperty(
         name="Environment",
@@ -75,10 +99,13 @@ class SceneSettings(bpy.types.PropertyGroup):
 
     automatic_orders: BoolProperty(
         name="Automatic s", default=True,
-        description="Choose the environment's SH order s from the lobe-filtered truncation error")
+        description="For a chosen method, choose the environment's SH order s from the "
+                    "lobe-filtered truncation error")
     target_error: FloatProperty(
-        name="Target error", default=0.05, min=0.001, max=1.0, subtype='FACTOR',
-        description="Relative RMS error of the lobe-filtered environment that automatic s aims for")
+        name="Target error", default=0.02, min=0.001, max=1.0, subtype='FACTOR',
+        description="Relative RMS error to aim for: of B against the reference of eq. (1), "
+                    "measured on sampled vertices (Automatic method); of the lobe-filtered "
+                    "environment (Automatic s of a chosen method)")
     max_automatic_order: IntProperty(
         name="Max s", default=8, min=1, **limits.maximum(LIMITS.light_order),
         description="Largest order automatic s may choose")
@@ -100,7 +127,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Sigma", default=8.0, min=0.0, soft_max=200.0, **limits.maximum(LIMITS.phong_exponent),
         description="Phong exponent sigma")
 
-    method: EnumProperty(name="Method", items=methods.enum_items(), default='msd_visibility')
+    method: EnumProperty(name="Method", items=_AUTOMATIC_ITEM + methods.enum_items(),
+                         default=analysis.AUTOMATIC)
     rays: IntProperty(name="Rays", default=256, min=16,
                       **limits.maximum(LIMITS.rays),
                       description="Rays traced per vertex for the visibility")
@@ -137,16 +165,18 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "for every method")
 
 
-CLASSES = (SceneSettings,)
+CLASSES = (ObjectOverrides, SceneSettings)
 
 
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.sd_lighting = PointerProperty(type=SceneSettings)
+    bpy.types.Object.sd_lighting = PointerProperty(type=ObjectOverrides)
 
 
 def unregister():
+    del bpy.types.Object.sd_lighting
     del bpy.types.Scene.sd_lighting
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

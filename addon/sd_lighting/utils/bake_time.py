@@ -87,11 +87,16 @@ class Prediction:
 @dataclass
 class SampleJob:
     """One object's bake: its mesh, and bake_transfer's keywords (orders, rays, occluders: every
-    other object's triangles)."""
+    other object's triangles) - a dict, or a function of a stop query returning one, called in
+    the worker (the automatic mode chooses the settings there first); `task`: the caller's."""
     vertices: np.ndarray
     normals: np.ndarray
     triangles: np.ndarray
-    bake_arguments: dict
+    bake_arguments: object
+    task: object = None
+
+    def arguments(self, stop):
+        return self.bake_arguments(stop) if callable(self.bake_arguments) else self.bake_arguments
 
 
 class BakeTimePredictor:
@@ -150,7 +155,12 @@ class BakeTimePredictor:
                 self._running = None
             self.finished = not self._cancelled and self.error is None
 
+    @property
+    def jobs(self):
+        return self._jobs
+
     def _sample(self, index, job):
+        arguments = job.arguments(lambda: self._cancelled)
         rounds = []
         for triangles in ROUNDS:
             vertices, normals, sample_triangles = sample_mesh(job.vertices, job.normals, job.triangles,
@@ -167,7 +177,7 @@ class BakeTimePredictor:
                 return not self._cancelled
 
             self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
-                                   **job.bake_arguments)
+                                   **arguments)
             rounds.append((len(vertices), time.perf_counter() - start))
             with self._lock:
                 self._estimates[index] = extrapolate(rounds, len(job.vertices))

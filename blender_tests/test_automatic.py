@@ -1,0 +1,167 @@
+"""The automatic mode (issue 10): per object, the cheapest setting within the target error, with
+the reasons, through the add-on's bake.
+
+Under forest.exr: a lone sphere high above everything (convex, nothing around it) and a sphere
+resting on a ground plane, both white Diffuse BSDF, baked together with the default method
+(Automatic, target 2 %). The lone sphere stores no visibility (unshadowed); the resting one gets a
+method with visibility; so the two get different choices, each recorded with its reasons and
+predicted error. The resting sphere's predicted error is within a factor 2 of its bake's error
+measured at every vertex against sdnative.reference. Its diffuse material compiles a shader
+variant without the glossy path. Before a bake, the bake-time predictor measures a chosen
+method's error too (the panel's line). An override of the object (method and s') is kept while the rest
+is still chosen. A cancel while the settings are being chosen stops within a second and leaves
+every bake as it was.
+Run (headless, GPU through a Workbench render):
+    blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
+"""
+
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def measured_error(package, scene, obj):
+    """The bake's relative RMS error at every vertex against the reference of eq. (1)."""
+    sd = package.native.get()
+    mesh = package.baking.baked_mesh(obj)
+    data = package.attributes.read(mesh)
+    positions = package.attributes.read_positions(mesh).astype(np.float64)
+    triangles = package.attributes.read_triangle_loops(mesh)
+    loops = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", loops)
+    ground = bpy.data.objects["Ground"]
+    occluder = np.array([tuple(ground.matrix_world @ v.co) for v in ground.data.vertices]) - np.array(obj.location)
+    occluder_triangles = package.attributes.read_triangle_loops(ground.data)
+    ground_loops = np.empty(len(ground.data.loops), dtype=np.int32)
+    ground.data.loops.foreach_get("vertex_index", ground_loops)
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
+    shaded = package.drawing.cpu_reference(scene, obj, view)
+    env = package.environment.environment(package.environment.source(scene))
+    reference, error = sd.reference(env, positions, data["normals"], loops[triangles], samples=4096,
+                                    occluder_vertices=occluder,
+                                    occluder_triangles=ground_loops[occluder_triangles].astype(np.int32))
+    return package.utils.accuracy.relative_error(shaded, reference, error ** 2)
+
+
+def main():
+    checks = sdtest.Checks("test_automatic")
+    args = sdtest.arguments()
+    package = sdtest.install_addon(args.zip)
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    sdtest.camera(scene)
+    white = sdtest.diffuse_material("White")
+    lone = sdtest.ico_sphere(scene, "Lone", subdivisions=3, location=(0.0, 0.0, 60.0))
+    resting = sdtest.ico_sphere(scene, "Resting", subdivisions=3, location=(0.0, 0.0, 1.0))
+    ground = sdtest.grid(scene, cuts=4, size=40.0)
+    for obj in (lone, resting, ground):
+        obj.data.materials.append(white)
+    settings = scene.sd_lighting
+    checks.check(settings.method == "automatic" and abs(settings.target_error - 0.02) < 1e-9,
+                 "the default method is Automatic with a 2 % target")
+
+    # A cancel while the settings are chosen: within a second, nothing changed.
+    sdtest.select_only([resting])
+    tasks, _ = package.baking.prepare(bpy.context, [resting])
+    job = package.baking.BakeJob(tasks)
+    job.start()
+    time.sleep(0.5)
+    checks.check(job.choosing, "the bake starts by choosing the settings", job.status_text())
+    start = time.perf_counter()
+    job.cancel()
+    job.join(10.0)
+    took = time.perf_counter() - start
+    checks.check(job.finished and job.cancelled and took < 1.0 and
+                 package.baking.baked_mesh(resting) is None,
+                 "a cancel while choosing stops within a second and bakes nothing", "%.2f s" % took)
+
+    sdtest.select_only([lone, resting])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake both with the automatic mode")
+    lone_info, resting_info = (dict(obj["sd_bake"]) for obj in (lone, resting))
+    for name, info in (("Lone", lone_info), ("Resting", resting_info)):
+        print("%s: %s s=%d s'=%d rays=%d predicted %.4f" % (
+            name, info["method"], info["light_order"], info["visibility_order"], info["rays"],
+            info["predicted_error"]))
+        print("   " + info["automatic"].replace("\n", "\n   "))
+    lone_mesh = package.baking.baked_mesh(lone)
+    checks.check(lone_info["method"] == "unshadowed" and
+                 not any(a.name.startswith(("sd_visibility", "sd_transfer", "sd_design", "sd_product"))
+                         for a in lone_mesh.attributes),
+                 "the lone sphere stores no visibility", lone_info["method"])
+    method = package.utils.methods.get(resting_info["method"])
+    checks.check(method.data is not None and resting_info["automatic"].startswith("Visibility: needed"),
+                 "the resting sphere gets its visibility", resting_info["method"])
+    checks.check(lone_info["predicted_error"] <= 0.02 and resting_info["predicted_error"] <= 0.02,
+                 "both meet the target", "%.4f, %.4f" % (lone_info["predicted_error"],
+                                                         resting_info["predicted_error"]))
+
+    checks.check(all(("Evaluation: per pixel" in info["automatic"]) == bool(info["per_pixel"])
+                     for info in (lone_info, resting_info)),
+                 "per-vertex or per-pixel evaluation chosen from the triangles' size on screen",
+                 "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
+
+    measured = measured_error(package, scene, resting)
+    ratio = measured / resting_info["predicted_error"]
+    checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
+                 "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
+
+    package.gpu_context.ensure()
+    data = package.drawing.object_data(resting)
+    checks.check(not data.variant.glossy and "SD_GLOSSY" not in data.variant.defines(
+        package.native.get().sh_recurrence_constants), "a diffuse material compiles no glossy path")
+
+    # Before a bake, the predictor measures the chosen method's error too, for the panel.
+    settings.method = "prt_diffuse"
+    sdtest.select_only([resting])
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    predicted = package.prediction.predicted_errors(bpy.context)
+    checks.check(predictor.finished and len(predicted) == 1 and predicted[0][0] == "Resting" and
+                 0.0 < predicted[0][2] < 0.2,
+                 "the panel's prediction measures a chosen method's error before the bake",
+                 str([(name, error) for name, _, error in predicted]))
+    settings.method = "automatic"
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    chosen = package.prediction.automatic_choices(bpy.context)["Resting"][0]["automatic"]
+    package.baking.clear(resting)
+    measure = package.analysis.choose
+
+    def measured_again(*args, **kwargs):
+        raise AssertionError("measured again")
+    package.analysis.choose = measured_again
+    try:
+        checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
+                     dict(resting["sd_bake"])["automatic"] == chosen,
+                     "a bake after the prediction takes over its choice (not measured again)")
+    finally:
+        package.analysis.choose = measure
+
+    # An override is kept per object; the rest is still chosen.
+    resting.sd_lighting.use_method = True
+    resting.sd_lighting.method = "prt_gaunt"
+    resting.sd_lighting.use_visibility_order = True
+    resting.sd_lighting.visibility_order = 3
+    sdtest.select_only([resting])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake with overrides")
+    info = dict(resting["sd_bake"])
+    checks.check(info["method"] == "prt_gaunt" and info["visibility_order"] == 3 and
+                 "automatic" not in info, "a method override bakes that method with the scene's s'"
+                 " overridden too", str({k: info[k] for k in ("method", "visibility_order")}))
+    resting.sd_lighting.use_method = False
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake with the s' override only")
+    info = dict(resting["sd_bake"])
+    chosen = package.utils.methods.get(info["method"])
+    checks.check("automatic" in info and info["automatic"].startswith("Overridden: visibility_order = 3")
+                 and (not chosen.uses_visibility_order or info["visibility_order"] == 3),
+                 "the automatic mode keeps the override", info.get("automatic", "")[:80])
+    return checks.summary()
+
+
+sdtest.run(main)

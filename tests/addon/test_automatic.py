@@ -1,0 +1,190 @@
+"""The automatic mode's measurement and choice (utils/accuracy.py, utils/automatic.py, utils/cost.py)
+on small meshes with sdnative: what it stores, which s it picks, and that its measured errors are
+those of real bakes. Errors are Monte Carlo estimates (the reference's noise removed), so the
+checks compare well separated cases."""
+
+import numpy as np
+import pytest
+
+from sd_lighting.utils import accuracy, automatic, cost, methods
+
+HDRI = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
+ALL = [m.id for m in methods.METHODS]
+
+
+def uv_sphere(rings=12, segments=24, centre=(0.0, 0.0, 1.0)):
+    """A unit UV sphere: vertices, normals, triangles (outward, counter-clockwise)."""
+    theta = np.linspace(0.0, np.pi, rings + 1)[1:-1]
+    phi = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
+    ring = np.stack([np.outer(np.sin(theta), np.cos(phi)), np.outer(np.sin(theta), np.sin(phi)),
+                     np.outer(np.cos(theta), np.ones_like(phi))], axis=-1).reshape(-1, 3)
+    normals = np.concatenate([[[0.0, 0.0, 1.0]], ring, [[0.0, 0.0, -1.0]]])
+    top, bottom = 0, len(normals) - 1
+    index = lambda r, k: 1 + r * segments + k % segments  # noqa: E731
+    triangles = []
+    for k in range(segments):
+        triangles.append((top, index(0, k), index(0, k + 1)))
+        triangles.append((bottom, index(rings - 2, k + 1), index(rings - 2, k)))
+        for r in range(rings - 2):
+            a, b, c, d = index(r, k), index(r + 1, k), index(r + 1, k + 1), index(r, k + 1)
+            triangles += [(a, b, c), (a, c, d)]
+    return normals + np.asarray(centre), normals.copy(), np.asarray(triangles, dtype=np.int32)
+
+
+FLOOR = {"occluder_vertices": np.array([[-9.0, -9, 0], [9, -9, 0], [9, 9, 0], [-9, 9, 0]]),
+         "occluder_triangles": np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)}
+
+
+def table(sdnative, environment, occluders=None, lobe="lambert", exponent=1.0, ids=ALL, max_order=6,
+          rays=256):
+    light = lambda s: np.asarray(environment.sh(s)).reshape(-1, 3)  # noqa: E731
+    sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=occluders, count=48)
+    return accuracy.ErrorTable(sdnative, sample, environment, light, lobe, exponent, np.eye(3), ids,
+                               max_order, rays)
+
+
+def choose(sdnative, errors, target=0.02):
+    return automatic.choose(errors, target, lambda s, sv: cost.gaunt_terms(sdnative, s, sv),
+                            vertices=266, threads=2, bake_budget=60.0)
+
+
+@pytest.fixture(scope="module")
+def forest(sdnative):
+    return sdnative.load_environment(HDRI)
+
+
+# -- exact: the bookkeeping
+
+def test_relative_error_removes_the_references_variance():
+    reference = np.ones((4, 3))
+    values = reference + 0.1
+    assert accuracy.relative_error(values, reference) == pytest.approx(0.1)
+    # a variance of 0.01 per channel is all of that difference: nothing is left
+    assert accuracy.relative_error(values, reference, np.full((4, 3), 0.01)) == pytest.approx(0.0, abs=1e-7)
+    assert accuracy.relative_error(values, reference, np.full((4, 3), 0.0075)) == pytest.approx(0.05)
+
+
+def test_ray_noise_falls_as_one_over_the_root_of_the_rays():
+    measured = accuracy.Measured(truncation=0.03, noise=0.04, rays=256)
+    assert measured.at(256) == pytest.approx(0.05)
+    assert measured.at(1024) == pytest.approx(np.hypot(0.03, 0.02))
+
+
+def test_frame_terms_and_stored_floats_follow_the_formulas(sdnative):
+    prt8, msd13 = methods.get("prt_matrix"), methods.get("msd_visibility")
+    assert prt8.frame_terms(4, 2, None) == 25 * 9 + 9
+    assert msd13.frame_terms(4, 2, None) == 17 * (25 + 3)     # 17 nodes at degree 6
+    assert cost.stored_floats(prt8, 4, 2) == 225
+    assert cost.stored_floats(methods.get("unshadowed"), 4, 2) == 0
+    assert cost.stored_floats(methods.get("ambient_occlusion"), 4, 2) == 1
+    # eq. (10) sums over the non-zero Gaunt coefficients only: fewer than the full triple product
+    assert 0 < cost.gaunt_terms(sdnative, 4, 2) < 25 * 9 * 49
+
+
+# -- Monte Carlo: the measurement is a real bake's error
+
+def test_truncated_arrays_shade_as_a_bake_at_the_lower_orders(sdnative, forest):
+    """One bake at the largest orders serves every order: the error of PRT (8) at s = 3, s' = 1 in
+    the table is the error of a bake made at those orders."""
+    errors = table(sdnative, forest, FLOOR, ids=["prt_matrix"], max_order=5)
+    sample = errors._sample
+    baked = sdnative.bake_transfer(sample.vertices, sample.normals, sample.triangles, rays=256,
+                                   seed=0, product_orders=(3, 1), **sample.occluders)
+    shaded = np.maximum(sdnative.shade("prt_matrix", np.asarray(forest.sh(3)).reshape(-1, 3),
+                                       sample.normals, rotation=np.eye(3), visibility_order=1,
+                                       product_matrices=baked["product_matrices"]), 0.0)
+    direct = accuracy.relative_error(shaded, errors.reference, errors.reference_variance)
+    measured = errors.measured[("prt_matrix", 3, 1)]
+    assert np.hypot(measured.truncation, measured.noise) == pytest.approx(direct, rel=1e-9)
+
+
+def test_errors_fall_with_the_order_and_the_reference_is_far_more_precise(sdnative, forest):
+    errors = table(sdnative, forest, ids=["unshadowed"])
+    by_order = [errors.error(accuracy.Setting("unshadowed", s, 0, 256)) for s in range(7)]
+    assert by_order[0] > 0.3 and by_order[6] < 0.03
+    assert by_order[0] > by_order[2] > by_order[6]
+    # the reference's own noise (removed from each error) is well below the errors it tells apart
+    assert errors.reference_error < 0.3 * by_order[1]
+
+
+def test_msd_has_the_error_of_the_prt_form_it_equals(sdnative, forest):
+    errors = table(sdnative, forest, FLOOR, ids=["msd_visibility", "msd_lobe"], max_order=4)
+    for msd, prt in accuracy.SAME_AS.items():
+        setting = accuracy.Setting(msd, 4, 2, 256)
+        assert errors.error(setting) == errors.error(accuracy.Setting(prt, 4, 2, 256))
+
+
+# -- the choices
+
+def test_a_lone_sphere_stores_no_visibility(sdnative, forest):
+    errors = table(sdnative, forest)
+    assert errors.shadowing() == pytest.approx(0.0, abs=1e-9)
+    choice = choose(sdnative, errors)
+    assert choice.met_target and choice.setting.method == "unshadowed"
+    assert choice.floats == 0
+    assert choice.reasons[0].startswith("Visibility: none stored")
+
+
+def test_a_sphere_on_a_floor_gets_its_visibility(sdnative, forest):
+    errors = table(sdnative, forest, FLOOR)
+    assert errors.shadowing() > 0.2
+    choice = choose(sdnative, errors)
+    assert methods.get(choice.setting.method).data is not None
+    assert choice.reasons[0].startswith("Visibility: needed")
+    # the unshadowed result is what the shadows make wrong
+    assert errors.error(accuracy.Setting("unshadowed", 6, 0, 256)) > 2 * choice.error
+
+
+def test_a_glossy_material_never_gets_the_lambert_only_method(sdnative, forest):
+    errors = table(sdnative, forest, FLOOR, lobe="phong", exponent=8.0)
+    assert not any(key[0] == "prt_diffuse" for key in errors.measured)
+    assert choose(sdnative, errors).setting.method != "prt_diffuse"
+
+
+def sky(sdnative, sun):
+    """A soft sky (a vertical gradient) and, with `sun`, the same with a small bright sun."""
+    height, width = 64, 128
+    rows = np.linspace(1.0, 0.0, height)[:, None, None]
+    pixels = np.broadcast_to(0.3 + 0.7 * rows, (height, width, 3)).astype(np.float32).copy()
+    if sun:
+        pixels[12:15, 40:43] = 400.0
+    return sdnative.environment_from_pixels(pixels)
+
+
+def test_a_soft_sky_gets_a_lower_order_than_a_sunny_one(sdnative):
+    soft, sunny = (choose(sdnative, table(sdnative, sky(sdnative, sun), ids=["unshadowed"], max_order=8))
+                   for sun in (False, True))
+    assert soft.met_target and sunny.met_target
+    assert soft.setting.light_order < sunny.setting.light_order
+
+
+def test_an_unreachable_target_takes_the_most_accurate_setting_and_says_so(sdnative, forest):
+    errors = table(sdnative, forest, ids=["unshadowed"], max_order=2)
+    choice = choose(sdnative, errors, target=1e-4)
+    assert not choice.met_target
+    assert choice.setting.light_order == 2
+    assert "no setting reaches" in choice.reasons[1]
+
+
+def test_an_override_is_kept_and_the_rest_still_chosen(sdnative, forest):
+    errors = table(sdnative, forest, FLOOR, max_order=4)
+    choice = automatic.choose(errors, 0.02, lambda s, sv: cost.gaunt_terms(sdnative, s, sv), 266, 2,
+                              60.0, fixed={"method": "prt_matrix", "visibility_order": 1})
+    assert choice.setting.method == "prt_matrix" and choice.setting.visibility_order == 1
+    assert choice.reasons[0] == "Overridden: method = prt_matrix, visibility_order = 1"
+    with pytest.raises(ValueError, match="no measured setting"):
+        automatic.choose(errors, 0.02, None, 266, 2, 60.0, fixed={"light_order": 9})
+
+
+def test_a_sparse_mesh_on_screen_is_evaluated_per_pixel():
+    """Two triangles of a square seen face on by a camera whose clip space is the square itself
+    (view_projection: identity with w = 1): each covers half the screen."""
+    square = np.array([[-1.0, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3]])
+    pixels = automatic.projected_triangle_pixels(square, triangles, np.eye(4), 200, 100)
+    assert pixels == pytest.approx(0.5 * 200 * 100)
+    # seen from behind (reversed winding) nothing faces the camera
+    assert automatic.projected_triangle_pixels(square, triangles[:, ::-1], np.eye(4), 200, 100) == 0.0
+    assert automatic.evaluation(pixels)[0]
+    assert not automatic.evaluation(10.0)[0]
+    assert not automatic.evaluation(None)[0]

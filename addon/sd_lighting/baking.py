@@ -101,10 +101,14 @@ class Geometry:
         return self._local_positions
 
     @property
+    def _wound_triangle_loops(self):
+        loops = self._triangle_loops
+        return loops[:, ::-1] if self._mirrored else loops
+
+    @property
     def mesh_triangles(self):
         """`triangles` over the mesh's own vertices: the same faces, without computing the split."""
-        loops = self._triangle_loops
-        return self._loop_vertices[loops[:, ::-1] if self._mirrored else loops]
+        return self._loop_vertices[self._wound_triangle_loops]
 
     # The split and what follows from it are computed when first read - for a bake from the UI in
     # its worker thread (BakeJob.run), not on the main thread - and kept.
@@ -130,8 +134,7 @@ class Geometry:
 
     @functools.cached_property
     def triangles(self):
-        loops = self._triangle_loops
-        return self._split.loop_vertex[loops[:, ::-1] if self._mirrored else loops]
+        return self._split.loop_vertex[self._wound_triangle_loops]
 
     @functools.cached_property
     def material_slots(self):

@@ -83,17 +83,25 @@ void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
 }
 
 // One Levenberg–Marquardt system with Marquardt's scaling, (JᵀJ + μ diag(JᵀJ)) h = −Jᵀr, in the
-// columns-normalised form J_s = J D^{-1/2}: h = D^{-1/2} z, (J_sᵀJ_s + μI) z = −J_sᵀr. The matrix
-// is positive definite for μ > 0, so a Cholesky factorisation does (cheaper than a pivoted LDLT),
-// and it is formed once per step for all the dampings tried.
+// columns-normalised form J_s = J D^{-1/2}: h = D^{-1/2} z, (J_sᵀJ_s + μI) z = −J_sᵀr. Where J has
+// more columns than rows (a design above the generic count, as when pruning a Tchakaloff rule of
+// ~k nodes: 3k unknowns) it is solved through the k × k system, z = −J_sᵀ (J_s J_sᵀ + μI)⁻¹ r.
+// Either matrix is positive definite for μ > 0, so a Cholesky factorisation does (cheaper than a
+// pivoted LDLT), and it is formed once per step for all the dampings tried.
 class DampedSystem {
  public:
-  explicit DampedSystem(const Linearisation& lin) {
+  explicit DampedSystem(const Linearisation& lin) : residual_(lin.residual) {
     inverse_root_ = lin.jacobian.colwise().squaredNorm().transpose().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
     scaled_.noalias() = lin.jacobian * inverse_root_.asDiagonal();
     scaled_gradient_.noalias() = scaled_.transpose() * lin.residual;
-    gram_.setZero(scaled_.cols(), scaled_.cols());
-    gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_.transpose());
+    wide_ = scaled_.cols() > scaled_.rows();
+    const Eigen::Index size = wide_ ? scaled_.rows() : scaled_.cols();
+    gram_.setZero(size, size);
+    if (wide_) {
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_);
+    } else {
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_.transpose());
+    }
   }
 
   /// The step h at damping μ and the decrease of ½E the linear model predicts for it,
@@ -103,16 +111,22 @@ class DampedSystem {
     damped_.diagonal().array() += damping;
     llt_.compute(damped_);
     if (llt_.info() != Eigen::Success) return false;
-    step = -llt_.solve(scaled_gradient_);
+    if (wide_) {
+      step.noalias() = -(scaled_.transpose() * llt_.solve(residual_));
+    } else {
+      step = -llt_.solve(scaled_gradient_);
+    }
     predicted = 0.5 * step.dot(damping * step - scaled_gradient_);
     step.array() *= inverse_root_.array();
     return true;
   }
 
  private:
+  const Eigen::VectorXd& residual_;
   Eigen::VectorXd inverse_root_, scaled_gradient_;
   Eigen::MatrixXd scaled_, gram_, damped_;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt_;
+  bool wide_ = false;
 };
 
 }  // namespace

@@ -173,7 +173,7 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
 // see nearly the same sky, so most refits certify with start's node count. A refit that stalls
 // gains the sample directions along which added weight lowers E fastest (the entering variables
 // of an active-set step), and is pruned back to the generic count (rank + 2)/3 after it
-// certifies. Returns nothing when it does not certify, or certifies with more nodes than start.
+// certifies. Returns nothing when it does not certify.
 std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                                      const SphericalDesign& start, const std::function<bool()>& stop) {
   const MomentSystem system = basis.system(samples.moments);
@@ -215,7 +215,6 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
     design = prune_design(system, std::move(design), generic, certified,
                           FitOptions{options.tolerance, kWarmIterations, true, false, stop});
   }
-  if (design.size() > start.size()) return std::nullopt;
   design.method = "refit";
   return design;
 }
@@ -283,9 +282,11 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
     if (!basis) basis = qr = qr_basis(samples);
     design = refit(measure, samples, *basis, *start, stop);
   }
-  if (!design) {
+  // A refit with more nodes than its start is kept only where the compression does no better.
+  if (!design || design->size() > start->size()) {
     if (!qr) qr = qr_basis(samples);
-    design = compress(measure, samples, *qr, stop);
+    SphericalDesign compressed = compress(measure, samples, *qr, stop);
+    if (!design || compressed.size() <= design->size()) design = std::move(compressed);
   }
   for (double& w : design->weights) w *= measure.scale;
   return std::move(*design);

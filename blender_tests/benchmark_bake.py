@@ -127,7 +127,7 @@ def bake_jobs(package, skip):
             continue
         settings = {"method": method.id, "rays": 0, "seed": SEED, "light_order": LIGHT_ORDER,
                     "visibility_order": VISIBILITY_ORDER if method.uses_visibility_order else 0}
-        task = package.baking.BakeTask("benchmark", None, (None, None), settings)
+        task = package.baking.BakeTask("benchmark", None, (None, None), settings, None)
         kwargs = task.bake_arguments()
         kwargs.pop("rays")
         key = tuple(sorted((k, repr(v)) for k, v in kwargs.items()))

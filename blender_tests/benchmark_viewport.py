@@ -185,7 +185,7 @@ def main():
     camera = sdtest.camera(scene, location=(0.0, -4.5, 3.5), target=(0.0, 0.0, 0.0))
     real_counts = design_node_counts_of_a_real_bake(package, scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.drawing.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.view.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
     uniform = package.compat.uniform_color_shader()
     from mathutils import Matrix
     projection = Matrix(view.view_projection.tolist())

@@ -3,8 +3,9 @@
 Builds Suzanne (Subdivision modifier, a rough Principled material, so the lobe read from the
 material is Lambert) sitting on a subdivided ground plane, under a Blender-shipped HDRI (forest)
 turned by a Mapping node, with a camera; installs and enables the add-on from its zip; bakes both
-objects with MSD Theorem 2.2 (eq. 13, s = 4, s' = 2 - the seed's orders) against each other, so
-Suzanne shadows herself and the ground (contact shadows); saves the .blend (the bake lives in it:
+objects against each other in the add-on's default automatic mode (per object the cheapest method,
+s, s' and rays whose error, measured on sampled vertices, is within 2 %; printed with the reasons),
+so Suzanne shadows herself and the ground (contact shadows); saves the .blend (the bake lives in it:
 open it with the add-on enabled and the viewport shades it live) and renders the live shading from
 the scene camera to a PNG (Standard view transform) and an EXR (scene-linear), plus a PNG with the
 world turned by 120 degrees. Prints the paths.
@@ -79,9 +80,12 @@ def build_scene(opts):
     scene.view_settings.view_transform = 'Standard'
     scene.view_settings.exposure = opts["exposure"]
 
-    settings = sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 4, 2, rays=opts["rays"],
-                                    select=[monkey, ground])
+    settings = scene.sd_lighting   # the add-on's defaults: the automatic mode, material from the material
+    settings.method = 'automatic'
+    settings.material_source = 'MATERIAL'
+    settings.rays = opts["rays"]
     settings.live_shading = True
+    sdtest.select_only([monkey, ground])
     return scene, mapping, monkey, ground
 
 
@@ -91,15 +95,18 @@ def main():
     start = time.perf_counter()
     sdtest.install_addon(args.zip)
     scene, mapping, monkey, ground = build_scene(opts)
-    print("sd_lighting: baking %s and %s (MSD Theorem 2.2, s = 4, s' = 2, %d rays per vertex)..."
-          % (monkey.name, ground.name, scene.sd_lighting.rays), flush=True)
+    print("sd_lighting: baking %s and %s (the automatic mode, target error %.0f %%)..."
+          % (monkey.name, ground.name, 100 * scene.sd_lighting.target_error), flush=True)
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
         raise RuntimeError("the bake failed")
     for obj in (monkey, ground):
         info = dict(obj["sd_bake"])
-        print("  %-8s %6d vertices, %s (%s), %d bytes per vertex, %.1f s" % (
-            obj.name, info["vertices"], info["method"], info["lobe"], info["bytes_per_vertex"],
-            info["seconds"]), flush=True)
+        print("  %-8s %6d vertices, %s (%s), s = %d, s' = %d, %d rays, %d bytes per vertex, %.1f s"
+              % (obj.name, info["vertices"], info["method"], info["lobe"], info["light_order"],
+                 info["visibility_order"], info["rays"], info["bytes_per_vertex"], info["seconds"]),
+              flush=True)
+        for line in str(info.get("automatic", "")).splitlines():
+            print("           " + line)
 
     blend = os.path.join(args.out, "sd_default_scene.blend")
     png = os.path.join(args.out, "sd_preview.png")

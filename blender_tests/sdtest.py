@@ -110,7 +110,29 @@ def registration_state():
             "panel": hasattr(bpy.types, "SD_PT_lighting"),
             "bake_operator": operator_exists("bake"),
             "preview_operator": operator_exists("render_preview"),
-            "load_post": len(bpy.app.handlers.load_post)}
+            "load_post": len(bpy.app.handlers.load_post),
+            # the live re-bake's, while a scene has it on
+            "handlers": {name: len(getattr(bpy.app.handlers, name))
+                         for name in ("depsgraph_update_post", "undo_post", "redo_post")}}
+
+
+class LayoutStub:
+    """Accepts any layout call, to run a panel's draw() without a visible sidebar; `texts` collects
+    the text= of every call (labels, operator buttons)."""
+
+    def __init__(self, texts=None):
+        object.__setattr__(self, "texts", [] if texts is None else texts)
+
+    def __getattr__(self, name):
+        return LayoutStub(self.texts)
+
+    def __call__(self, *args, **kwargs):
+        if "text" in kwargs:
+            self.texts.append(kwargs["text"])
+        return LayoutStub(self.texts)
+
+    def __setattr__(self, name, value):
+        pass
 
 
 class Checks:

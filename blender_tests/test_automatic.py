@@ -7,10 +7,12 @@ resting on a ground plane, both white Diffuse BSDF, baked together with the defa
 method with visibility; so the two get different choices, each recorded with its reasons and
 predicted error. The resting sphere's predicted error is within a factor 2 of its bake's error
 measured at every vertex against sdnative.reference. Its diffuse material compiles a shader
-variant without the glossy path. An override of the object (method and s') is kept while the rest
+variant without the glossy path. Before a bake, the bake-time predictor measures a chosen
+method's error too (the panel's line). An override of the object (method and s') is kept while the rest
 is still chosen. A cancel while the settings are being chosen stops within a second and leaves
 every bake as it was.
-Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
+Run (headless, GPU through a Workbench render):
+    blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
 """
 
 import os
@@ -38,7 +40,7 @@ def measured_error(package, scene, obj):
     occluder_triangles = package.attributes.read_triangle_loops(ground.data)
     ground_loops = np.empty(len(ground.data.loops), dtype=np.int32)
     ground.data.loops.foreach_get("vertex_index", ground_loops)
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
     shaded = package.drawing.cpu_reference(scene, obj, view)
     env = package.environment.environment(package.environment.source(scene))
     reference, error = sd.reference(env, positions, data["normals"], loops[triangles], samples=4096,
@@ -99,14 +101,47 @@ def main():
                  "both meet the target", "%.4f, %.4f" % (lone_info["predicted_error"],
                                                          resting_info["predicted_error"]))
 
+    checks.check(all(("Evaluation: per pixel" in info["automatic"]) == bool(info["per_pixel"])
+                     for info in (lone_info, resting_info)),
+                 "per-vertex or per-pixel evaluation chosen from the triangles' size on screen",
+                 "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
+
     measured = measured_error(package, scene, resting)
     ratio = measured / resting_info["predicted_error"]
     checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
                  "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
 
+    package.gpu_context.ensure()
     data = package.drawing.object_data(resting)
     checks.check(not data.variant.glossy and "SD_GLOSSY" not in data.variant.defines(
         package.native.get().sh_recurrence_constants), "a diffuse material compiles no glossy path")
+
+    # Before a bake, the predictor measures the chosen method's error too, for the panel.
+    settings.method = "prt_diffuse"
+    sdtest.select_only([resting])
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    predicted = package.prediction.predicted_errors(bpy.context)
+    checks.check(predictor.finished and len(predicted) == 1 and predicted[0][0] == "Resting" and
+                 0.0 < predicted[0][2] < 0.2,
+                 "the panel's prediction measures a chosen method's error before the bake",
+                 str([(name, error) for name, _, error in predicted]))
+    settings.method = "automatic"
+    predictor = package.prediction.start(bpy.context)
+    predictor.join(120.0)
+    chosen = package.prediction.automatic_choices(bpy.context)["Resting"][0]["automatic"]
+    package.baking.clear(resting)
+    measure = package.analysis.choose
+
+    def measured_again(*args, **kwargs):
+        raise AssertionError("measured again")
+    package.analysis.choose = measured_again
+    try:
+        checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
+                     dict(resting["sd_bake"])["automatic"] == chosen,
+                     "a bake after the prediction takes over its choice (not measured again)")
+    finally:
+        package.analysis.choose = measure
 
     # An override is kept per object; the rest is still chosen.
     resting.sd_lighting.use_method = True

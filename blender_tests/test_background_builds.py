@@ -147,7 +147,7 @@ def main():
     sdtest.grid(scene, cuts=8, size=4.0)
     sdtest.camera(scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.drawing.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
+    view = package.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
     check_lobe_designs(checks, package, scene, ball, view, os.path.join(args.out, "lobe_designs"))
     check_prediction(checks, package, scene)
     return checks.summary()

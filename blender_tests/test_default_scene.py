@@ -50,28 +50,32 @@ def main():
                      "%s: baked mesh of the evaluated geometry" % obj.name,
                      "%d vertices" % (len(baked.vertices) if baked else -1))
         info = dict(obj["sd_bake"])
-        checks.check(info["method"] == "msd_visibility" and info["lobe"] == "lambert" and
-                     info["light_order"] == 4 and info["visibility_order"] == 2,
-                     "%s: MSD 2.2, Lambert from the rough material, s = 4, s' = 2" % obj.name, str(info))
+        method = package.utils.methods.get(info["method"])
+        checks.check("automatic" in info and info["lobe"] == "lambert" and
+                     info["predicted_error"] <= bpy.context.scene.sd_lighting.target_error,
+                     "%s: the automatic mode chose %s within the target for Lambert from the rough "
+                     "material" % (obj.name, method.label),
+                     "predicted %.4f; %s" % (info.get("predicted_error", -1), info.get("automatic", "")[:200]))
         names = {a.name for a in baked.attributes}
-        design_names = sorted(n for n in names if n.startswith("sd_design_"))
-        checks.check({"sd_normal", "sd_ambient_occlusion"} <= names and design_names,
-                     "%s: normal, AO and design attributes" % obj.name, ", ".join(design_names))
-        for name in ["sd_normal", "sd_ambient_occlusion"] + design_names:
+        stored = set(method.data.keys if method.data else ())
+        checks.check({"sd_normal", "sd_ambient_occlusion"} <= names,
+                     "%s: normal and AO attributes" % obj.name, ", ".join(sorted(names)))
+        for name in sorted(n for n in names if n.startswith("sd_")):
             attribute = baked.attributes[name]
             checks.check(attribute.domain == 'POINT' and attribute.data_type in
-                         {'FLOAT', 'FLOAT_VECTOR', 'FLOAT_COLOR'}, "%s: %s is POINT float" % (obj.name, name))
+                         {'FLOAT', 'FLOAT_VECTOR', 'FLOAT_COLOR', 'FLOAT2'},
+                         "%s: %s is POINT float" % (obj.name, name))
         values = attributes.read(baked)
+        checks.check(all(values.get(key) is not None for key in stored),
+                     "%s: the chosen method's data is stored" % obj.name, ", ".join(sorted(stored)))
         ao = values["ambient_occlusion"]
         normals = attributes.read_normals(baked)
-        offsets = values["design_offsets"]
-        sums = np.add.reduceat(values["design_weights"], offsets[:-1])
-        nonempty = np.diff(offsets) > 0
         checks.check(np.all((ao >= 0) & (ao <= 1)) and
-                     np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-4) and
-                     np.allclose(sums[nonempty], ao[nonempty], atol=1e-5),
-                     "%s: AO in [0, 1], unit normals, design weights sum to AO" % obj.name,
-                     "AO mean %.3f" % ao.mean())
+                     np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-4),
+                     "%s: AO in [0, 1], unit normals" % obj.name, "AO mean %.3f" % ao.mean())
+        if obj == monkey:
+            checks.check(method.data is not None, "Suzanne's visibility is stored: she shadows "
+                         "herself", info["method"])
         data[obj.name] = {k: np.array(v) for k, v in values.items() if v is not None}
     checks.check(data["Suzanne"]["ambient_occlusion"].min() < 0.6,
                  "Suzanne shadows herself", "min AO %.3f" % data["Suzanne"]["ambient_occlusion"].min())

@@ -69,7 +69,7 @@ class Harness:
 
     def view(self):
         depsgraph = bpy.context.evaluated_depsgraph_get()
-        return self.package.drawing.View.from_camera(self.scene.camera, depsgraph, 640, 480,
+        return self.package.view.View.from_camera(self.scene.camera, depsgraph, 640, 480,
                                                      self.scene)
 
     def bake(self, objects, method, material, sigma, rays=256):

@@ -71,7 +71,7 @@ def main():
     settings.rays = 256
     sdtest.select_only([ball, ground])
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = drawing.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
+    view = package.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
 
     table = []
     for method, material, sigma, s, sv in CASES:

@@ -47,7 +47,7 @@ def agreement(package, scene, image, obj):
     CPU value, the median relative difference, and how many vertices were compared."""
     drawing = package.drawing
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     mesh = package.baking.baked_mesh(obj)
     cpu = drawing.cpu_reference(scene, obj, view)
     x, y = projected(view, obj, package.attributes.read_positions(mesh).astype(np.float64))
@@ -134,7 +134,7 @@ def main():
                      "%.0f %% of %d within 2 %%, median %.2e" % (100 * fraction, count, median))
     drawing = package.drawing
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     ground_values = drawing.cpu_reference(scene, ground, view).mean(axis=1)
     co = package.attributes.read_positions(package.baking.baked_mesh(ground))
     r = np.hypot(co[:, 0], co[:, 1])

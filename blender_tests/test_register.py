@@ -33,9 +33,23 @@ def main():
                  package.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
                  "shaders are the zip's copy", package.gpu_shading.shader_directory())
     settings = bpy.context.scene.sd_lighting
-    checks.check(settings.method == "msd_visibility" and settings.visibility_order == 2,
-                 "default settings: MSD Theorem 2.2, s' = 2")
+    checks.check(settings.method == "automatic" and settings.visibility_order == 2,
+                 "default settings: the automatic mode, s' = 2 for a chosen method")
     drawing = package.drawing
+    live = package.live_rebake
+    checks.check(not settings.live_rebake and on["handlers"] == before["handlers"],
+                 "Live Re-bake is off by default, without handlers")
+    settings.live_rebake = True
+    handlers = sdtest.registration_state()["handlers"]
+    checks.check(all(handlers[name] == before["handlers"][name] + 1 for name in handlers),
+                 "Live Re-bake on: its handlers are added", str(handlers))
+    live._mark(["Cube"])           # a change waiting for its re-bake: the timer runs
+    checks.check(bpy.app.timers.is_registered(live._tick), "a change starts the re-bake timer")
+    settings.live_rebake = False
+    checks.check(sdtest.registration_state() == on and not bpy.app.timers.is_registered(live._tick)
+                 and not live.pending(), "Live Re-bake off: handlers, timer and changes are gone")
+    settings.live_rebake = True
+    live._mark(["Cube"])
 
     import addon_utils
     for cycle in range(2):
@@ -44,8 +58,17 @@ def main():
         checks.check(off == before, "unregister leaves nothing behind (cycle %d)" % cycle,
                      "%s vs %s" % (off, before))
         checks.check(drawing._handler is None, "draw handler removed (cycle %d)" % cycle)
+        checks.check(not bpy.app.timers.is_registered(live._tick) and not live.pending(),
+                     "live re-bake timer and changes removed (cycle %d)" % cycle)
         addon_utils.enable("sd_lighting")
-        checks.check(sdtest.registration_state() == on, "registers again (cycle %d)" % cycle)
+        # The scene still has Live Re-bake on: its handlers come back at the first timer (bpy.data
+        # is not readable while an add-on registers).
+        checks.check(bpy.app.timers.is_registered(live.sync) and
+                     sdtest.registration_state() == on, "registered; Live Re-bake waits for a timer")
+        live.sync()
+        again = sdtest.registration_state()
+        checks.check(again == dict(on, handlers=handlers), "registers again (cycle %d)" % cycle,
+                     str(again))
     return checks.summary()
 
 

@@ -121,7 +121,7 @@ def main():
                                     select=[ball])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
 
     checks.check(settings.ringing_window == 'AUTOMATIC', "the ringing window is Automatic by default")
     check_choice_in_background(checks, package, scene, ball, view)

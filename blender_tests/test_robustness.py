@@ -198,7 +198,7 @@ def check_zero_normals(checks, package, scene):
                  np.allclose(normals[1:5], given[1:5]),
                  "the baked normals are the fallback the bake used (+X), the others Blender's; the "
                  "loose vertex is left out", str(normals.tolist()))
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
     checks.check(baked is not None and np.isfinite(package.drawing.cpu_reference(scene, fan, view)).all(),
                  "the repaired bake shades (finite)")
@@ -337,7 +337,7 @@ def check_without_addon(checks, package, scene, ball, args):
     sdtest.bake_settings(scene, 'msd_visibility', 'PHONG', 3, 1, rays=64, phong_exponent=8.0,
                          select=[ball])
     assert bake()[0] == {'FINISHED'}
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
     shaded = package.drawing.cpu_reference(scene, ball, view)
     state = baked_state(package, ball)
@@ -386,7 +386,7 @@ def check_undo(checks, package):
     ed("redo")
     ball = bpy.data.objects["Ball"]
     scene = bpy.context.scene
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
     checks.check(baked_state(package, ball) == state and
                  np.isfinite(package.drawing.cpu_reference(scene, ball, view)).all(),

@@ -93,7 +93,7 @@ def main():
     sdtest.grid(scene, cuts=10, size=6.0)
     sdtest.camera(scene, location=(1.5, -6.0, 3.0), target=(0.0, 0.0, 1.2))
     mesh = monkey_mesh()
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             640, 480, scene)
 
     table = []

@@ -39,19 +39,6 @@ def boundary_vertices(triangles, count):
     return out
 
 
-class Stub:
-    """Accepts any layout call (to run the panel's draw() without a visible sidebar)."""
-
-    def __getattr__(self, name):
-        return Stub()
-
-    def __call__(self, *args, **kwargs):
-        return Stub()
-
-    def __setattr__(self, name, value):
-        pass
-
-
 class Test:
     def __init__(self):
         self.checks = sdtest.Checks("test_viewport")
@@ -98,7 +85,7 @@ class Test:
                 buffer = framebuffer.read_color(0, 0, region.width, region.height, 4, 0, 'FLOAT')
                 buffer.dimensions = region.width * region.height * 4
                 self.samples = np.array(buffer, dtype=np.float32).reshape(region.height, region.width, 4)
-                self.view = self.package.drawing.View.from_region(bpy.context.region_data)
+                self.view = self.package.view.View.from_region(bpy.context.region_data)
         return bpy.types.SpaceView3D.draw_handler_add(grab, (), 'WINDOW', 'POST_PIXEL')
 
     # -- the test, one step per timer tick
@@ -146,7 +133,7 @@ class Test:
                      "%s cancels a modal bake and nothing changes" % how)
 
         # The panel draws without errors.
-        panel = Stub()
+        panel = sdtest.LayoutStub()
         try:
             with self.override():
                 bpy.types.SD_PT_lighting.draw(panel, bpy.context)

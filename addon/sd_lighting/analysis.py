@@ -12,6 +12,7 @@ from . import environment, native
 from .utils import accuracy, automatic, bake_time, cost, methods
 
 AUTOMATIC = "automatic"     # the scene's and an object's method setting for the automatic mode
+MEASURED_RAYS = 256         # rays per vertex of the measurement (the error at others follows)
 
 
 @dataclass
@@ -24,9 +25,11 @@ class Inputs:
     target_error: float
     max_order: int
     fixed: dict = field(default_factory=dict)   # the object's overrides (automatic.choose)
+    triangle_pixels: object = None   # its triangles' mean area on screen (None: no camera)
 
 
-def gather(scene, src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting):
+def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
+           triangle_pixels):
     """Inputs for an object: src an environment.Source, rotation g R, eye in the bake frame."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
@@ -41,13 +44,11 @@ def gather(scene, src, lobe, exponent, rotation, eye, target_error, max_order, f
         def light(order):   # the reference reads the map without the strength: so does this
             return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True)
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
-    return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed))
+    return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
+                  triangle_pixels)
 
 
-def choose(inputs, geometry, occluders, lobe, exponent, stop):
-    """The automatic.Choice for one object (any thread): geometry a baking.Geometry, occluders
-    bake_transfer's occluder keywords (or {}); stop() True cancels (InterruptedError)."""
-    sd = native.get()
+def _table(inputs, geometry, occluders, lobe, exponent, method_ids, max_order, rays, stop):
     eye = inputs.eye
 
     def views(points):
@@ -58,10 +59,26 @@ def choose(inputs, geometry, occluders, lobe, exponent, stop):
 
     sample = accuracy.Sample.of_mesh(geometry.vertices, geometry.normals, geometry.triangles,
                                      occluders, views)
-    rays = int(inputs.fixed.get("rays", 256))
-    table = accuracy.ErrorTable(sd, sample, inputs.environment, inputs.light, lobe, exponent,
-                                inputs.rotation, [m.id for m in methods.METHODS],
-                                inputs.max_order, rays, stop=stop)
+    return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe, exponent,
+                               inputs.rotation, method_ids, max_order, rays, stop=stop)
+
+
+def choose(inputs, geometry, occluders, lobe, exponent, stop):
+    """The automatic.Choice for one object (any thread): geometry a baking.Geometry, occluders
+    bake_transfer's occluder keywords (or {}); stop() True cancels (InterruptedError)."""
+    sd = native.get()
+    table = _table(inputs, geometry, occluders, lobe, exponent, [m.id for m in methods.METHODS],
+                   inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop)
     return automatic.choose(table, inputs.target_error, lambda s, sv: cost.gaunt_terms(sd, s, sv),
                             len(geometry.vertices), os.cpu_count() or 1, bake_time.CONFIRM_SECONDS,
                             inputs.fixed)
+
+
+def predict(inputs, geometry, occluders, settings, stop):
+    """The predicted relative RMS error of a bake's chosen settings (its `sd_bake` dict; any
+    thread), measured as the automatic mode measures every setting."""
+    setting = accuracy.Setting(settings["method"], int(settings["light_order"]),
+                               int(settings["visibility_order"]), int(settings["rays"]))
+    table = _table(inputs, geometry, occluders, settings["lobe"], settings["exponent"],
+                   [setting.method], setting.light_order, setting.rays, stop)
+    return table.error(setting)

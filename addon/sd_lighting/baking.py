@@ -8,8 +8,9 @@ A bake runs in three steps:
    transforms.bake_frame), the lobe, the orders s and s' and what the method needs. Nothing in
    the .blend changes.
 2. `BakeJob.run` (a worker thread in the UI, or the caller's thread): sdnative.bake_transfer for
-   each object, with progress and cancellation; it only reads the arrays of step 1 (bpy is never
-   touched off the main thread), and the native bake releases the GIL.
+   each object, with progress and cancellation; it only reads the arrays of step 1 and computes
+   what follows from them (the corner split: Geometry), bpy is never touched off the main
+   thread, and the native bake releases the GIL.
 3. `BakeJob.apply` (main thread, only after every object baked): for each object a new mesh
    datablock "SD <object>", a copy of the evaluated geometry carrying the results as `sd_`
    attributes (attributes.py), with a fake user so it persists; the object links it in the custom
@@ -19,6 +20,8 @@ A bake runs in three steps:
    cancelled or failed bake leaves the file as it was.
 """
 
+import functools
+import hashlib
 import threading
 import time
 import uuid
@@ -26,7 +29,8 @@ import uuid
 import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
-from .utils import corners, methods, transforms
+from .view import View
+from .utils import automatic, corners, methods, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -64,31 +68,81 @@ class Geometry:
     def __init__(self, mesh, shape, uv_map=None):
         """mesh: a temporary mesh (Object.to_mesh()), which this scales by K; uv_map: the name of
         the UV layer an albedo texture is read through ("" for the active render layer), or None."""
-        positions = attributes.read_positions(mesh)
-        loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
-        mesh.loops.foreach_get('vertex_index', loop_vertices)
+        self._local_positions = attributes.read_positions(mesh)
+        self._loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
+        mesh.loops.foreach_get('vertex_index', self._loop_vertices)
         self.loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_start', self.loop_starts)
         self.loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
         mesh.polygons.foreach_get('loop_total', self.loop_totals)
-        loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
-        loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
+        self._loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
+        self._loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
         # The scale applied as Object > Apply > Scale does (normals recomputed from the scaled
         # faces); a mirror's normals and triangles turned outside out (the bake reads their winding).
         matrix = np.eye(4)
         matrix[:3, :3] = shape
         mesh.transform([list(row) for row in matrix])
-        mirrored = np.linalg.det(shape) < 0
+        self._mirrored = bool(np.linalg.det(shape) < 0)
         normals = compat.corner_normals(mesh).astype(np.float64)
-        split = corners.split(loop_vertices, -normals if mirrored else normals, loop_slots, loop_uvs)
-        self.positions = positions[split.origin]
-        self.loop_vertices = split.loop_vertex
-        self.vertices = attributes.read_positions(mesh).astype(np.float64)[split.origin]
-        self.normals = _unit_or_zero(split.normal_sums)
-        triangle_loops = attributes.read_triangle_loops(mesh)
-        self.triangles = split.loop_vertex[triangle_loops[:, ::-1] if mirrored else triangle_loops]
-        self.material_slots = None if loop_slots is None else corners.vertex_values(split, loop_slots)
-        self.uvs = None if loop_uvs is None else corners.vertex_values(split, loop_uvs)
+        self._corner_normals = -normals if self._mirrored else normals
+        self._scaled_positions = attributes.read_positions(mesh).astype(np.float64)
+        self._triangle_loops = attributes.read_triangle_loops(mesh)
+        self.triangle_count = len(self._triangle_loops)
+
+    def inputs(self):
+        """What was read from the mesh: everything the other arrays are computed from."""
+        return (self._local_positions, self._loop_vertices, self.loop_starts, self.loop_totals,
+                self._loop_slots, self._loop_uvs, np.array(self._mirrored), self._corner_normals,
+                self._scaled_positions, self._triangle_loops)
+
+    @property
+    def mesh_positions(self):
+        """The mesh's own vertex positions in the local frame (before the split)."""
+        return self._local_positions
+
+    @property
+    def _wound_triangle_loops(self):
+        loops = self._triangle_loops
+        return loops[:, ::-1] if self._mirrored else loops
+
+    @property
+    def mesh_triangles(self):
+        """`triangles` over the mesh's own vertices: the same faces, without computing the split."""
+        return self._loop_vertices[self._wound_triangle_loops]
+
+    # The split and what follows from it are computed when first read - for a bake from the UI in
+    # its worker thread (BakeJob.run), not on the main thread - and kept.
+    @functools.cached_property
+    def _split(self):
+        return corners.split(self._loop_vertices, self._corner_normals, self._loop_slots, self._loop_uvs)
+
+    @functools.cached_property
+    def positions(self):
+        return self._local_positions[self._split.origin]
+
+    @property
+    def loop_vertices(self):
+        return self._split.loop_vertex
+
+    @functools.cached_property
+    def vertices(self):
+        return self._scaled_positions[self._split.origin]
+
+    @functools.cached_property
+    def normals(self):
+        return _unit_or_zero(self._split.normal_sums)
+
+    @functools.cached_property
+    def triangles(self):
+        return self._split.loop_vertex[self._wound_triangle_loops]
+
+    @functools.cached_property
+    def material_slots(self):
+        return None if self._loop_slots is None else corners.vertex_values(self._split, self._loop_slots)
+
+    @functools.cached_property
+    def uvs(self):
+        return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
@@ -135,13 +189,35 @@ def world_triangles(obj, depsgraph, view_layer):
 class BakeTask:
     """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
 
-    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs=None):
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs):
         self.object_name = obj_name
         self.geometry = geometry
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
-        self.analysis = analysis_inputs   # the automatic mode's analysis.Inputs, or None
+        self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
+        self.predicted_error = None   # of a chosen method's settings, once predicted
         self.result = None
+        self._inputs = None
+
+    def inputs_hash(self):
+        """A digest of everything the bake's result depends on: the arrays read from the mesh
+        (Geometry.inputs) and sdnative.bake_transfer's arguments. Recorded as `inputs`: an equal
+        digest later means that baking again would give the same bake."""
+        if self._inputs is None:
+            digest = hashlib.blake2b(digest_size=16)
+            for value in self.geometry.inputs():
+                digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
+            for key, value in sorted(self.bake_arguments().items()):
+                digest.update(key.encode())
+                digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
+                              else repr(value).encode())
+            self._inputs = digest.hexdigest()
+        return self._inputs
+
+    @property
+    def automatic(self):
+        """Whether the automatic mode chooses its settings (choose(), before the bake)."""
+        return self.settings["method"] == analysis.AUTOMATIC
 
     def occluders(self):
         """bake_transfer's occluder keywords ({} without occluders)."""
@@ -154,11 +230,25 @@ class BakeTask:
         """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
                                  self.settings["lobe"], self.settings["exponent"], stop)
+        per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
+            per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
             method=choice.setting.method, light_order=choice.setting.light_order,
             visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
-            automatic="\n".join(choice.reasons), predicted_error=float(choice.error),
+            predicted_error=float(choice.error),
             frame_terms=int(choice.frame_terms))
+        self.predicted_error = float(choice.error)
+
+    def adopt(self, settings, predicted_error):
+        """Takes over an automatic choice already made for this object (the prediction's), with
+        this bake's own shape."""
+        self.settings = dict(settings, shape=self.settings["shape"])
+        self.predicted_error = predicted_error
+
+    def predict(self, stop):
+        """The predicted error of its settings (any thread; the bake-time predictor's)."""
+        self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
+                                                self.settings, stop)
 
     def bake_arguments(self):
         s = self.settings
@@ -201,19 +291,35 @@ def bake_settings(scene, obj, env_source):
                 rays=int(fixed.get("rays", settings.rays)))
 
 
-def _analysis_inputs(scene, obj, env_source, settings, to_frame):
-    """What the automatic mode measures the object with (analysis.Inputs), in its bake frame."""
+def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
+    """What the object's error is measured with (analysis.Inputs), in its bake frame."""
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
-    eye = None
+    eye = triangle_pixels = None
     if scene.camera is not None:
         eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+        render = scene.render
+        width = render.resolution_x * render.resolution_percentage // 100
+        height = render.resolution_y * render.resolution_percentage // 100
+        view = View.from_camera(scene.camera, depsgraph, width, height, scene)
+        triangle_pixels = automatic.projected_triangle_pixels(
+            transforms.transform_points(matrix, geometry.mesh_positions), geometry.mesh_triangles,
+            view.view_projection, width, height)
     fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
     fixed.pop("method", None)
     panel = scene.sd_lighting
-    return analysis.gather(scene, env_source, settings["lobe"], settings["exponent"], rotation, eye,
+    return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
                            panel.target_error, panel.max_automatic_order, fixed,
-                           panel.ringing_window.lower())
+                           panel.ringing_window.lower(), triangle_pixels)
+
+
+def recorded_settings(scene, obj, env_source):
+    """The settings the object's bake recorded - what it was asked for and, from the automatic
+    mode, what was chosen - for a re-bake (not the panel's); BakeError without a bake."""
+    mesh = baked_mesh(obj)
+    if mesh is None:
+        raise BakeError("%s has no bake" % obj.name)
+    return {key: value for key, value in mesh[BAKE].to_dict().items() if key not in SUMMARY_KEYS}
 
 
 def _refusal(obj):
@@ -242,10 +348,12 @@ def _occluders(others, to_frame):
     return np.concatenate(verts), np.concatenate(tris).astype(np.int32)
 
 
-def prepare(context, objects):
+def prepare(context, objects, settings_of=bake_settings):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
-    BakeError when none is left or the bake cannot start (no sdnative, no environment)."""
+    BakeError when none is left or the bake cannot start (no sdnative, no environment).
+    settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
+    panel's; recorded_settings: those of its last bake)."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
@@ -258,11 +366,17 @@ def prepare(context, objects):
     except environment.Unavailable as exc:
         raise BakeError(str(exc)) from exc
 
-    visible = []
-    for other in scene.objects:
-        tris = world_triangles(other, depsgraph, view_layer)
-        if tris is not None:
-            visible.append((other, tris))
+    # The other objects' world triangles, each read when first needed: an object baked alone (a
+    # live re-bake) never reads its own.
+    triangles = {}
+
+    def occluders_of(obj):
+        for other in scene.objects:
+            if other != obj:
+                if other.name_full not in triangles:
+                    triangles[other.name_full] = world_triangles(other, depsgraph, view_layer)
+                if triangles[other.name_full] is not None:
+                    yield triangles[other.name_full]
 
     tasks, skipped = [], []
     for obj in objects:
@@ -273,16 +387,15 @@ def prepare(context, objects):
                 reason = "%s has a zero scale" % obj.name
         if reason is None:
             geometry = _evaluated_arrays(obj, depsgraph, shape)
-            if geometry is None or len(geometry.triangles) == 0:
+            if geometry is None or geometry.triangle_count == 0:
                 reason = "%s has no faces" % obj.name
         if reason is not None:
             skipped.append(reason)
             continue
-        occluders = _occluders([tris for other, tris in visible if other != obj], to_frame)
-        settings = bake_settings(scene, obj, env_source)
+        occluders = _occluders(occluders_of(obj), to_frame)
+        settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        inputs = (_analysis_inputs(scene, obj, env_source, settings, to_frame)
-                  if settings["method"] == analysis.AUTOMATIC else None)
+        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
@@ -351,7 +464,7 @@ class BakeJob:
                     return not self.cancel_requested
 
                 geometry = task.geometry
-                if task.analysis is not None:
+                if task.automatic:
                     self.choosing = True
                     task.choose(lambda: self.cancel_requested)
                     self.choosing = False
@@ -421,7 +534,14 @@ class BakeJob:
         return [obj.name for obj, _, _ in built]
 
 
+# The keys _result_summary adds to a bake's settings in `sd_bake`: what the bake found, not what it
+# was asked for.
+SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
+                "design_nodes_max", "design_nodes_mean")
+
+
 def _result_summary(task, floats):
+    """The summary of a task's result for `sd_bake` (SUMMARY_KEYS)."""
     result = task.result
     n = len(task.geometry.vertices)
     summary = {
@@ -430,6 +550,7 @@ def _result_summary(task, floats):
         "floats_per_vertex": int(floats),
         "bytes_per_vertex": int(4 * floats),
         "bake_id": uuid.uuid4().hex,
+        "inputs": task.inputs_hash(),
     }
     offsets = result.get("design_offsets")
     if offsets is not None:

@@ -26,6 +26,7 @@ import numpy as np
 from . import attributes, baking, environment, gpu_shading, materials, native
 from .utils import methods, transforms
 from .utils.bake_data import BAKE
+from .view import View
 
 log = logging.getLogger(__name__)
 
@@ -35,48 +36,6 @@ _handler = None
 _objects = {}         # object name -> (key, ObjectData)
 _generations = ()     # the background work's generations the viewports last showed
 last_error = ""
-
-
-class View:
-    """A camera for drawing: world-to-clip matrix and the eye (position, or direction to an
-    orthographic viewer with w = 0)."""
-
-    def __init__(self, view_projection, camera):
-        self.view_projection = np.asarray(view_projection, dtype=np.float64)
-        self.camera = np.asarray(camera, dtype=np.float64)
-
-    @classmethod
-    def from_region(cls, region_3d):
-        inverse = region_3d.view_matrix.inverted()
-        if region_3d.is_perspective:
-            camera = tuple(inverse.translation) + (1.0,)
-        else:
-            camera = tuple(inverse.col[2][:3]) + (0.0,)
-        return cls(region_3d.perspective_matrix, camera)
-
-    @classmethod
-    def from_camera(cls, camera_object, depsgraph, width, height, scene=None):
-        projection = camera_object.calc_matrix_camera(
-            depsgraph, x=width, y=height,
-            scale_x=scene.render.pixel_aspect_x if scene else 1.0,
-            scale_y=scene.render.pixel_aspect_y if scene else 1.0)
-        world = camera_object.matrix_world
-        view = world.inverted()
-        if camera_object.data.type == 'ORTHO':
-            camera = tuple(world.col[2][:3]) + (0.0,)
-        else:
-            camera = tuple(world.translation) + (1.0,)
-        return cls(projection @ view, camera)
-
-    def view_directions(self, world_positions, world_to_local):
-        """Unit directions to the eye, per point, in a local frame (float64, as the CPU does)."""
-        if self.camera[3] > 0.5:
-            to_eye = self.camera[:3] - world_positions
-        else:
-            to_eye = np.broadcast_to(self.camera[:3], world_positions.shape)
-        to_eye = to_eye / np.linalg.norm(to_eye, axis=1)[:, None]
-        local = to_eye @ world_to_local.T
-        return local / np.linalg.norm(local, axis=1)[:, None]
 
 
 def clear_cache():
@@ -174,20 +133,25 @@ def exposure_scale(scene):
 
 
 def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False):
-    """Draws the baked objects into the bound framebuffer with the current GPU state. wait=False
-    (the interactive draw) shades with no ringing window until it is chosen; True waits for it."""
+    """Draws the baked objects into the bound framebuffer with the current GPU state. per_pixel:
+    every object per pixel (the panel's Per Pixel), else those whose automatic choice says so.
+    wait=False (the interactive draw) shades with no ringing window until it is chosen; True
+    waits for it."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
     for obj in objects:
-        data = object_data(obj, per_pixel=per_pixel, band_limited_texture=band_limited_texture)
+        info = baking.bake_info(obj) or {}
+        data = object_data(obj, per_pixel=per_pixel or bool(info.get("per_pixel", False)),
+                           band_limited_texture=band_limited_texture)
         if data is None:
             continue
         block, texture = _frame(scene, obj, data, view, scale, wait, source, g, depth_bias=depth_bias)
         data.draw(block, texture)
 
 
-def _tag_viewports():
+def tag_viewports():
+    """Redraws every 3D viewport (and its sidebar)."""
     import bpy
     for window in bpy.context.window_manager.windows:
         for area in window.screen.areas:
@@ -208,7 +172,7 @@ def _poll_background():
     generations = tuple(w.generation for w in work)
     if generations != _generations:
         _generations = generations
-        _tag_viewports()
+        tag_viewports()
     return 0.25 if any(w.pending() for w in work) else None
 
 

@@ -3,7 +3,7 @@
 import bpy
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
-from . import baking, drawing, prediction, preview
+from . import baking, drawing, live_rebake, prediction, preview
 
 active_job = None     # the BakeJob running in the UI, for the panel and poll()
 
@@ -44,12 +44,18 @@ class SD_OT_bake(bpy.types.Operator):
         return True
 
     def _prepare(self, context):
+        chosen = prediction.automatic_choices(context)
         prediction.stop_sampling()
+        live_rebake.stop()   # this bake's result replaces what a running re-bake would give
         try:
-            return baking.BakeJob(*baking.prepare(context, context.selected_objects))
+            tasks, warnings = baking.prepare(context, context.selected_objects)
         except baking.BakeError as exc:
             self.report({'ERROR'}, "Bake: %s" % exc)
-        return None
+            return None
+        for task in tasks:   # what the prediction chose is not measured again
+            if task.automatic and task.object_name in chosen:
+                task.adopt(*chosen[task.object_name])
+        return baking.BakeJob(tasks, warnings)
 
     def _finish(self, context, job):
         if job.cancelled:
@@ -103,6 +109,7 @@ class SD_OT_bake(bpy.types.Operator):
         wm = context.window_manager
         self._job = job
         active_job = job
+        live_rebake.wait_for(job)
         job.start()
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)
@@ -152,16 +159,19 @@ class SD_OT_bake(bpy.types.Operator):
 
 
 class SD_OT_cancel_bake(bpy.types.Operator):
-    """Cancel the running bake"""
+    """Cancel the running bake, or the running live re-bake (its object keeps its bake)"""
     bl_idname = "sd_lighting.cancel_bake"
     bl_label = "Cancel Bake"
 
     @classmethod
     def poll(cls, context):
-        return active_job is not None
+        return active_job is not None or live_rebake.running() is not None
 
     def execute(self, context):
-        active_job.cancel()
+        if active_job is not None:
+            active_job.cancel()
+        else:
+            live_rebake.cancel()
         return {'FINISHED'}
 
 

@@ -2,8 +2,8 @@
 
 import bpy
 
-from . import (analysis, baking, drawing, environment, gpu_shading, materials, native, operators,
-               prediction)
+from . import (analysis, baking, drawing, environment, gpu_shading, live_rebake, materials, native,
+               operators, prediction)
 from .utils import methods, ringing
 
 
@@ -98,8 +98,19 @@ class SD_PT_lighting(bpy.types.Panel):
                 layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')
             elif prediction.settings_key(context) is not None:
                 layout.label(text="Predicting the bake time...", icon='TIME')
-            for name, chosen in prediction.automatic_choices(context):
-                _draw_choice(layout.box(), "Automatic for %s (before the bake)" % name, chosen)
+            for name, chosen, error in prediction.predicted_errors(context):
+                if "automatic" in chosen:
+                    _draw_choice(layout.box(), "Automatic for %s (before the bake)" % name, chosen)
+                else:
+                    layout.label(text="%s: predicted error %.1f %%" % (name, 100 * error), icon='INFO')
+        layout.prop(settings, "live_rebake")
+        rebake = live_rebake.running()
+        if rebake is not None:
+            row = layout.row(align=True)
+            row.label(text="Re-baking %s, %d %%" % (rebake[0], int(100 * rebake[1].fraction)), icon='TIME')
+            row.operator("sd_lighting.cancel_bake", text="Cancel", icon='CANCEL')
+        elif settings.live_rebake and live_rebake.message:
+            layout.label(text=live_rebake.message[:100], icon='INFO')
 
         # Live shading
         box = layout.box()
@@ -146,6 +157,9 @@ class SD_PT_lighting(bpy.types.Panel):
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
         if "automatic" in info:
             _draw_choice(box, "Automatic choice", info)
+        if settings.live_rebake and method is not None and method.designs_per_vertex:
+            col.label(text="%s builds a design per vertex: each live re-bake takes about as long"
+                      % method.label, icon='ERROR')
         if baking.scale_changed(obj):
             col.label(text="Scale changed since the bake: bake again", icon='ERROR')
         if baking.albedo_texture_unbaked(obj):

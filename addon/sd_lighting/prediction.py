@@ -38,12 +38,14 @@ def settings_key(context):
 
 def sample_jobs(tasks):
     """The sampling jobs of baking.prepare's tasks: each object's own mesh joins its occluders,
-    so that a sampled triangle's vertices see the rest of the object. An automatic task chooses
-    its settings first, in the predictor's worker (its reasons and predicted error are then in
-    task.settings, for the panel)."""
+    so that a sampled triangle's vertices see the rest of the object. First, in the predictor's
+    worker, an automatic task chooses its settings (its reasons are then in task.settings) and
+    a chosen method's are measured: either way task.predicted_error, for the panel."""
     def arguments(task, stop):
-        if task.analysis is not None:
+        if task.automatic:
             task.choose(stop)
+        else:
+            task.predict(stop)
         geometry = task.geometry
         kwargs = task.bake_arguments()
         vertices, triangles = [geometry.vertices], [geometry.triangles]
@@ -112,14 +114,26 @@ def current(context):
     return predictor.prediction()
 
 
-def automatic_choices(context):
-    """[(object name, settings dict)] of the automatic mode's choices for the panel's selection,
-    once the predictor has made them (empty before)."""
+def predicted_errors(context):
+    """[(object name, its task's settings dict, predicted error)] for the panel's selection, as
+    the predictor has measured them (empty before)."""
     predictor = _predictors.get(settings_key(context))
     if predictor is None:
         return []
-    return [(job.task.object_name, job.task.settings) for job in predictor.jobs
-            if job.task.analysis is not None and "automatic" in job.task.settings]
+    return [(job.task.object_name, job.task.settings, job.task.predicted_error)
+            for job in predictor.jobs if job.task.predicted_error is not None]
+
+
+def automatic_choices(context):
+    """{object name: (settings dict, predicted error)} of the automatic choices the prediction for
+    the panel's settings and selection has made, for the bake to take over (the
+    environment's rotation and the camera they were measured at may have changed since: what
+    they change is small next to a second measurement's seconds)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return {}
+    return {job.task.object_name: (dict(job.task.settings), job.task.predicted_error)
+            for job in predictor.jobs if "automatic" in job.task.settings}
 
 
 def _start_requested():

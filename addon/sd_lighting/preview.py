@@ -18,6 +18,7 @@ import zlib
 import numpy as np
 
 from . import baking, compat, drawing, gpu_context
+from .view import View
 
 OTHER_MESH_GREY = 0.18
 
@@ -45,7 +46,7 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
     if camera is None:
         raise RuntimeError("the scene has no camera")
     gpu_context.ensure()
-    view = drawing.View.from_camera(camera, depsgraph, width, height, scene)
+    view = View.from_camera(camera, depsgraph, width, height, scene)
     objects = drawing.baked_objects(scene, view_layer)
     others = _other_mesh_batches(scene, depsgraph, view_layer, {o.name for o in objects})
 

@@ -9,7 +9,7 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        IntProperty, PointerProperty, StringProperty)
 
-from . import analysis, environment, native
+from . import analysis, environment, live_rebake, native
 from .utils import limits, methods, ringing
 
 log = logging.getLogger(__name__)
@@ -50,6 +50,10 @@ def _set_rotation(self, value):
         mapping.inputs["Rotation"].default_value = value
     else:
         self.stored_rotation = tuple(value)
+
+
+def _sync_live_rebake(self, context):
+    live_rebake.sync()
 
 
 _AUTOMATIC_ITEM = [(analysis.AUTOMATIC, "Automatic",
@@ -129,6 +133,11 @@ class SceneSettings(bpy.types.PropertyGroup):
                       **limits.maximum(LIMITS.rays),
                       description="Rays traced per vertex for the visibility")
     seed: IntProperty(name="Seed", default=0, min=0, description="Seed of the ray directions")
+
+    live_rebake: BoolProperty(
+        name="Live Re-bake", default=False, update=_sync_live_rebake,
+        description="While you edit a baked object (edit mode, modifiers), bake it again in the "
+                    "background with the settings of its bake, and show the new bake when done")
 
     live_shading: BoolProperty(
         name="Live Shading", default=True, update=_redraw,

@@ -1,10 +1,12 @@
 """What enabling and disabling the add-on does: settings, operators, panel, the viewport's draw
-handler, and a load_post handler that drops the GPU data and environments of the previous file."""
+handler, the live re-bake's handlers (live_rebake.py), and a load_post handler that drops the GPU
+data, environments and re-bakes of the previous file."""
 
 import bpy
 from bpy.app.handlers import persistent
 
-from . import drawing, environment, gpu_shading, operators, panels, prediction, properties
+from . import (drawing, environment, gpu_shading, live_rebake, operators, panels, prediction,
+               properties)
 
 
 @persistent
@@ -13,6 +15,8 @@ def _on_load(_dummy):
     gpu_shading.clear_cache()
     environment.clear_cache()
     prediction.clear()
+    live_rebake.stop()
+    live_rebake.sync()
 
 
 def register():
@@ -20,6 +24,7 @@ def register():
     operators.register()
     panels.register()
     drawing.register()
+    live_rebake.register()
     if _on_load not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(_on_load)
 
@@ -27,6 +32,7 @@ def register():
 def unregister():
     if _on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(_on_load)
+    live_rebake.unregister()
     drawing.unregister()
     prediction.clear()
     gpu_shading.clear_cache()

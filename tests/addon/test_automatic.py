@@ -174,3 +174,17 @@ def test_an_override_is_kept_and_the_rest_still_chosen(sdnative, forest):
     assert choice.reasons[0] == "Overridden: method = prt_matrix, visibility_order = 1"
     with pytest.raises(ValueError, match="no measured setting"):
         automatic.choose(errors, 0.02, None, 266, 2, 60.0, fixed={"light_order": 9})
+
+
+def test_a_sparse_mesh_on_screen_is_evaluated_per_pixel():
+    """Two triangles of a square seen face on by a camera whose clip space is the square itself
+    (view_projection: identity with w = 1): each covers half the screen."""
+    square = np.array([[-1.0, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3]])
+    pixels = automatic.projected_triangle_pixels(square, triangles, np.eye(4), 200, 100)
+    assert pixels == pytest.approx(0.5 * 200 * 100)
+    # seen from behind (reversed winding) nothing faces the camera
+    assert automatic.projected_triangle_pixels(square, triangles[:, ::-1], np.eye(4), 200, 100) == 0.0
+    assert automatic.evaluation(pixels)[0]
+    assert not automatic.evaluation(10.0)[0]
+    assert not automatic.evaluation(None)[0]

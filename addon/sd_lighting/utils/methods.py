@@ -37,6 +37,11 @@ class Method:
         return self.data.bake_arguments(light_order, visibility_order) if self.data else {}
 
     @property
+    def designs_per_vertex(self):
+        """Whether its bake builds a design per vertex (eq. 13): far slower than the rays alone."""
+        return self.data is DESIGN
+
+    @property
     def shade_inputs(self):
         """The per-vertex keywords of sdnative.shade it takes, besides light and normals."""
         keys = self.data.keys if self.data else ()

@@ -74,7 +74,10 @@ VertexWalk vertex_walk(std::size_t vertex_count, const std::vector<Triangle>& tr
       const std::size_t p = position[adjacency.neighbours[j]];
       if (p >= group_start && p < i) best = std::max(best, static_cast<std::int64_t>(p));
     }
-    if (adjacency.first[v] == adjacency.first[v + 1] && i > group_start) best = static_cast<std::int64_t>(i - 1);
+    // No earlier neighbour in the group (its walk parent lies in an earlier group, or it has no
+    // edges): the previous position, a few edges away after a backtrack, still sees a closer sky
+    // than a design from scratch needs.
+    if (best < 0 && i > group_start) best = static_cast<std::int64_t>(i - 1);
     walk.source[i] = best;
   }
   return walk;

@@ -12,14 +12,16 @@
 namespace sd {
 
 /// Vertices in depth-first preorder over the mesh's edges, cut into groups of `group` consecutive
-/// positions that one worker runs in order. Within a group, each vertex after the first usually
-/// has an earlier neighbour — its depth-first parent — whose design can start its own; across
-/// groups nothing is shared, so the results do not depend on which worker runs which group.
+/// positions that one worker runs in order. Within a group, each vertex after the first starts from
+/// an earlier vertex's design: usually a neighbour (its depth-first parent), else the previous
+/// position; across groups nothing is shared, so the results do not depend on which worker runs
+/// which group.
 struct VertexWalk {
   std::size_t group = 1;
   std::vector<std::size_t> order;     ///< [N] the vertex at each position
-  /// [N] per position, the earlier position in the same group to warm-start from, or -1: the
-  /// latest-visited neighbour in the group; for a vertex without edges, the previous position.
+  /// [N] per position, the earlier position in the same group to warm-start from, or -1 for a
+  /// group's first: the latest-visited neighbour in the group; for a vertex without one (its
+  /// parent in an earlier group, or no edges), the previous position.
   std::vector<std::int64_t> source;
 };
 

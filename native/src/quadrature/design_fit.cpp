@@ -2,6 +2,8 @@
 
 #include <glm/geometric.hpp>
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -19,11 +21,14 @@ namespace {
 constexpr int kStallWindow = 10;
 constexpr double kPolishZone = 1e3;
 
+// The buffers of one fit, sized once per node count rather than once per step or trial.
 struct Linearisation {
-  Eigen::VectorXd residual;
+  Eigen::VectorXd residual, residual_trial;
   Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2)
   std::vector<glm::dvec3> e1, e2;
   Eigen::MatrixXd raw_jacobian;
+  Eigen::VectorXd raw_sum, values;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> gradients;
 };
 
 int raw_size(const MomentSystem& system) { return system.transform.size() == 0 ? system.size : system.raw_size; }
@@ -38,44 +43,91 @@ void to_basis(const MomentSystem& system, const Raw& raw, Out& out) {
   }
 }
 
-Eigen::VectorXd residual_of(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
-                            const std::vector<double>& weights) {
-  Eigen::VectorXd raw = Eigen::VectorXd::Zero(raw_size(system));
-  Eigen::VectorXd values(raw.size());
+double cost_of(const MomentSystem& system, const std::vector<glm::dvec3>& nodes, const std::vector<double>& weights,
+               Linearisation& lin) {
+  lin.raw_sum.setZero(raw_size(system));
+  lin.values.resize(lin.raw_sum.size());
   for (size_t i = 0; i < nodes.size(); ++i) {
-    system.evaluate(nodes[i], values.data(), nullptr);
-    raw += weights[i] * values;
+    system.evaluate(nodes[i], lin.values.data(), nullptr);
+    lin.raw_sum += weights[i] * lin.values;
   }
-  raw -= system.target;
-  Eigen::VectorXd r;
-  to_basis(system, raw, r);
-  return r;
+  lin.raw_sum -= system.target;
+  if (system.transform.size() == 0) return lin.raw_sum.norm();
+  lin.residual_trial.noalias() = system.transform * lin.raw_sum;
+  return lin.residual_trial.norm();
 }
 
 void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
                const std::vector<double>& weights, Linearisation& lin) {
   const int k = raw_size(system);
   const int n = static_cast<int>(nodes.size());
-  Eigen::VectorXd raw_sum = Eigen::VectorXd::Zero(k);
+  lin.raw_sum.setZero(k);
   lin.raw_jacobian.resize(k, 3 * n);
   lin.e1.resize(n);
   lin.e2.resize(n);
-  Eigen::VectorXd values(k);
-  Eigen::Matrix<double, 3, Eigen::Dynamic> gradients(3, k);
+  lin.values.resize(k);
+  lin.gradients.resize(3, k);
   for (int i = 0; i < n; ++i) {
-    system.evaluate(nodes[i], values.data(), gradients.data());
+    system.evaluate(nodes[i], lin.values.data(), lin.gradients.data());
     tangent_frame(nodes[i], lin.e1[i], lin.e2[i]);
     const Eigen::Vector3d e1(lin.e1[i].x, lin.e1[i].y, lin.e1[i].z);
     const Eigen::Vector3d e2(lin.e2[i].x, lin.e2[i].y, lin.e2[i].z);
-    raw_sum += weights[i] * values;
-    lin.raw_jacobian.col(3 * i) = values;
-    lin.raw_jacobian.col(3 * i + 1) = weights[i] * (gradients.transpose() * e1);
-    lin.raw_jacobian.col(3 * i + 2) = weights[i] * (gradients.transpose() * e2);
+    lin.raw_sum += weights[i] * lin.values;
+    lin.raw_jacobian.col(3 * i) = lin.values;
+    lin.raw_jacobian.col(3 * i + 1).noalias() = weights[i] * (lin.gradients.transpose() * e1);
+    lin.raw_jacobian.col(3 * i + 2).noalias() = weights[i] * (lin.gradients.transpose() * e2);
   }
   to_basis(system, lin.raw_jacobian, lin.jacobian);
-  raw_sum -= system.target;
-  to_basis(system, raw_sum, lin.residual);
+  lin.raw_sum -= system.target;
+  to_basis(system, lin.raw_sum, lin.residual);
 }
+
+// One Levenberg–Marquardt system with Marquardt's scaling, (JᵀJ + μ diag(JᵀJ)) h = −Jᵀr, in the
+// columns-normalised form J_s = J D^{-1/2}: h = D^{-1/2} z, (J_sᵀJ_s + μI) z = −J_sᵀr. Where J has
+// more columns than rows (a design above the generic count, as when pruning a Tchakaloff rule of
+// ~k nodes: 3k unknowns) it is solved through the k × k system, z = −J_sᵀ (J_s J_sᵀ + μI)⁻¹ r.
+// Either matrix is positive definite for μ > 0, so a Cholesky factorisation does (cheaper than a
+// pivoted LDLT), and it is formed once per step for all the dampings tried.
+class DampedSystem {
+ public:
+  explicit DampedSystem(const Linearisation& lin) : residual_(lin.residual) {
+    inverse_root_ = lin.jacobian.colwise().squaredNorm().transpose().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    scaled_.noalias() = lin.jacobian * inverse_root_.asDiagonal();
+    scaled_gradient_.noalias() = scaled_.transpose() * lin.residual;
+    wide_ = scaled_.cols() > scaled_.rows();
+    const Eigen::Index size = wide_ ? scaled_.rows() : scaled_.cols();
+    gram_.setZero(size, size);
+    if (wide_) {
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_);
+    } else {
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_.transpose());
+    }
+  }
+
+  /// The step h at damping μ and the decrease of ½E the linear model predicts for it,
+  /// ½ hᵀ(μ D h − g) = ½ zᵀ(μ z − J_sᵀr); false where the factorisation fails to rounding.
+  bool solve(double damping, Eigen::VectorXd& step, double& predicted) {
+    damped_ = gram_;
+    damped_.diagonal().array() += damping;
+    llt_.compute(damped_);
+    if (llt_.info() != Eigen::Success) return false;
+    if (wide_) {
+      step.noalias() = -(scaled_.transpose() * llt_.solve(residual_));
+    } else {
+      step = -llt_.solve(scaled_gradient_);
+    }
+    predicted = 0.5 * step.dot(damping * step - scaled_gradient_);
+    step.array() *= inverse_root_.array();
+    return true;
+  }
+
+ private:
+  const Eigen::VectorXd& residual_;
+  Eigen::VectorXd inverse_root_, scaled_gradient_;
+  Eigen::MatrixXd scaled_, gram_, damped_;
+  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt_;
+  bool wide_ = false;
+};
 
 }  // namespace
 
@@ -88,6 +140,9 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
   double damping = 1e-3;
   double growth = 2.0;  // of μ after a rejected step, doubling while steps keep failing
   double cost_before = cost;  // kStallWindow iterations ago
+  Eigen::VectorXd step;
+  std::vector<glm::dvec3> trial_nodes;
+  std::vector<double> trial_weights;
   for (int iteration = 0; iteration < options.max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
     if (options.stop && options.stop()) throw DesignCancelled("the design fit was cancelled");
     if (options.stop_when_stalled && iteration > 0 && iteration % kStallWindow == 0) {
@@ -95,28 +150,24 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
       cost_before = cost;
     }
     const int n = static_cast<int>(nodes.size());
-    // Marquardt's scaling keeps the step meaningful whatever the units of λ and of angles.
-    Eigen::MatrixXd normal = lin.jacobian.transpose() * lin.jacobian;
-    const Eigen::VectorXd scale = normal.diagonal().cwiseMax(1e-300);
-    const Eigen::VectorXd gradient = lin.jacobian.transpose() * lin.residual;
+    DampedSystem system_at_nodes(lin);
     // Within kPolishZone of the tolerance, rounding starts to dominate E: a stallable fit stops at
     // the first step that fails or does not halve it, rather than growing μ for nothing.
     const bool polishing = options.stop_when_stalled && cost < kPolishZone * tolerance;
     bool accepted = false, converged = false;
+    trial_nodes.resize(n);
+    trial_weights.resize(n);
     while (!accepted && damping < 1e12) {
-      Eigen::MatrixXd damped = normal;
-      damped.diagonal() += damping * scale;
-      const Eigen::VectorXd step = -damped.ldlt().solve(gradient);
-      // The decrease of ½E the linear model predicts: ½ hᵀ(μ D h − g).
-      const double predicted = 0.5 * step.dot(damping * scale.cwiseProduct(step) - gradient);
-      std::vector<glm::dvec3> trial_nodes(n);
-      std::vector<double> trial_weights(n);
-      for (int i = 0; i < n; ++i) {
-        trial_weights[i] = std::max(weights[i] + step(3 * i), 0.0);  // projection onto λ >= 0
-        trial_nodes[i] = glm::normalize(nodes[i] + step(3 * i + 1) * lin.e1[i] + step(3 * i + 2) * lin.e2[i]);
-        if (system.project_to_support) trial_nodes[i] = system.project_to_support(trial_nodes[i]);
+      double predicted = 0.0;
+      double trial_cost = cost;
+      if (system_at_nodes.solve(damping, step, predicted)) {
+        for (int i = 0; i < n; ++i) {
+          trial_weights[i] = std::max(weights[i] + step(3 * i), 0.0);  // projection onto λ >= 0
+          trial_nodes[i] = glm::normalize(nodes[i] + step(3 * i + 1) * lin.e1[i] + step(3 * i + 2) * lin.e2[i]);
+          if (system.project_to_support) trial_nodes[i] = system.project_to_support(trial_nodes[i]);
+        }
+        trial_cost = cost_of(system, trial_nodes, trial_weights, lin);
       }
-      const double trial_cost = residual_of(system, trial_nodes, trial_weights).norm();
       if (std::isfinite(trial_cost) && trial_cost < cost) {
         accepted = true;
         nodes.clear();

@@ -168,16 +168,15 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
 }
 
 // Theorem 2.2 from `start`, a design of a nearby measure (a neighbouring vertex's): its weights
-// scaled to this mass, then nodes and weights refitted by gradient projection (eq. 14). Neighbours
+// scaled to this mass, then nodes and weights refitted by gradient projection (eq. 14) in `basis`
+// (gram_basis's, or qr_basis's where the Gram matrix is ill-conditioned). Neighbours
 // see nearly the same sky, so most refits certify with start's node count. A refit that stalls
 // gains the sample directions along which added weight lowers E fastest (the entering variables
 // of an active-set step), and is pruned back to the generic count (rank + 2)/3 after it
-// certifies. Returns nothing when it does not certify, or certifies with more nodes than start.
-std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const SphericalDesign& start,
-                                     const std::function<bool()>& stop) {
-  const std::optional<OrthonormalBasis> basis = gram_basis(samples);
-  if (!basis) return std::nullopt;
-  const MomentSystem system = basis->system(samples.moments);
+// certifies. Returns nothing when it does not certify.
+std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
+                                     const SphericalDesign& start, const std::function<bool()>& stop) {
+  const MomentSystem system = basis.system(samples.moments);
   const FitOptions options{fit_tolerance_for(measure.mass), kWarmIterations, true, true, stop};
   const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
@@ -195,9 +194,9 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   for (int round = 0; !certified(design) && round < kExchangeRounds; ++round) {
     const std::vector<double> now = design_moments(design.nodes, design.weights, samples.degree);
     const Eigen::VectorXd residual =
-        basis->transform * (Eigen::Map<const Eigen::VectorXd>(now.data(), samples.moments.size()) - system.target);
+        basis.transform * (Eigen::Map<const Eigen::VectorXd>(now.data(), samples.moments.size()) - system.target);
     // dE/dλ at a new node x is 2 φ(x)·residual: the most negative ones enter.
-    const Eigen::VectorXd slope = samples.vandermonde * (basis->transform.transpose() * residual);
+    const Eigen::VectorXd slope = samples.vandermonde * (basis.transform.transpose() * residual);
     std::vector<int> order(static_cast<std::size_t>(slope.size()));
     std::iota(order.begin(), order.end(), 0);
     const int entering = std::min<int>(kExchangeNodes, static_cast<int>(order.size()));
@@ -216,14 +215,13 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
     design = prune_design(system, std::move(design), generic, certified,
                           FitOptions{options.tolerance, kWarmIterations, true, false, stop});
   }
-  if (design.size() > start.size()) return std::nullopt;
   design.method = "refit";
   return design;
 }
 
-// Carathéodory–Tchakaloff compression, then pruning by gradient projection.
-SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, const std::function<bool()>& stop) {
-  const int points = static_cast<int>(measure.dirs.size());
+// The basis from the column-pivoted QR of the weighted Vandermonde, which decides the rank where
+// the Gram matrix is too ill-conditioned for gram_basis.
+OrthonormalBasis qr_basis(const Samples& samples) {
   const int k = static_cast<int>(samples.vandermonde.cols());
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
   qr.setThreshold(kRankThreshold);
@@ -237,6 +235,14 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
   basis.degree = samples.degree;
   basis.transform = Eigen::MatrixXd::Zero(rank, k);
   for (int j = 0; j < rank; ++j) basis.transform.col(qr.colsPermutation().indices()(j)) = inverse_r.row(j).transpose();
+  return basis;
+}
+
+// Carathéodory–Tchakaloff compression in qr_basis's `basis`, then pruning by gradient projection.
+SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
+                         const std::function<bool()>& stop) {
+  const int points = static_cast<int>(measure.dirs.size());
+  const int rank = static_cast<int>(basis.transform.rows());
   const Eigen::MatrixXd phi = samples.vandermonde * basis.transform.transpose();  // orthonormal for the measure
   const Eigen::VectorXd target = phi.transpose() * samples.weights;
   const std::vector<double> moments = samples.moment_vector();
@@ -270,8 +276,18 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
   const CleanMeasure measure = validate(dirs, weights, degree);
   const Samples samples(measure, degree);
   std::optional<SphericalDesign> design;
-  if (start != nullptr && start->degree == degree && start->size() > 0) design = refit(measure, samples, *start, stop);
-  if (!design) design = compress(measure, samples, stop);
+  std::optional<OrthonormalBasis> qr;
+  if (start != nullptr && start->degree == degree && start->size() > 0) {
+    std::optional<OrthonormalBasis> basis = gram_basis(samples);
+    if (!basis) basis = qr = qr_basis(samples);
+    design = refit(measure, samples, *basis, *start, stop);
+  }
+  // A refit with more nodes than its start is kept only where the compression does no better.
+  if (!design || design->size() > start->size()) {
+    if (!qr) qr = qr_basis(samples);
+    SphericalDesign compressed = compress(measure, samples, *qr, stop);
+    if (!design || compressed.size() <= design->size()) design = std::move(compressed);
+  }
   for (double& w : design->weights) w *= measure.scale;
   return std::move(*design);
 }

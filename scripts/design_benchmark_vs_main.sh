@@ -1,0 +1,23 @@
+#!/bin/bash
+# Per-vertex design cost (Theorem 2.2) of a base branch's builder against this checkout's, back to
+# back per degree on one thread (CPU ms per vertex, nodes mean and max), so that the ratios come
+# from one run on a shared machine. The base's library is built once into build/main-build with
+# this checkout's native/benchmarks/design_benchmarks.cpp, so both print the same columns.
+#
+#   scripts/design_benchmark_vs_main.sh [base=main] [rays=1024] [degrees=4..9 as "4 5 6 7 8 9"]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+base=${1:-main}
+rays=${2:-1024}
+degrees=${3:-"4 5 6 7 8 9"}
+if [ ! -x build/main-build/native/design_benchmarks ]; then
+  rm -rf build/main-src && mkdir -p build/main-src
+  git archive "$base" | tar -x -C build/main-src
+  cp native/benchmarks/design_benchmarks.cpp build/main-src/native/benchmarks/
+  cmake -S build/main-src -B build/main-build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > /dev/null
+  nice -n 10 cmake --build build/main-build -j2 --target design_benchmarks > /dev/null
+fi
+for d in $degrees; do
+  echo "degree $d $base:   $(nice -n 10 build/main-build/native/design_benchmarks "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+  echo "degree $d branch: $(nice -n 10 build/native/design_benchmarks "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+done

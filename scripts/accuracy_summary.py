@@ -300,7 +300,8 @@ def markdown(report, averaged, plots, strip_file):
     if gpu:
         lines += ["", "## MSD against PRT: frame time and memory", "",
                   "GPU frame time (1280 x 720, software rasteriser: %s) at s = 4, s' = 2, Lambert, 256 rays; "
-                  "ratios to PRT (8) for MSD (13) and to PRT (10) for MSD (12):" % report["gpu"], "",
+                  "ns/vertex is the frame time over the vertices (at a few thousand vertices the frame's fixed "
+                  "cost is most of it); ratios to PRT (8) for MSD (13) and to PRT (10) for MSD (12):" % report["gpu"], "",
                   "| scene | method | shading | L~ | frame ms | ns/vertex | bytes/vertex | design nodes mean/max | / PRT |",
                   "|---|---|---|---|---|---|---|---|---|"]
         for row in gpu:
@@ -315,8 +316,9 @@ def markdown(report, averaged, plots, strip_file):
 
     lines += ["", "## The seed's Table 1 (s = 4, s' = 2) with measured costs", "",
               "The seed counts terms per vertex and floats per vertex; beside them the measured CPU cost "
-              "(sdnative.shade, ns per vertex, median over the scenes), the floats the add-on stores "
-              "(without the normal) and the design nodes.", "",
+              "(sdnative.shade, ns per vertex, median over the scenes: the whole call on both cores, the "
+              "rotation of L included, over the scene's 642-3966 vertices), the floats the add-on stores "
+              "(without the normal; a design is padded to the object's largest) and the design nodes.", "",
               "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) | stored floats | design nodes mean / max |",
               "|---|---|---|---|---|---|"]
     frame = defaultdict(list)

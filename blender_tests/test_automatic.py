@@ -106,6 +106,13 @@ def main():
                  "per-vertex or per-pixel evaluation chosen from the triangles' size on screen",
                  "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
 
+    cost = package.utils.cost
+    checks.check(all(info["floats_per_vertex"] == cost.stored_floats(
+        package.utils.methods.get(info["method"]), info["light_order"], info["visibility_order"])
+        for info in (lone_info, resting_info)),
+        "the cost model's stored floats are what the bakes store",
+        ", ".join(str(info["floats_per_vertex"]) for info in (lone_info, resting_info)))
+
     measured = measured_error(package, scene, resting)
     ratio = measured / resting_info["predicted_error"]
     checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",

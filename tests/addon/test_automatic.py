@@ -74,9 +74,11 @@ def test_frame_terms_and_stored_floats_follow_the_formulas(sdnative):
     prt8, msd13 = methods.get("prt_matrix"), methods.get("msd_visibility")
     assert prt8.frame_terms(4, 2, None) == 25 * 9 + 9
     assert msd13.frame_terms(4, 2, None) == 17 * (25 + 3)     # 17 nodes at degree 6
-    assert cost.stored_floats(prt8, 4, 2) == 225
-    assert cost.stored_floats(methods.get("unshadowed"), 4, 2) == 0
+    # as a bake counts them: the AO, then vec4 groups (225 -> 57 groups)
+    assert cost.stored_floats(prt8, 4, 2) == 1 + 228
+    assert cost.stored_floats(methods.get("unshadowed"), 4, 2) == 1
     assert cost.stored_floats(methods.get("ambient_occlusion"), 4, 2) == 1
+    assert cost.stored_floats(msd13, 4, 2) == 1 + 4 * 49
     # eq. (10) sums over the non-zero Gaunt coefficients only: fewer than the full triple product
     assert 0 < cost.gaunt_terms(sdnative, 4, 2) < 25 * 9 * 49
 
@@ -121,7 +123,7 @@ def test_a_lone_sphere_stores_no_visibility(sdnative, forest):
     assert errors.shadowing() == pytest.approx(0.0, abs=1e-9)
     choice = choose(sdnative, errors)
     assert choice.met_target and choice.setting.method == "unshadowed"
-    assert choice.floats == 0
+    assert choice.floats == 1
     assert choice.reasons[0].startswith("Visibility: none stored")
 
 

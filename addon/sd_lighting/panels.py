@@ -4,7 +4,7 @@ import bpy
 
 from . import (analysis, baking, drawing, environment, gpu_shading, live_rebake, materials, native,
                operators, prediction)
-from .utils import methods, ringing
+from .utils import cost, methods, ringing
 
 
 class SD_PT_lighting(bpy.types.Panel):
@@ -190,6 +190,9 @@ def _draw_choice(layout, title, chosen):
         chosen.get("visibility_order", 0), chosen.get("rays", 0)), icon='AUTO')
     col.label(text="Predicted error %.1f %%, %d frame terms per vertex" % (
         100 * chosen.get("predicted_error", 0.0), chosen.get("frame_terms", 0)))
+    if "vertices" in chosen:
+        col.label(text="Predicted frame: %.2f ms on the CPU evaluator for %d vertices" % (
+            cost.frame_milliseconds(chosen.get("frame_terms", 0), chosen["vertices"]), chosen["vertices"]))
     for line in str(chosen.get("automatic", "")).split("\n"):
         col.label(text=line[:100])
 

@@ -190,3 +190,8 @@ def test_a_sparse_mesh_on_screen_is_evaluated_per_pixel():
     assert automatic.evaluation(pixels)[0]
     assert not automatic.evaluation(10.0)[0]
     assert not automatic.evaluation(None)[0]
+
+
+def test_frame_time_follows_the_terms():
+    assert cost.frame_milliseconds(100, 10000) == pytest.approx(1e-6 * cost.CPU_NS_PER_TERM * 1e6)
+    assert cost.frame_milliseconds(0, 10000) == 0.0

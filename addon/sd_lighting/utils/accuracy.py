@@ -13,8 +13,7 @@ apart by a second bake with another seed:
 - the bake's ray noise, which falls as 1/sqrt(rays) (the difference of the two seeds' results is
   sqrt(2) times it).
 The reference's own noise is removed from the squared error (its variance is known), so a
-reference noisier than the target still measures it without bias. A glossy error is measured over
-the sampled points that face the eye, which are those a user sees.
+reference noisier than the target still measures it without bias.
 
 MSD (13) equals PRT (8) and MSD (12) equals PRT (10) for the same rays and orders (Theorems 2.2
 and 2.1), so their errors are those of the PRT forms, which need no designs.
@@ -32,7 +31,6 @@ SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
 REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
 REFERENCE_TRIANGLES = 16     # sampled triangles per reference call (cancel granularity)
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
-MIN_SEEN = 8                 # sampled points facing the eye that a glossy error is measured over
 SAME_AS = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}   # equal results (see above)
 
 
@@ -116,9 +114,6 @@ class ErrorTable:
         self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
         views = sample.views if sample.views is not None else sample.normals
         self._views = views if lobe != "lambert" else None
-        # A glossy B is what the eye sees: the points facing it (all, when too few do).
-        facing = np.sum(sample.normals * views, axis=1) > 0.0
-        self._seen = facing if lobe != "lambert" and facing.sum() >= MIN_SEEN else slice(None)
         self.reference, error = self._reference(environment, seed, stop)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
@@ -136,10 +131,9 @@ class ErrorTable:
                 for sv in range(MAX_VISIBILITY_ORDER + 1) if method.uses_visibility_order else (0,):
                     if stop is not None and stop():
                         raise InterruptedError("cancelled")
-                    first, second = (self._shade(method, s, sv, bake)[self._seen] for bake in bakes)
+                    first, second = (self._shade(method, s, sv, bake) for bake in bakes)
                     noise = relative_error(first, second) / np.sqrt(2.0)
-                    total = relative_error(first, self.reference[self._seen],
-                                           self.reference_variance[self._seen])
+                    total = relative_error(first, self.reference, self.reference_variance)
                     self.measured[(method.id, s, sv)] = Measured(
                         float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays)
     def _reference(self, environment, seed, stop):

@@ -15,6 +15,10 @@ import math
 DESIGN_MS = {0: 0.01, 1: 0.02, 2: 0.05, 3: 0.1, 4: 0.31, 5: 2.5, 6: 4.0, 7: 16.8, 8: 65.5,
              9: 154.0}
 RAY_SECONDS = 1.5e-7         # per ray per core: Embree's occlusion rays with the projections
+# The CPU evaluator's (sdnative.shade) time per frame term per vertex: the accuracy report's fits
+# of ns per vertex against frame_terms run from 1.3 to 4.5 ns per term over the methods and lobes
+# (docs/report/cost_model.json, "frame_ns_per_vertex"); this is their middle.
+CPU_NS_PER_TERM = 2.0
 
 
 def design_nodes(degree):
@@ -38,6 +42,12 @@ def stored_floats(method, s, sv):
     if data.packing == "design":
         return 1 + 4 * (s + sv + 1) ** 2
     return 1 + 4 * math.ceil(math.prod(data.shape(s, sv)) / 4)
+
+
+def frame_milliseconds(frame_terms, vertices):
+    """The predicted CPU evaluator time of one frame of `vertices` vertices (the GPU's is measured
+    in the report, not modelled)."""
+    return 1e-6 * CPU_NS_PER_TERM * frame_terms * vertices
 
 
 def bake_seconds(method, s, sv, rays, vertices, threads):

@@ -74,7 +74,9 @@ QUICK = {
     "predicted_rays": [64, 1024],
 }
 BLOCK = 4
-RECOMMENDED = "MSD (13), s = 4, s' = 2, 256 rays"   # the seed's orders, the main job's setting
+RECOMMENDED = "MSD (13), s = 4, s' = 2, 256 rays"   # the seed's orders, the previous default
+LAMBERT_BEST = "PRT (2), s = 8, 1024 rays"          # the report's pick for Lambert
+AUTOMATIC = "Automatic, 2 % target"                 # the add-on's default: chosen per object
 
 
 def options():
@@ -387,6 +389,8 @@ def stored_floats(package, method, arrays):
 CYCLES_SETTINGS = [
     # (label, method, automatic s, s, s', rays)
     (RECOMMENDED, "msd_visibility", False, 4, 2, 256),
+    (LAMBERT_BEST, "prt_diffuse", False, 8, 0, 1024),
+    (AUTOMATIC, "automatic", False, 0, 0, 256),       # s, s', rays: the choice's
     ("unshadowed, s = 4", "unshadowed", False, 4, 0, 16),
     ("AO, s = 4, 256 rays", "ambient_occlusion", False, 4, 0, 256),
     ("PRT (8), s = 6, s' = 4, 1024 rays", "prt_matrix", False, 6, 4, 1024),
@@ -437,6 +441,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
         if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
             raise RuntimeError("the bake of %s failed (%s)" % (name, label))
         info = dict(objects[0]["sd_bake"])
+        method = info["method"]          # the automatic mode's choice for the object measured
         variants = [("vertex", False, False), ("pixel", True, False)]
         if package.utils.methods.get(method).band_limited_texture:
             variants.append(("vertex", False, True))
@@ -450,8 +455,8 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
                 rms, p99 = relative_errors(ours, theirs)
                 rows.append({"reference": "cycles", "scene": name, "hdri": hdri, "material": "lambert",
                              "method": method, "s": int(info["light_order"]),
-                             "s_v": int(info["visibility_order"]) if method in ("msd_visibility", "prt_matrix") else None,
-                             "rays": rays if method != "unshadowed" else None, "shading": shading,
+                             "s_v": int(info["visibility_order"]) if package.utils.methods.get(method).uses_visibility_order else None,
+                             "rays": int(info["rays"]) if method != "unshadowed" else None, "shading": shading,
                              "light": "texture" if band_limited else "sh", "setting": label,
                              "rel_rms": rms, "p99": p99, "reference_se": noise, "points": int(len(ours)),
                              "bake_seconds": float(info["seconds"]), "bytes_per_vertex": int(info["bytes_per_vertex"]),
@@ -872,7 +877,7 @@ def main():
         "gpu": renderer, "cpu_threads": os.cpu_count(),
         "config": {k: ({"%d,%d" % d: v for d, v in v.items()} if k == "design_scenes" else v) for k, v in config.items()},
         "hdris": hdri_names, "vertices": vertex_counts, "mix": {"weights": [MIX[0], MIX[2]], "lobes": [MIX[1], MIX[3]]},
-        "recommended": RECOMMENDED, "rows": rows, "gpu_rows": gpu_rows, "bakes": costs["bakes"],
+        "recommended": RECOMMENDED, "cycles_findings": [RECOMMENDED, LAMBERT_BEST, AUTOMATIC], "rows": rows, "gpu_rows": gpu_rows, "bakes": costs["bakes"],
         "equalities": costs["equalities"], "predictions": costs["predictions"], "cost_model": model,
         "invariants": [{"check": w, "ok": ok, "detail": d} for w, ok, d in results],
     }

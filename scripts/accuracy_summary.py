@@ -210,16 +210,22 @@ def findings(report, averaged):
                                "(over the scenes)." % (LABELS[method], "band-limited texture" if light == "texture" else "SH sum",
                                                        LABELS[base], ratio_text([v[0] for v in values]),
                                                        ratio_text([v[1] for v in values])))
-    cycles = [r for r in report["rows"] if r["reference"] == "cycles" and r["setting"] == report["recommended"]
-              and r["material"] == "lambert" and r["light"] == "sh"]
-    for scene in scenes:
-        rows = [r for r in cycles if r["scene"] == scene]
-        if rows:
-            out.append("- %s against Cycles at %s: per vertex %s, per pixel %s (over %s)." % (
-                scene, report["recommended"],
-                ratio_text_percent([r["rel_rms"] for r in rows if r["shading"] == "vertex"]),
-                ratio_text_percent([r["rel_rms"] for r in rows if r["shading"] == "pixel"]),
-                ", ".join(sorted({r["hdri"] for r in rows}))))
+    for label in report.get("cycles_findings", [report["recommended"]]):
+        cycles = [r for r in report["rows"] if r["reference"] == "cycles" and r["setting"] == label
+                  and r["material"] == "lambert" and r["light"] == "sh"]
+        for scene in scenes:
+            rows = [r for r in cycles if r["scene"] == scene]
+            if rows:
+                out.append("- %s against Cycles at %s: per vertex %s, per pixel %s (over %s); %s, "
+                           "bake %.2f s, %d bytes per vertex." % (
+                               scene, label,
+                               ratio_text_percent([r["rel_rms"] for r in rows if r["shading"] == "vertex"]),
+                               ratio_text_percent([r["rel_rms"] for r in rows if r["shading"] == "pixel"]),
+                               ", ".join(sorted({r["hdri"] for r in rows})),
+                               ", ".join(sorted({"%s s = %d%s%s" % (
+                                   LABELS[r["method"]], r["s"], "" if r["s_v"] is None else ", s' = %d" % r["s_v"],
+                                   "" if r["rays"] is None else ", %d rays" % r["rays"]) for r in rows})),
+                               rows[0]["bake_seconds"], rows[0]["bytes_per_vertex"]))
     compared = [p for p in report.get("predictions", []) if not p["noise_limited"] and not p["extrapolated"]]
     if compared:
         ratios = [p["ratio"] for p in compared]

@@ -301,10 +301,11 @@ def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsg
         render = scene.render
         width = render.resolution_x * render.resolution_percentage // 100
         height = render.resolution_y * render.resolution_percentage // 100
-        view = View.from_camera(scene.camera, depsgraph, width, height, scene)
-        triangle_pixels = automatic.projected_triangle_pixels(
-            transforms.transform_points(matrix, geometry.mesh_positions), geometry.mesh_triangles,
-            view.view_projection, width, height)
+        if settings["method"] == analysis.AUTOMATIC:   # only its choice reads the mesh on screen
+            view = View.from_camera(scene.camera, depsgraph, width, height, scene)
+            triangle_pixels = automatic.projected_triangle_pixels(
+                transforms.transform_points(matrix, geometry.mesh_positions), geometry.mesh_triangles,
+                view.view_projection, width, height)
     fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
     fixed.pop("method", None)
     panel = scene.sd_lighting

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
 from .view import View
-from .utils import automatic, corners, methods, transforms
+from .utils import automatic, corners, methods, refine, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -149,6 +149,34 @@ class Geometry:
         return attributes.new_mesh(name, self.positions, self.loop_vertices, self.loop_starts,
                                    self.loop_totals)
 
+    def surface(self):
+        """The baked vertices and triangles as a refine.Surface (copies of a mesh vertex weld)."""
+        return refine.Surface(self.vertices, self.normals, self.positions, self._split.origin,
+                              self.triangles, self.material_slots, self.uvs)
+
+    def refined(self, refinement):
+        """The geometry of a refined copy (refine.Refinement of this one's surface)."""
+        return RefinedGeometry(refinement, self._mirrored)
+
+
+class RefinedGeometry:
+    """A baked copy refined (utils/refine.py): the Geometry arrays of its surface, all triangles;
+    `refinement` says what was done."""
+
+    def __init__(self, refinement, mirrored):
+        surface = refinement.surface
+        self.refinement = refinement
+        self.vertices, self.normals, self.positions = surface.vertices, surface.normals, surface.positions
+        self.triangles, self.material_slots, self.uvs = surface.triangles, surface.slots, surface.uvs
+        self._mirrored = mirrored
+
+    def build_mesh(self, name):
+        """A new mesh datablock of these triangles in the local frame (the object's winding)."""
+        faces = self.triangles[:, ::-1] if self._mirrored else self.triangles
+        count = len(faces)
+        return attributes.new_mesh(name, self.positions, faces.ravel(), 3 * np.arange(count),
+                                   np.full(count, 3))
+
 
 def _evaluated_arrays(obj, depsgraph, shape):
     """Geometry of the object's evaluated mesh (modifiers applied)."""
@@ -196,6 +224,8 @@ class BakeTask:
         self.settings = settings      # dict, becomes the `sd_bake` property
         self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
         self.predicted_error = None   # of a chosen method's settings, once predicted
+        self.baked = None             # the geometry baked: `geometry` or its refinement
+        self.refine_seconds = 0.0
         self.result = None
         self._inputs = None
 
@@ -207,7 +237,9 @@ class BakeTask:
             digest = hashlib.blake2b(digest_size=16)
             for value in self.geometry.inputs():
                 digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
-            for key, value in sorted(self.bake_arguments().items()):
+            arguments = dict(self.bake_arguments(),
+                             **{key: self.settings.get(key) for key in REFINE_KEYS})
+            for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
                 digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
                               else repr(value).encode())
@@ -250,6 +282,35 @@ class BakeTask:
         self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
                                                 self.settings, stop)
 
+    def refined_geometry(self, sd, progress):
+        """The geometry to bake (any thread): the Geometry, or with `refine` on, its refinement
+        (utils/refine.py) tested against this task's light and occluders with common rays."""
+        s = self.settings
+        if not s.get("refine"):
+            return self.geometry
+        occluders = self.occluders()
+        kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
+                  "transfer_order": refine.CRITERION_ORDER, "common_rotation": True,
+                  "progress": progress}
+
+        def bake(vertices, normals, triangles, rest_vertices, rest_triangles):
+            verts, tris = [rest_vertices], [rest_triangles]
+            if occluders:
+                verts.append(occluders["occluder_vertices"])
+                tris.append(occluders["occluder_triangles"] + len(rest_vertices))
+            extra = {}
+            if sum(len(t) for t in tris):
+                extra = {"occluder_vertices": np.concatenate(verts),
+                         "occluder_triangles": np.concatenate(tris).astype(np.int32)}
+            return sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs,
+                                    **extra)["transfer"]
+
+        surface = self.geometry.surface()
+        weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
+        refinement = refine.refine(surface, bake, weights, float(s["refine_target"]),
+                                   int(float(s["refine_budget"]) * len(surface.vertices)))
+        return self.geometry.refined(refinement) if refinement.levels else self.geometry
+
     def bake_arguments(self):
         s = self.settings
         method = methods.get(s["method"])
@@ -268,7 +329,9 @@ def bake_settings(scene, obj, env_source):
     method_id = fixed.get("method", settings.method)
     lobe, exponent = materials.lobe_for(obj, settings)
     common = {"lobe": lobe, "exponent": float(exponent), "seed": int(settings.seed),
-              "environment": env_source.description}
+              "environment": env_source.description, "refine": bool(settings.refine),
+              "refine_target": float(settings.target_error),
+              "refine_budget": float(settings.refine_budget)}
     if method_id == analysis.AUTOMATIC:
         return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
                     rays=int(fixed.get("rays", settings.rays)))
@@ -421,6 +484,7 @@ class BakeJob:
         self.fraction = 0.0           # overall progress in [0, 1]
         self.cancel_requested = False
         self.choosing = False         # the automatic mode is measuring the current object
+        self.refining = False         # the current object's copy is being refined
         self.cancelled = False
         self.error = None             # message when the bake failed
         self.finished = False
@@ -444,8 +508,10 @@ class BakeJob:
         if not self.tasks:
             return ""
         task = self.tasks[min(self.current, len(self.tasks) - 1)]
+        doing = ("choosing the settings of" if self.choosing else
+                 "refining" if self.refining else "baking")
         return "SD Lighting: %s %s (%d/%d), %d %%  -  Esc to cancel" % (
-            "choosing the settings of" if self.choosing else "baking", task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
+            doing, task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
             int(100 * self.fraction))
 
     # -- work
@@ -464,11 +530,15 @@ class BakeJob:
                     self.fraction = (index + (done / total if total else 1.0)) / count
                     return not self.cancel_requested
 
-                geometry = task.geometry
                 if task.automatic:
                     self.choosing = True
                     task.choose(lambda: self.cancel_requested)
                     self.choosing = False
+                t0 = time.perf_counter()
+                self.refining = True
+                geometry = task.baked = task.refined_geometry(sd, progress)
+                self.refining = False
+                task.refine_seconds = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 result = sd.bake_transfer(geometry.vertices, geometry.normals, geometry.triangles,
                                           progress=progress, **task.bake_arguments())
@@ -507,10 +577,10 @@ class BakeJob:
                 obj = bpy.data.objects.get((task.object_name, None))   # the local one
                 if obj is None:
                     raise BakeError("%s was deleted during the bake" % task.object_name)
-                mesh = task.geometry.build_mesh(MESH_PREFIX + task.object_name)
+                mesh = task.baked.build_mesh(MESH_PREFIX + task.object_name)
                 built.append((obj, mesh, task))
                 floats = attributes.write(mesh, task.result["normals"], task.result)
-                attributes.write_surface(mesh, task.geometry.material_slots, task.geometry.uvs)
+                attributes.write_surface(mesh, task.baked.material_slots, task.baked.uvs)
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))
                 mesh[BAKE] = settings
@@ -538,21 +608,31 @@ class BakeJob:
 # The keys _result_summary adds to a bake's settings in `sd_bake`: what the bake found, not what it
 # was asked for.
 SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
-                "design_nodes_max", "design_nodes_mean")
+                "design_nodes_max", "design_nodes_mean", "unrefined_vertices", "refine_levels",
+                "refine_seconds", "refine_worst_left", "refine_budget_reached")
+# The settings of the refinement (recorded with the bake, so that a re-bake refines alike).
+REFINE_KEYS = ("refine", "refine_target", "refine_budget")
 
 
 def _result_summary(task, floats):
     """The summary of a task's result for `sd_bake` (SUMMARY_KEYS)."""
     result = task.result
-    n = len(task.geometry.vertices)
+    n = len(task.baked.vertices)
     summary = {
-        "seconds": float(result.get("seconds", 0.0)),
+        "seconds": float(result.get("seconds", 0.0)) + task.refine_seconds,
         "vertices": int(n),
         "floats_per_vertex": int(floats),
         "bytes_per_vertex": int(4 * floats),
         "bake_id": uuid.uuid4().hex,
         "inputs": task.inputs_hash(),
     }
+    refinement = getattr(task.baked, "refinement", None)
+    if task.settings.get("refine"):
+        summary.update(unrefined_vertices=int(len(task.geometry.vertices)),
+                       refine_seconds=float(task.refine_seconds),
+                       refine_levels=int(refinement.levels) if refinement else 0,
+                       refine_worst_left=float(refinement.worst_left) if refinement else 0.0,
+                       refine_budget_reached=bool(refinement.budget_reached) if refinement else False)
     offsets = result.get("design_offsets")
     if offsets is not None:
         counts = np.diff(np.asarray(offsets))

@@ -59,10 +59,17 @@ class SD_PT_lighting(bpy.types.Panel):
                 row.prop(settings, "max_automatic_order")
             else:
                 box.prop(settings, "light_order")
+                if settings.refine:
+                    box.prop(settings, "target_error")
             box.prop(settings, "visibility_order")
         row = box.row(align=True)
         row.prop(settings, "rays")
         row.prop(settings, "seed")
+        row = box.row(align=True)
+        row.prop(settings, "refine")
+        sub = row.row(align=True)
+        sub.enabled = settings.refine
+        sub.prop(settings, "refine_budget")
         obj = context.active_object
         if obj is not None and obj.type == 'MESH':
             _draw_overrides(box, obj)
@@ -155,6 +162,8 @@ class SD_PT_lighting(bpy.types.Panel):
             col.label(text="Design nodes per vertex: %.1f mean, %d max" % (
                 info.get("design_nodes_mean", 0.0), info.get("design_nodes_max", 0)))
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
+        if "unrefined_vertices" in info:
+            _draw_refinement(col, info)
         if "automatic" in info:
             _draw_choice(box, "Automatic choice", info)
         if settings.live_rebake and method is not None and method.designs_per_vertex:
@@ -179,6 +188,22 @@ def _draw_overrides(layout, obj):
         sub = row.row(align=True)
         sub.enabled = getattr(overrides, "use_" + name)
         sub.prop(overrides, name)
+
+
+def _draw_refinement(layout, info):
+    """What the refinement of a bake did (its `sd_bake` dict)."""
+    if not info.get("refine_levels"):
+        layout.label(text="Refine: no edge off by more than %.1f %%, nothing split (%.2f s)" % (
+            100 * info.get("refine_target", 0.0), info.get("refine_seconds", 0.0)))
+        return
+    layout.label(text="Refined %d -> %d vertices in %d levels (%.2f s)" % (
+        info["unrefined_vertices"], info.get("vertices", 0), info["refine_levels"],
+        info.get("refine_seconds", 0.0)))
+    row = layout.row()
+    row.alert = bool(info.get("refine_budget_reached"))
+    row.label(text="Largest edge error left %.1f %% (target %.1f %%)%s" % (
+        100 * info.get("refine_worst_left", 0.0), 100 * info.get("refine_target", 0.0),
+        ": the vertex budget stopped it" if info.get("refine_budget_reached") else ""))
 
 
 def _draw_choice(layout, title, chosen):

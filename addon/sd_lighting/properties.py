@@ -10,7 +10,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        IntProperty, PointerProperty, StringProperty)
 
 from . import analysis, environment, live_rebake, native
-from .utils import limits, methods, ringing
+from .utils import limits, methods, refine, ringing
 
 log = logging.getLogger(__name__)
 
@@ -105,7 +105,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Target error", default=0.02, min=0.001, max=1.0, subtype='FACTOR',
         description="Relative RMS error to aim for: of B against the reference of eq. (1), "
                     "measured on sampled vertices (Automatic method); of the lobe-filtered "
-                    "environment (Automatic s of a chosen method)")
+                    "environment (Automatic s of a chosen method); of the light between two "
+                    "vertices against their interpolation (Refine)")
     max_automatic_order: IntProperty(
         name="Max s", default=8, min=1, **limits.maximum(LIMITS.light_order),
         description="Largest order automatic s may choose")
@@ -133,6 +134,15 @@ class SceneSettings(bpy.types.PropertyGroup):
                       **limits.maximum(LIMITS.rays),
                       description="Rays traced per vertex for the visibility")
     seed: IntProperty(name="Seed", default=0, min=0, description="Seed of the ray directions")
+
+    refine: BoolProperty(
+        name="Refine", default=True,
+        description="Before the bake, split the baked copy's triangles where the light between "
+                    "their vertices is not linear (a shadow across a large face) by more than the "
+                    "target error, up to the vertex budget. The object's own mesh is not changed")
+    refine_budget: FloatProperty(
+        name="Vertex Budget", default=refine.DEFAULT_BUDGET, min=1.0, soft_max=16.0,
+        description="Most vertices the refined copy may have, as a multiple of the unrefined one's")
 
     live_rebake: BoolProperty(
         name="Live Re-bake", default=False, update=_sync_live_rebake,

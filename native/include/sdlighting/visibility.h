@@ -59,6 +59,11 @@ struct TransferOptions {
   int design_visibility_order = -1;  ///< s' of the design, in [0, kMaxVisibilityOrder]
   int threads = 0;            ///< worker threads; 0 = every hardware thread
   bool record_rays = false;   ///< test hook: keep every V_r in TransferBake::ray_visibility
+  /// Every vertex traces vertex 0's rotation of the ray set (common random numbers): where two
+  /// vertices' visibility and normals agree, so do their results, and a difference between
+  /// vertices measures how the signal changes, not ray noise. For comparing neighbouring points
+  /// (the add-on's refinement, utils/refine.py); a bake to store keeps independent rotations.
+  bool common_rotation = false;
   /// Refit each vertex's design from an already-built neighbour's (weighted_design's `start`)
   /// instead of compressing every one from scratch: the same certification at a fraction of the
   /// time. false is the benchmarks' baseline. Either way the result depends on the mesh, the

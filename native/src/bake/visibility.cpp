@@ -91,6 +91,7 @@ struct Plan {
   int visibility_count = 0, product_rows = 0, product_cols = 0, transfer_count = 0;
   int design_degree = -1;
   bool record_rays = false;
+  bool common_rotation = false;
   std::uint64_t seed = 0;
   const std::vector<glm::dvec3>* fibonacci = nullptr;
 };
@@ -115,7 +116,7 @@ struct Outputs {
 // the vertex unfinished, when `stopping` interrupted its design.
 bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
                  const SphericalDesign* start, const StopQuery& stopping, Scratch& s, const Outputs& out) {
-  const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, v);
+  const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, plan.common_rotation ? 0 : v);
   const std::vector<glm::dvec3>& base = *plan.fibonacci;
   const int rays = plan.rays;
   std::uint8_t* record = plan.record_rays ? out.bake->ray_visibility.data() + v * static_cast<std::size_t>(rays)
@@ -276,6 +277,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   plan.seed = options.seed;
   plan.fibonacci = &fibonacci;
   plan.record_rays = options.record_rays;
+  plan.common_rotation = options.common_rotation;
   plan.basis_order = std::max({options.visibility_order, options.product_order, options.product_visibility_order,
                                options.transfer_order});
   if (options.visibility_order >= 0) plan.visibility_count = sh_count(options.visibility_order);

@@ -1,0 +1,238 @@
+"""Refinement of the baked copy where its vertices are too sparse for the signal (issue 8, item 3).
+
+The live shading interpolates per-vertex data linearly over each triangle, so a shadow that
+crosses a large flat face between its vertices is lost: on a CAD-like model that, not the bake,
+is most of the error against Cycles. Refinement splits the baked copy's triangles where the
+signal between the vertices is not linear, before the bake; the user's mesh is never touched.
+
+The test: an edge is split where the value at its midpoint differs from the mean of the values at
+its ends by more than the target error. The value is what a white Lambert surface shows under the
+scene's environment, shadowed: B = T · L with T the PRT (2) transfer vector of order
+CRITERION_ORDER. The user turns the environment, so the difference is averaged over every
+rotation g of it: band l of L turns by a uniformly random orthogonal matrix, hence
+    E_g[(ΔT · L_g)²] = Σ_l |ΔT_l|² |L_l|² / (2l + 1)          (|x_l|²: the band's sum of squares)
+and the error of an edge is the square root of that over the same mean of B² over the vertices
+(the object's RMS radiance): the relative RMS error that the target error states. The ends and the
+midpoints are baked in one pass in which every point traces the same ray directions
+(bake_transfer's common_rotation), so their difference is the signal's, not ray noise.
+
+The split is conforming, so no crack opens: an edge is marked as a place (the copies of a
+vertex split at a hard edge or seam, `weld`, mark their edges together); a triangle with two
+marked sides gets its third marked too, so each triangle is kept, halved (one side marked) or
+cut into four (all sides). Each level tests only the edges of the triangles the last one made;
+refinement stops when no edge is marked, after MAX_LEVELS levels, or at the vertex budget (the
+worst edges are split first). Shading follows the mesh: a midpoint gets the normalised mean of
+its ends' normals (Blender and Cycles interpolate smooth normals across the face), their mean
+UV and their material slot (a corner copy carries one slot).
+
+This module is bpy-free: `Surface` holds the arrays, `refine` takes the bake as a callback.
+"""
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+CRITERION_ORDER = 6    # the order of T the test shades with: a shadow's edge, not just its mean
+CRITERION_RAYS = 512   # rays per point of the test (at most the bake's)
+MAX_LEVELS = 4         # each level halves the edges it splits
+DEFAULT_BUDGET = 4.0   # the vertex budget, as a multiple of the unrefined copy's vertices
+
+
+@dataclass
+class Surface:
+    """A triangle mesh as the bake and the baked copy see it; per vertex: `vertices` (bake frame),
+    `normals` (unit or zero), `positions` (the object's local frame), `weld` (vertices at the same
+    place share it), `slots` and `uvs` (or None); `triangles` [T, 3] in the bake's winding."""
+    vertices: np.ndarray
+    normals: np.ndarray
+    positions: np.ndarray
+    weld: np.ndarray
+    triangles: np.ndarray
+    slots: object = None
+    uvs: object = None
+
+    def with_midpoints(self, edges, welded_edges):
+        """This surface with one vertex appended at the middle of each edge [E, 2]; midpoints of
+        copies of one place (welded_edges [E]: its index) share a new weld id."""
+        a, b = edges[:, 0], edges[:, 1]
+        normals = self.normals[a] + self.normals[b]
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0.0)
+
+        def mean(values):
+            return None if values is None else np.concatenate([values, 0.5 * (values[a] + values[b])])
+
+        def first(values):
+            return None if values is None else np.concatenate([values, values[a]])
+
+        return replace(self, vertices=mean(self.vertices), positions=mean(self.positions),
+                       normals=np.concatenate([self.normals, normals]),
+                       weld=np.concatenate([self.weld, self.weld.max(initial=-1) + 1 + welded_edges]),
+                       slots=first(self.slots), uvs=mean(self.uvs))
+
+
+def edges_of(triangles):
+    """(edges [E, 2] with a < b, side_edge [T, 3]): side k of triangle t runs from t[k] to
+    t[(k + 1) % 3] and is edge side_edge[t, k]."""
+    sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
+    edges, inverse = np.unique(np.sort(sides, axis=1), axis=0, return_inverse=True)
+    return edges, inverse.reshape(-1, 3)
+
+
+def _places(weld, edges):
+    """(the index of each edge's place among the distinct places, an int64 key of each place):
+    a place is the unordered pair of its ends' weld ids."""
+    ends = np.sort(weld[edges], axis=1).astype(np.int64)
+    keys = (ends[:, 0] << 32) | ends[:, 1]     # the same key at every level: ids stay below 2³²
+    return np.unique(keys, return_inverse=True)[1].reshape(-1), keys
+
+
+def split(triangles, side_edge, marked, midpoint):
+    """The triangles with their marked sides split, windings kept: a triangle with no marked side
+    is kept, one with one is halved towards the opposite corner, one with two is cut into three
+    (the corner between them, and the rest by the diagonal from the unsplit side's first corner),
+    one with three into four. marked: bool [E]; midpoint: int [E], the vertex at the middle of
+    each marked edge. Returns (triangles, made [T']: whether each is new)."""
+    t = triangles
+    m = np.where(marked[side_edge], midpoint[side_edge], -1)   # [T, 3]: side k's midpoint or -1
+    count = (m >= 0).sum(axis=1)
+    out = [t[count == 0]]
+    made = [np.zeros(int((count == 0).sum()), dtype=bool)]
+
+    four = count == 3
+    if four.any():
+        a, b, c = t[four].T
+        ab, bc, ca = m[four].T
+        out += [np.stack(x, axis=1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+        made += [np.ones(int(four.sum()), dtype=bool)] * 4
+
+    for marked_sides in (1, 2):
+        rows = np.flatnonzero(count == marked_sides)
+        if rows.size == 0:
+            continue
+        # Turn each triangle so that its first marked side (for two: the one whose next side is
+        # marked too) is side 0: (a, b) split at ab; c is the opposite corner.
+        has = m[rows] >= 0
+        if marked_sides == 1:
+            k = np.argmax(has, axis=1)
+        else:
+            k = np.argmax(has & np.roll(has, -1, axis=1), axis=1)
+        turn = (k[:, None] + np.arange(3)[None, :]) % 3
+        a, b, c = np.take_along_axis(t[rows], turn, axis=1).T
+        ab, bc, _ = np.take_along_axis(m[rows], turn, axis=1).T
+        if marked_sides == 1:
+            out += [np.stack((a, ab, c), axis=1), np.stack((ab, b, c), axis=1)]
+            made += [np.ones(rows.size, dtype=bool)] * 2
+        else:
+            out += [np.stack((ab, b, bc), axis=1), np.stack((a, ab, bc), axis=1),
+                    np.stack((a, bc, c), axis=1)]
+            made += [np.ones(rows.size, dtype=bool)] * 3
+    return np.concatenate(out).astype(triangles.dtype), np.concatenate(made)
+
+
+def close_marks(side_edge, welded_edges, marked_welded):
+    """The marks of places (bool over welded edges) with every triangle that has two marked sides
+    given its third: afterwards each triangle has none, one or three."""
+    marked_welded = marked_welded.copy()
+    side_place = welded_edges[side_edge]
+    while True:
+        sides = marked_welded[side_place]
+        two = sides.sum(axis=1) == 2
+        if not two.any():
+            return marked_welded
+        marked_welded[side_place[two][~sides[two]]] = True
+
+
+def band_weights(light):
+    """Per SH coefficient l² + l + m of `light` ([(s+1)², channels]): |L_l|² / (2l + 1), the weight
+    of ΔT_lm² in the rotation-averaged squared difference of B (the module's doc)."""
+    light = np.asarray(light, dtype=np.float64).reshape(len(light), -1)
+    order = int(round(np.sqrt(len(light)))) - 1
+    band = np.repeat(np.arange(order + 1), 2 * np.arange(order + 1) + 1)
+    energy = np.bincount(band, weights=(light ** 2).sum(axis=1), minlength=order + 1)
+    return (energy / (2 * np.arange(order + 1) + 1))[band]
+
+
+@dataclass
+class Refinement:
+    """What refine() did: the refined surface, the levels run, the edges split and the largest
+    error left among the tested edges (relative)."""
+    surface: Surface
+    levels: int
+    split_edges: int
+    worst_left: float
+    budget_reached: bool
+
+
+def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
+    """Refines `surface` (the module's doc). bake(vertices, normals, triangles, rest_vertices,
+    rest_triangles) -> T [V, (s+1)²]: the transfer vectors of the object made of those vertices
+    and triangles, with rest_triangles (indices into rest_vertices: the surface's other triangles)
+    and the scene as occluders, every vertex tracing the same ray directions; weights: band_weights
+    of the light; target: the relative error an edge may keep; max_vertices: the budget. Raises
+    what bake raises (a cancel). Returns a Refinement."""
+    triangles = np.asarray(surface.triangles)
+    made = np.ones(len(triangles), dtype=bool)
+    tested = np.zeros(0, dtype=np.int64)   # the keys of the places whose midpoint was tested
+    scale = None
+    levels = split_count = 0
+    worst_left = 0.0
+    budget_reached = False
+    for _ in range(max_levels):
+        edges, side_edge = edges_of(triangles)
+        welded_edges, keys = _places(surface.weld, edges)
+        candidate = np.zeros(len(edges), dtype=bool)
+        candidate[side_edge[made].ravel()] = True
+        candidate &= ~np.isin(keys, tested)
+        if not candidate.any():
+            break
+        tested = np.union1d(tested, keys[candidate])
+
+        # Bake the triangles with a candidate side, those sides split, with the rest as occluders.
+        probe = surface.with_midpoints(edges, welded_edges)
+        midpoint = len(surface.vertices) + np.arange(len(edges))
+        around = candidate[side_edge].any(axis=1)
+        probed, _ = split(triangles[around], side_edge[around], candidate, midpoint)
+        used, local = np.unique(probed, return_inverse=True)
+        transfer = np.zeros((len(probe.vertices), len(weights)))
+        transfer[used] = bake(probe.vertices[used], probe.normals[used], local.reshape(-1, 3),
+                              surface.vertices, triangles[~around])
+        if scale is None:
+            scale = float(np.mean(transfer[used] ** 2 @ weights))
+        a, b = edges[candidate, 0], edges[candidate, 1]
+        delta = transfer[midpoint[candidate]] - 0.5 * (transfer[a] + transfer[b])
+        error = np.zeros(len(edges))
+        error[candidate] = np.sqrt(delta ** 2 @ weights / scale) if scale > 0.0 else 0.0
+        place_error = np.zeros(welded_edges.max() + 1)
+        np.maximum.at(place_error, welded_edges, error)
+
+        # The worst places first, as many as the budget holds once closed.
+        copies = np.bincount(welded_edges, minlength=len(place_error))
+        worst = np.argsort(-place_error, kind="stable")
+        worst = worst[place_error[worst] > target]
+        room = max_vertices - len(surface.vertices)
+        keep = len(worst)
+        while keep > 0:
+            marked = np.zeros(len(place_error), dtype=bool)
+            marked[worst[:keep]] = True
+            marked = close_marks(side_edge, welded_edges, marked)
+            if copies[marked].sum() <= room:
+                break
+            budget_reached = True
+            keep //= 2
+        if keep == 0:
+            worst_left = float(place_error.max(initial=0.0))
+            break
+        worst_left = float(place_error[~marked].max(initial=0.0))
+        split_marked = marked[welded_edges]
+        order = np.cumsum(split_marked) - 1
+        kept = surface.with_midpoints(edges[split_marked], welded_edges[split_marked])
+        triangles, made = split(triangles, side_edge, split_marked,
+                                len(surface.vertices) + np.where(split_marked, order, 0))
+        surface = replace(kept, triangles=triangles)
+        levels += 1
+        split_count += int(split_marked.sum())
+        if budget_reached:
+            break
+    return Refinement(replace(surface, triangles=triangles), levels, split_count, worst_left,
+                      budget_reached)

@@ -406,18 +406,6 @@ def preview(package, scene, path, size, per_pixel=False, texture=False):
     return sdtest.load_exr(path)
 
 
-def cycles_pair(scene, work, tag, size, samples):
-    """Cycles from two seeds: (their mean, the relative RMS noise of the mean's 4 x 4 block
-    averages estimated from their difference, over the blocks where both cover the scene)."""
-    a = sdtest.cycles_render(scene, os.path.join(work, tag + "_cycles_a.exr"), size, samples // 2, seed=1)
-    b = sdtest.cycles_render(scene, os.path.join(work, tag + "_cycles_b.exr"), size, samples // 2, seed=2)
-    mask = (a[..., 3] > 0.99) & (b[..., 3] > 0.99)
-    mean = 0.5 * (a + b)
-    block_a, block_b = sdtest.block_averages(a, mask, BLOCK), sdtest.block_averages(b, mask, BLOCK)
-    noise = 0.5 * math.sqrt(float(np.mean((block_a - block_b) ** 2))) / math.sqrt(float(np.mean((0.5 * (block_a + block_b)) ** 2)))
-    return mean, noise
-
-
 def against_cycles(package, name, scene, objects, texture, config, work, progress, rows, strip):
     """Cycles under each of config["cycles_hdris"], then each setting baked once (the bake does not
     depend on the HDRI: fixed orders) and previewed under each HDRI against it."""
@@ -428,10 +416,12 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
     for hdri in config["cycles_hdris"]:
         accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
         samples = config["cycles_samples"]
-        cycles[hdri] = cycles_pair(scene, work, "%s_%s" % (name, hdri[:-4]), size, samples)
+        cycles[hdri] = sdtest.cycles_pair(scene, os.path.join(work, "%s_%s" % (name, hdri[:-4])),
+                                          size, samples, BLOCK)
         if cycles[hdri][1] > 0.015:   # a sun's shadows: four times the samples halve the noise
             samples *= 4
-            cycles[hdri] = cycles_pair(scene, work, "%s_%s" % (name, hdri[:-4]), size, samples)
+            cycles[hdri] = sdtest.cycles_pair(scene, os.path.join(work, "%s_%s" % (name, hdri[:-4])),
+                                          size, samples, BLOCK)
         progress.step("%s: %s, Cycles (%d samples, noise %.2f %%)" % (name, hdri, samples, 100 * cycles[hdri][1]), 4.0)
     if strip is not None and strip["hdri"] in cycles:
         strip["images"]["Cycles"] = cycles[strip["hdri"]][0]
@@ -481,7 +471,8 @@ def glossy_case(package, name, scene, objects, config, work, progress, rows):
         obj.data.materials.clear()
         obj.data.materials.append(material)
     size = config["cycles_size"]
-    cycles, noise = cycles_pair(scene, work, name + "_glossy", size, 4 * config["cycles_samples"])
+    cycles, noise = sdtest.cycles_pair(scene, os.path.join(work, name + "_glossy"), size,
+                                       4 * config["cycles_samples"], BLOCK)
     sdtest.bake_settings(scene, "msd_visibility", 'MATERIAL', 4, 2, rays=256, select=objects)
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
         raise RuntimeError("the glossy bake failed")

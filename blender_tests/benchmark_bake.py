@@ -70,48 +70,10 @@ def suzanne(scene, levels):
     return obj, "Suzanne subdivided %d times" % levels
 
 
-def imported(scene, path):
-    before = set(bpy.data.objects)
-    ext = os.path.splitext(path)[1].lower()
-    if ext in (".glb", ".gltf"):
-        # Debian's Blender 3.4 glTF importer uses np.bool, which NumPy 1.24+ removed
-        if "bool" not in np.__dict__:
-            np.bool = bool
-        bpy.ops.import_scene.gltf(filepath=path)
-    elif ext == ".obj":
-        if hasattr(bpy.ops.wm, "obj_import"):
-            bpy.ops.wm.obj_import(filepath=path)
-        else:
-            bpy.ops.import_scene.obj(filepath=path)
-    elif ext == ".ply":
-        bpy.ops.import_mesh.ply(filepath=path)
-    elif ext == ".stl":
-        bpy.ops.import_mesh.stl(filepath=path)
-    else:
-        raise ValueError("unsupported mesh file %s" % path)
-    new = [obj for obj in bpy.data.objects if obj not in before]
-    others = [obj.name for obj in new if obj.type != 'MESH']
-    meshes = [obj for obj in new if obj.type == 'MESH']
-    if not meshes:
-        raise ValueError("%s has no mesh" % path)
-    bpy.ops.object.select_all(action='DESELECT')
-    for obj in meshes:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = meshes[0]
-    bpy.ops.object.parent_clear(type='CLEAR_KEEP_TRANSFORM')
-    if len(meshes) > 1:
-        bpy.ops.object.join()
-    obj = bpy.context.view_layer.objects.active
-    for name in others:   # empties the importer made parents
-        bpy.data.objects.remove(bpy.data.objects[name])
-    bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
-    return obj, "%s (%d parts joined)" % (os.path.basename(path), len(meshes))
-
-
 def load_mesh(scene, args):
     if args.mesh == "suzanne":
         return suzanne(scene, 2 if args.quick else 4)
-    return imported(scene, os.path.abspath(args.mesh))
+    return sdtest.imported(os.path.abspath(args.mesh))
 
 
 # ----------------------------------------------------------------------------------------------

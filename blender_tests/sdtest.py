@@ -440,3 +440,62 @@ def cycles_render(scene, path, size, samples=512, seed=1):
     bpy.ops.render.render(write_still=True)
     return load_exr(path)
 
+
+
+def cycles_pair(scene, path_stem, size, samples, block):
+    """Cycles from two seeds (samples // 2 each, cycles_render): (their mean, the relative RMS noise
+    of the mean's block x block averages estimated from their difference, over the blocks where
+    both cover the scene)."""
+    import math
+    import numpy as np
+    a = cycles_render(scene, path_stem + "_cycles_a.exr", size, samples // 2, seed=1)
+    b = cycles_render(scene, path_stem + "_cycles_b.exr", size, samples // 2, seed=2)
+    mask = (a[..., 3] > 0.99) & (b[..., 3] > 0.99)
+    block_a, block_b = block_averages(a, mask, block), block_averages(b, mask, block)
+    noise = 0.5 * math.sqrt(float(np.mean((block_a - block_b) ** 2))) / math.sqrt(
+        float(np.mean((0.5 * (block_a + block_b)) ** 2)))
+    return 0.5 * (a + b), noise
+
+
+def imported(path):
+    """Imports a mesh file (glTF, OBJ, PLY, STL) with Blender's own importer, joins its meshes into
+    one object with its transforms applied and removes the empties: (object, a description)."""
+    import numpy as np
+    before = set(bpy.data.objects)
+    ext = os.path.splitext(path)[1].lower()
+    if ext in (".glb", ".gltf"):
+        # Debian's Blender 3.4 glTF importer uses np.bool, which NumPy 1.24+ removed
+        if "bool" not in np.__dict__:
+            np.bool = bool
+        bpy.ops.import_scene.gltf(filepath=path)
+    elif ext == ".obj":
+        if hasattr(bpy.ops.wm, "obj_import"):
+            bpy.ops.wm.obj_import(filepath=path)
+        else:
+            bpy.ops.import_scene.obj(filepath=path)
+    elif ext == ".ply":
+        if hasattr(bpy.ops.wm, "ply_import"):
+            bpy.ops.wm.ply_import(filepath=path)
+        else:
+            bpy.ops.import_mesh.ply(filepath=path)
+    elif ext == ".stl":
+        bpy.ops.import_mesh.stl(filepath=path)
+    else:
+        raise ValueError("unsupported mesh file %s" % path)
+    new = [obj for obj in bpy.data.objects if obj not in before]
+    others = [obj.name for obj in new if obj.type != 'MESH']
+    meshes = [obj for obj in new if obj.type == 'MESH']
+    if not meshes:
+        raise ValueError("%s has no mesh" % path)
+    bpy.ops.object.select_all(action='DESELECT')
+    for obj in meshes:
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = meshes[0]
+    bpy.ops.object.parent_clear(type='CLEAR_KEEP_TRANSFORM')
+    if len(meshes) > 1:
+        bpy.ops.object.join()
+    obj = bpy.context.view_layer.objects.active
+    for name in others:   # empties the importer made parents
+        bpy.data.objects.remove(bpy.data.objects[name])
+    bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
+    return obj, "%s (%d parts joined)" % (os.path.basename(path), len(meshes))

@@ -1,0 +1,177 @@
+"""Parity with Cycles on real assets the project did not make (issue 8, item 7).
+
+Assets, from Debian's assimp-testmodels, imported with Blender's own importers:
+- engine: glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb, a CAD model (pistons, crank,
+  plates; hard edges, large flat faces), white Diffuse BSDF;
+- house:  OBJ/regr01.obj, a 3ds Max house (walls, rafters; flat faces), as in the accuracy report,
+  white;
+- wuson:  PLY/Wuson.ply, a smooth character, an orange Diffuse BSDF (colour, not only luminance).
+Each stands on nothing, scaled to about 4 units, seen by a camera from above the front, lit by
+forest.exr and sunrise.exr (a low sun: hard shadows).
+
+For each asset and HDRI: Cycles as a user compares (direct light only, pixel filter off, the
+mean of two seeds, samples raised until the noise of its 4 x 4 pixel blocks is under 1.5 %) and
+the add-on's preview at the panel's defaults (Automatic, Refine on) and with Refine off. Over the
+4 x 4 blocks both cover: relative RMS (over blocks and channels), the bias (mean over the mean of
+Cycles, per channel) and the share of blocks that are black where Cycles is lit. Error images
+(Cycles | preview | |difference| x 4) go to --out.
+
+Checks: Cycles' noise is under 1.5 %; refinement lowers the error on the CAD models; no block is
+black where Cycles is lit; each asset's error with the defaults is within its limit below (what
+this build measures, with margin: the issue's goal of 5 % on CAD models is not met yet); the
+coloured asset's mean colour follows Cycles' channel by channel.
+Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_cycles_parity.py -- --zip Z --out DIR
+"""
+
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+import accuracy_scenes  # noqa: E402
+
+MODELS = "/usr/share/assimp/models"
+SIZE = 160
+BLOCK = 4
+SAMPLES = 256
+MAX_NOISE = 0.015
+HDRIS = ("forest.exr", "sunrise.exr")
+ORANGE = (0.8, 0.35, 0.1, 1.0)
+
+# asset: (file, colour, the largest relative RMS against Cycles at the defaults, over the HDRIs)
+ASSETS = {
+    "engine": ("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb", (1.0, 1.0, 1.0, 1.0), 0.30),
+    "house": ("OBJ/regr01.obj", (1.0, 1.0, 1.0, 1.0), 0.30),
+    "wuson": ("PLY/Wuson.ply", ORANGE, 0.10),
+}
+CAD = ("engine", "house")
+
+
+def place(obj, scene):
+    """Scales the object to 4 units, standing at the origin, and aims a camera at it."""
+    bpy.context.view_layer.update()
+    corners = np.array([obj.matrix_world @ v.co for v in obj.data.vertices])
+    low, high = corners.min(axis=0), corners.max(axis=0)
+    scale = 4.0 / float((high - low).max())
+    obj.scale = [scale * s for s in obj.scale]
+    centre = 0.5 * (low + high) * scale
+    obj.location = (-centre[0], -centre[1], -low[2] * scale)
+    height = float(high[2] - low[2]) * scale
+    return sdtest.camera(scene, location=(4.6, -5.6, 1.0 + height), target=(0.0, 0.0, 0.4 * height),
+                         lens=35.0)
+
+
+def build(name):
+    path, colour, _ = ASSETS[name]
+    scene = sdtest.empty_scene()
+    world, _ = sdtest.hdri_world(scene, sdtest.hdri(HDRIS[0]), rotation_z=math.radians(30.0))
+    if name == "house":
+        objects, camera = accuracy_scenes.house(scene)
+        obj = objects[0]
+    else:
+        obj, _ = sdtest.imported(os.path.join(MODELS, path))
+        camera = place(obj, scene)
+    obj.data.materials.clear()
+    obj.data.materials.append(sdtest.diffuse_material("Colour", colour))
+    texture = next(n for n in world.node_tree.nodes if n.type == 'TEX_ENVIRONMENT')
+    return scene, obj, texture
+
+
+def cycles(scene, stem):
+    samples = SAMPLES
+    while True:
+        image, noise = sdtest.cycles_pair(scene, stem, SIZE, samples, BLOCK)
+        if noise < MAX_NOISE or samples >= 16 * SAMPLES:
+            return image, noise, samples
+        samples *= 4
+
+
+def preview(scene, obj, refine, path):
+    settings = scene.sd_lighting
+    settings.refine = refine
+    sdtest.select_only([obj])
+    if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+        raise RuntimeError("the bake of %s failed" % obj.name)
+    settings.live_shading = True
+    if bpy.ops.sd_lighting.render_preview(filepath=path, width=SIZE, height=SIZE) != {'FINISHED'}:
+        raise RuntimeError("render_preview failed for " + path)
+    return sdtest.load_exr(path), dict(obj["sd_bake"])
+
+
+def compare(ours, theirs):
+    """(relative RMS, bias per channel, the share of blocks black where Cycles is lit) over the
+    blocks both cover."""
+    mask = (ours[..., 3] > 0.99) & (theirs[..., 3] > 0.99)
+    a, b = sdtest.block_averages(ours, mask, BLOCK), sdtest.block_averages(theirs, mask, BLOCK)
+    rms = math.sqrt(float(np.mean((a - b) ** 2)) / float(np.mean(b ** 2)))
+    bias = (a - b).mean(axis=0) / b.mean(axis=0)
+    lit = b.mean(axis=1) > 0.1 * b.mean()
+    black = float(np.mean(a[lit].mean(axis=1) < 0.2 * b[lit].mean(axis=1)))
+    return rms, bias, black
+
+
+def error_image(path, theirs, images):
+    """Cycles | each preview | its |difference| x 4, side by side, as a PNG."""
+    panels = [theirs[..., :3]]
+    for image in images:
+        panels += [image[..., :3], 4.0 * np.abs(image[..., :3] - theirs[..., :3])]
+    strip = np.concatenate(panels, axis=1)
+    height, width = strip.shape[:2]
+    rgba = np.concatenate([np.clip(strip, 0.0, 1.0), np.ones((height, width, 1))], axis=2)
+    image = bpy.data.images.new("parity", width, height, alpha=True, float_buffer=True)
+    image.pixels.foreach_set(rgba[::-1].astype(np.float32).ravel())
+    image.filepath_raw = path
+    image.file_format = 'PNG'
+    image.save()
+    bpy.data.images.remove(image)
+
+
+def main():
+    args = sdtest.arguments()
+    sdtest.install_addon(args.zip)
+    os.makedirs(args.out, exist_ok=True)
+    checks = sdtest.Checks("test_cycles_parity")
+    names = os.environ.get("SD_PARITY_ASSETS", ",".join(ASSETS)).split(",")   # a part, by hand
+    for name in names:
+        scene, obj, texture = build(name)
+        for hdri in HDRIS:
+            accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
+            tag = "%s_%s" % (name, hdri[:-4])
+            stem = os.path.join(args.out, tag)
+            theirs, noise, samples = cycles(scene, stem)
+            checks.check(noise < MAX_NOISE, "%s: Cycles' noise under 1.5 %%" % tag,
+                         "%.2f %% at %d samples" % (100 * noise, samples))
+            results = {}
+            for refine in (True, False):
+                image, info = preview(scene, obj, refine, "%s_%s.exr" % (stem, "refined" if refine else "plain"))
+                rms, bias, black = compare(image, theirs)
+                results[refine] = (image, rms, bias, black)
+                print("%s: refine %s: %.1f %% RMS, bias %s %%, black %.2f %%; %s s = %d, %d rays; "
+                      "%d vertices (%s unrefined, %s levels), bake %.2f s, %d bytes per vertex"
+                      % (tag, "on " if refine else "off", 100 * rms,
+                         "/".join("%+.1f" % (100 * x) for x in bias), 100 * black, info["method"],
+                         info["light_order"], info["rays"], info["vertices"],
+                         info.get("unrefined_vertices", "-"), info.get("refine_levels", "-"),
+                         info["seconds"], info["bytes_per_vertex"]), flush=True)
+            error_image(stem + "_error.png", theirs, [results[True][0], results[False][0]])
+            rms, bias, black = results[True][1:]
+            checks.check(rms <= ASSETS[name][2], "%s: within %.0f %% of Cycles at the defaults"
+                         % (tag, 100 * ASSETS[name][2]), "%.1f %%" % (100 * rms))
+            checks.check(black == 0.0, "%s: no block black where Cycles is lit" % tag,
+                         "%.2f %%" % (100 * black))
+            if name in CAD:
+                checks.check(rms < results[False][1], "%s: refinement lowers the error" % tag,
+                             "%.1f %% -> %.1f %%" % (100 * results[False][1], 100 * rms))
+            if ASSETS[name][1] != (1.0, 1.0, 1.0, 1.0):
+                checks.check(np.abs(bias - bias.mean()).max() < 0.03,
+                             "%s: the colour follows Cycles' per channel" % tag,
+                             "bias %s %%" % "/".join("%+.1f" % (100 * x) for x in bias))
+    return checks.summary()
+
+
+sdtest.run(main)

@@ -69,6 +69,8 @@ TESTS = [
     ("test_viewport", WINDOW, 600, ["--enable-event-simulate"], [], (3, 4, 0)),
     # the accuracy-cost report's quick variant and its invariants (issue 11)
     ("accuracy_report", BACKGROUND, 600, [], ["--quick"], (3, 4, 0)),
+    # parity with Cycles on Debian's real assets (issue 8, item 7)
+    ("test_cycles_parity", BACKGROUND, 900, [], [], (3, 4, 0)),
 ]
 
 

@@ -310,10 +310,12 @@ def select_only(objects):
 
 
 def bake_settings(scene, method, material, light_order, visibility_order=None, rays=256,
-                  phong_exponent=None, select=()):
-    """Sets what the next bake uses (fixed orders, no automatic s) and selects `select`; returns
-    the scene's settings."""
+                  phong_exponent=None, select=(), refine=False):
+    """Sets what the next bake uses (fixed orders, no automatic s; no refinement unless asked:
+    the baked copy then has the evaluated mesh's vertices) and selects `select`; returns the
+    scene's settings."""
     settings = scene.sd_lighting
+    settings.refine = refine
     settings.method = method
     settings.material_source = material
     if phong_exponent is not None:
@@ -474,7 +476,7 @@ def imported(path):
         else:
             bpy.ops.import_scene.obj(filepath=path)
     elif ext == ".ply":
-        if hasattr(bpy.ops.wm, "ply_import"):
+        if bpy.app.version >= (3, 6, 0):   # bpy.ops.wm answers hasattr for any name
             bpy.ops.wm.ply_import(filepath=path)
         else:
             bpy.ops.import_mesh.ply(filepath=path)

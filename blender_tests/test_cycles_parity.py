@@ -147,7 +147,7 @@ def main():
             checks.check(noise < MAX_NOISE, "%s: Cycles' noise under 1.5 %%" % tag,
                          "%.2f %% at %d samples" % (100 * noise, samples))
             results = {}
-            for refine in (True, False):
+            for refine in (False, True):   # the refined bake last: the panel tells of it below
                 image, info = preview(scene, obj, refine, "%s_%s.exr" % (stem, "refined" if refine else "plain"))
                 rms, bias, black = compare(image, theirs)
                 results[refine] = (image, rms, bias, black)
@@ -159,6 +159,12 @@ def main():
                          info.get("unrefined_vertices", "-"), info.get("refine_levels", "-"),
                          info["seconds"], info["bytes_per_vertex"]), flush=True)
             error_image(stem + "_error.png", theirs, [results[True][0], results[False][0]])
+            panel = sdtest.LayoutStub()
+            bpy.types.SD_PT_lighting.draw(panel, bpy.context)
+            info = dict(obj["sd_bake"])
+            told = "Refined %d -> %d vertices" % (info["unrefined_vertices"], info["vertices"])
+            checks.check(any(text.startswith(told) for text in panel.texts),
+                         "%s: the panel tells what the refinement did" % tag, told)
             rms, bias, black = results[True][1:]
             checks.check(rms <= ASSETS[name][2], "%s: within %.0f %% of Cycles at the defaults"
                          % (tag, 100 * ASSETS[name][2]), "%.1f %%" % (100 * rms))

@@ -46,10 +46,13 @@ def main():
         evaluated = obj.evaluated_get(depsgraph).to_mesh()
         count = len(evaluated.vertices)
         obj.evaluated_get(depsgraph).to_mesh_clear()
-        checks.check(baked is not None and len(baked.vertices) == count,
-                     "%s: baked mesh of the evaluated geometry" % obj.name,
-                     "%d vertices" % (len(baked.vertices) if baked else -1))
         info = dict(obj["sd_bake"])
+        # Smooth, one material: the copy has the evaluated vertices, then the refinement's.
+        checks.check(baked is not None and info.get("unrefined_vertices") == count
+                     and len(baked.vertices) == info["vertices"] >= count
+                     and len(baked.vertices) <= info["refine_budget"] * count,
+                     "%s: baked mesh of the evaluated geometry, refined within the budget" % obj.name,
+                     "%d evaluated, %d baked" % (count, len(baked.vertices) if baked else -1))
         method = package.utils.methods.get(info["method"])
         checks.check("automatic" in info and info["lobe"] == "lambert" and
                      info["predicted_error"] <= bpy.context.scene.sd_lighting.target_error,

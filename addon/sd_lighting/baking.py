@@ -237,8 +237,11 @@ class BakeTask:
             digest = hashlib.blake2b(digest_size=16)
             for value in self.geometry.inputs():
                 digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
-            arguments = dict(self.bake_arguments(),
-                             **{key: self.settings.get(key) for key in REFINE_KEYS})
+            # The refinement's settings as the types they are asked in (an ID property keeps a
+            # bool as an int): a bake and its recorded settings give one digest.
+            refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
+                          float(self.settings.get("refine_budget", 0.0)))
+            arguments = dict(self.bake_arguments(), refine=refinement)
             for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
                 digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
@@ -610,8 +613,6 @@ class BakeJob:
 SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
                 "design_nodes_max", "design_nodes_mean", "unrefined_vertices", "refine_levels",
                 "refine_seconds", "refine_worst_left", "refine_budget_reached")
-# The settings of the refinement (recorded with the bake, so that a re-bake refines alike).
-REFINE_KEYS = ("refine", "refine_target", "refine_budget")
 
 
 def _result_summary(task, floats):

@@ -99,7 +99,8 @@ class SD_PT_lighting(bpy.types.Panel):
             if predicted is not None:
                 row = layout.row()
                 row.alert = predicted.needs_confirmation
-                row.label(text="Predicted bake time: " + predicted.text(),
+                refined = " + refinement, up to %.3gx the vertices" % settings.refine_budget
+                row.label(text="Predicted bake time: " + predicted.text() + (refined if settings.refine else ""),
                           icon='ERROR' if predicted.needs_confirmation else 'TIME')
             elif problem:
                 layout.label(text="No bake time prediction: " + problem[:80], icon='ERROR')

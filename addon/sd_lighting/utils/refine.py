@@ -33,7 +33,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 CRITERION_ORDER = 6    # the order of T the test shades with: a shadow's edge, not just its mean
-CRITERION_RAYS = 512   # rays per point of the test (at most the bake's)
+CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
 DEFAULT_BUDGET = 4.0   # the vertex budget, as a multiple of the unrefined copy's vertices
 

@@ -50,7 +50,7 @@ def main():
         # Smooth, one material: the copy has the evaluated vertices, then the refinement's.
         checks.check(baked is not None and info.get("unrefined_vertices") == count
                      and len(baked.vertices) == info["vertices"] >= count
-                     and len(baked.vertices) <= info["refine_budget"] * count,
+                     and len(baked.vertices) <= info["refine_max_vertices"],
                      "%s: baked mesh of the evaluated geometry, refined within the budget" % obj.name,
                      "%d evaluated, %d baked" % (count, len(baked.vertices) if baked else -1))
         method = package.utils.methods.get(info["method"])

@@ -150,9 +150,12 @@ class Geometry:
                                    self.loop_totals)
 
     def surface(self):
-        """The baked vertices and triangles as a refine.Surface (copies of a mesh vertex weld)."""
-        return refine.Surface(self.vertices, self.normals, self.positions, self._split.origin,
-                              self.triangles, self.material_slots, self.uvs)
+        """The baked vertices and triangles as a refine.Surface. Vertices at one point weld: the
+        corner copies of a mesh vertex, and the corners of a mesh whose faces share none (a
+        triangle soup, as some exporters write), so that the split stays conforming there too."""
+        weld = np.unique(self.vertices, axis=0, return_inverse=True)[1].reshape(-1)
+        return refine.Surface(self.vertices, self.normals, self.positions, weld, self.triangles,
+                              self.material_slots, self.uvs)
 
     def refined(self, refinement):
         """The geometry of a refined copy (refine.Refinement of this one's surface)."""
@@ -240,7 +243,7 @@ class BakeTask:
             # The refinement's settings as the types they are asked in (an ID property keeps a
             # bool as an int): a bake and its recorded settings give one digest.
             refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
-                          float(self.settings.get("refine_budget", 0.0)))
+                          int(self.settings.get("refine_max_vertices", 0)))
             arguments = dict(self.bake_arguments(), refine=refinement)
             for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
@@ -311,7 +314,7 @@ class BakeTask:
         surface = self.geometry.surface()
         weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
         refinement = refine.refine(surface, bake, weights, float(s["refine_target"]),
-                                   int(float(s["refine_budget"]) * len(surface.vertices)))
+                                   int(s["refine_max_vertices"]))
         return self.geometry.refined(refinement) if refinement.levels else self.geometry
 
     def bake_arguments(self):
@@ -334,7 +337,7 @@ def bake_settings(scene, obj, env_source):
     common = {"lobe": lobe, "exponent": float(exponent), "seed": int(settings.seed),
               "environment": env_source.description, "refine": bool(settings.refine),
               "refine_target": float(settings.target_error),
-              "refine_budget": float(settings.refine_budget)}
+              "refine_max_vertices": int(settings.refine_max_vertices)}
     if method_id == analysis.AUTOMATIC:
         return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
                     rays=int(fixed.get("rays", settings.rays)))

@@ -69,7 +69,7 @@ class SD_PT_lighting(bpy.types.Panel):
         row.prop(settings, "refine")
         sub = row.row(align=True)
         sub.enabled = settings.refine
-        sub.prop(settings, "refine_budget")
+        sub.prop(settings, "refine_max_vertices")
         obj = context.active_object
         if obj is not None and obj.type == 'MESH':
             _draw_overrides(box, obj)
@@ -99,7 +99,7 @@ class SD_PT_lighting(bpy.types.Panel):
             if predicted is not None:
                 row = layout.row()
                 row.alert = predicted.needs_confirmation
-                refined = " + refinement, up to %.3gx the vertices" % settings.refine_budget
+                refined = " + refinement, up to %d vertices" % settings.refine_max_vertices
                 row.label(text="Predicted bake time: " + predicted.text() + (refined if settings.refine else ""),
                           icon='ERROR' if predicted.needs_confirmation else 'TIME')
             elif problem:
@@ -204,7 +204,7 @@ def _draw_refinement(layout, info):
     row.alert = bool(info.get("refine_budget_reached"))
     row.label(text="Largest edge error left %.1f %% (target %.1f %%)%s" % (
         100 * info.get("refine_worst_left", 0.0), 100 * info.get("refine_target", 0.0),
-        ": the vertex budget stopped it" if info.get("refine_budget_reached") else ""))
+        ": Max Vertices stopped it" if info.get("refine_budget_reached") else ""))
 
 
 def _draw_choice(layout, title, chosen):

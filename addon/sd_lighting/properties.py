@@ -140,9 +140,10 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Before the bake, split the baked copy's triangles where the light between "
                     "their vertices is not linear (a shadow across a large face) by more than the "
                     "target error, up to the vertex budget. The object's own mesh is not changed")
-    refine_budget: FloatProperty(
-        name="Vertex Budget", default=refine.DEFAULT_BUDGET, min=1.0, soft_max=16.0,
-        description="Most vertices the refined copy may have, as a multiple of the unrefined one's")
+    refine_max_vertices: IntProperty(
+        name="Max Vertices", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
+        description="Most vertices a refined copy may have (its bake time and memory grow with "
+                    "them); a copy that has as many already is not refined")
 
     live_rebake: BoolProperty(
         name="Live Re-bake", default=False, update=_sync_live_rebake,

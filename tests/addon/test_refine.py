@@ -155,6 +155,15 @@ def test_the_vertex_budget_holds_and_says_it_stopped_refinement():
     assert _boundary_length(result.surface.vertices, result.surface.triangles) == pytest.approx(4.0)
 
 
+def test_a_surface_at_the_budget_is_not_tested_at_all():
+    calls = []
+    surface = _grid(4)
+    result = refine.refine(surface, _synthetic_bake(lambda p: np.where(p[:, 0] < 0.13, 0.2, 1.0), calls),
+                           WEIGHTS, 0.02, len(surface.vertices))
+    assert result.budget_reached and result.levels == 0 and not calls
+    assert result.surface is surface
+
+
 def test_copies_of_a_vertex_split_their_edges_together():
     """Two triangles meeting at a hard edge, each with its own copies of the edge's vertices (the
     corner split): a signal that changes along one copy only splits both, so no crack opens."""

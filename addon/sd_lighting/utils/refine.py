@@ -16,8 +16,9 @@ and the error of an edge is the square root of that over the same mean of B² ov
 midpoints are baked in one pass in which every point traces the same ray directions
 (bake_transfer's common_rotation), so their difference is the signal's, not ray noise.
 
-The split is conforming, so no crack opens: an edge is marked as a place (the copies of a
-vertex split at a hard edge or seam, `weld`, mark their edges together); a triangle with two
+The split is conforming, so no crack opens: an edge is marked as a place (the vertices at one
+point - copies split at a hard edge or seam, the corners of a triangle soup - share a `weld` id
+and mark their edges together); a triangle with two
 marked sides gets its third marked too, so each triangle is kept, halved (one side marked) or
 cut into four (all sides). Each level tests only the edges of the triangles the last one made;
 refinement stops when no edge is marked, after MAX_LEVELS levels, or at the vertex budget (the
@@ -35,7 +36,7 @@ import numpy as np
 CRITERION_ORDER = 6    # the order of T the test shades with: a shadow's edge, not just its mean
 CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
-DEFAULT_BUDGET = 4.0   # the vertex budget, as a multiple of the unrefined copy's vertices
+DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity, benchmark_refine)
 
 
 @dataclass
@@ -172,6 +173,8 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
     of the light; target: the relative error an edge may keep; max_vertices: the budget. Raises
     what bake raises (a cancel). Returns a Refinement."""
     triangles = np.asarray(surface.triangles)
+    if len(surface.vertices) >= max_vertices:
+        return Refinement(surface, 0, 0, 0.0, True)
     made = np.ones(len(triangles), dtype=bool)
     tested = np.zeros(0, dtype=np.int64)   # the keys of the places whose midpoint was tested
     scale = None

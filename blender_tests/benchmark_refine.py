@@ -1,0 +1,61 @@
+"""What refinement costs and gives: for each asset and HDRI of test_cycles_parity.py, the preview
+against Cycles (relative RMS over 4 x 4 blocks) with Refine off and at each vertex budget, beside
+the bake's time, vertices and memory - measured in one run, printed as a table with ratios to the
+unrefined bake.
+
+    blender -b --factory-startup --python blender_tests/benchmark_refine.py -- --zip Z --out DIR
+        [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 2,4,8]
+"""
+
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import accuracy_scenes  # noqa: E402
+import test_cycles_parity as parity  # noqa: E402
+
+
+def options():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--assets", default=",".join(parity.ASSETS))
+    parser.add_argument("--hdris", default=",".join(parity.HDRIS))
+    parser.add_argument("--budgets", default="100000,250000,500000")
+    return parser.parse_known_args(argv)[0]
+
+
+def main():
+    args, opts = sdtest.arguments(), options()
+    sdtest.install_addon(args.zip)
+    budgets = [int(b) for b in opts.budgets.split(",")]
+    rows = []
+    for name in opts.assets.split(","):
+        scene, obj, texture = parity.build(name)
+        for hdri in opts.hdris.split(","):
+            accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
+            stem = os.path.join(args.out, "%s_%s" % (name, hdri[:-4]))
+            theirs, noise, _ = parity.cycles(scene, stem)
+            for budget in [None] + budgets:
+                if budget is not None:
+                    scene.sd_lighting.refine_max_vertices = budget
+                image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr")
+                rms = parity.compare(image, theirs)[0]
+                rows.append((name, hdri[:-4], budget, rms, info, noise))
+                print("%s %s budget %s: %.1f %% (Cycles noise %.2f %%), %d vertices, %.2f s, %s"
+                      % (name, hdri, budget, 100 * rms, 100 * noise, info["vertices"], info["seconds"],
+                         info["method"]), flush=True)
+    print("\n| asset | HDRI | refine | error vs Cycles | vertices | bake | bake / unrefined | memory |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, hdri, budget, rms, info, noise in rows:
+        base = next(r[4] for r in rows if r[0] == name and r[1] == hdri and r[2] is None)
+        print("| %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
+            name, hdri, "off" if budget is None else "max %d vertices" % budget, 100 * rms,
+            info["vertices"], info["seconds"], info["seconds"] / max(base["seconds"], 1e-9),
+            info["vertices"] * info["bytes_per_vertex"] / 1e6))
+    return 0
+
+
+sdtest.run(main)

@@ -420,10 +420,11 @@ def block_differences(images, reference, mask, block):
     return [np.abs(block_averages(image, mask, block) - expected).max(axis=1) / scale for image in images]
 
 
-def cycles_render(scene, path, size, samples=512, seed=1):
+def cycles_render(scene, path, size, samples=512, seed=1, transparent=True):
     """Renders the scene with Cycles as a user comparing with the preview would (direct light
     only, pixel filter off, no denoising - Debian's Cycles has no OpenImageDenoise - transparent
-    film) at size x size into an EXR; returns load_exr's image. Two seeds give independent noise."""
+    film unless asked for the world behind) at size x size into an EXR; returns load_exr's image.
+    Two seeds give independent noise."""
     render = scene.render
     render.engine = 'CYCLES'
     scene.cycles.samples = samples
@@ -433,7 +434,7 @@ def cycles_render(scene, path, size, samples=512, seed=1):
     scene.cycles.seed = seed
     scene.cycles.filter_width = 0.01
     scene.cycles.max_bounces = 0
-    render.film_transparent = True
+    render.film_transparent = transparent
     render.resolution_x = render.resolution_y = size
     render.resolution_percentage = 100
     render.image_settings.file_format = 'OPEN_EXR'

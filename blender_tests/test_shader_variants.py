@@ -120,8 +120,26 @@ def stage_source(package, variant, stage, dialect):
         lines.append("layout(location = %d) %s %s %s %s;" % (location, qualifier, direction, kind, member))
     if stage == "frag":
         lines.append("layout(location = 0) out vec4 fragColor;")
-    library, vertex, fragment = (gs._read_shader(f) for f in gs.SHADER_FILES)
-    return "\n".join(lines) + "\n" + library + "\n" + (vertex if stage == "vert" else fragment)
+    vertex, fragment = gs.stage_sources(gs.SHADER_FILES)
+    return "\n".join(lines) + "\n" + (vertex if stage == "vert" else fragment)
+
+
+def background_stage_source(package, stage, dialect):
+    """The world background's stage as gpu_shading._background_shader declares it (its push
+    constants as a uniform block)."""
+    gs = package.gpu_shading
+    lines = (["#version 320 es", "precision highp float;", "precision highp int;",
+              "precision highp sampler2D;"] if dialect == "es" else ["#version 450"])
+    lines += ["#define SD_EQUIRECT_MAP %s" % gs.BACKGROUND_SAMPLER,
+              "layout(std140, binding = 1) uniform sd_push { mat4 sd_inverse_view_projection; "
+              "mat4 sd_to_environment; float sd_scale; };",
+              "layout(binding = 0) uniform highp sampler2D %s;" % gs.BACKGROUND_SAMPLER]
+    if stage == "vert":
+        lines += ["layout(location = 0) in vec2 pos;", "layout(location = 0) smooth out vec2 sd_ndc;"]
+    else:
+        lines += ["layout(location = 0) smooth in vec2 sd_ndc;", "layout(location = 0) out vec4 fragColor;"]
+    vertex, fragment = gs.stage_sources(gs.BACKGROUND_FILES)
+    return "\n".join(lines) + "\n" + (vertex if stage == "vert" else fragment)
 
 
 def glslang_errors(validator, source, stage, dialect, directory):
@@ -138,6 +156,9 @@ def glslang_errors(validator, source, stage, dialect, directory):
         return []
     return [l for l in (done.stdout + done.stderr).splitlines()
             if "ERROR" in l and "compilation terminated" not in l] or [done.stdout + done.stderr]
+
+
+BACKGROUND = object()   # the world background's program, beside the variants in the glslang jobs
 
 
 def main():
@@ -160,6 +181,12 @@ def main():
             failed.append("%s: %s" % (name(variant), str(exc).splitlines()[0] if str(exc) else type(exc).__name__))
     checks.check(not failed, "every variant compiles on this Blender's GPU backend (%d programs, %.1f s)"
                  % (len(all_variants), time.perf_counter() - start), "; ".join(failed[:5]))
+    try:
+        package.gpu_shading._background_shader()
+        problem = ""
+    except Exception as exc:
+        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    checks.check(not problem, "the world background's shader compiles on this Blender's GPU backend", problem)
     package.gpu_shading.clear_cache()
 
     # 2. glslang, strict.
@@ -173,16 +200,24 @@ def main():
     for dialect, label in (("es", "GLSL ES 3.20 (no implicit conversions)"),
                            ("vulkan", "Vulkan GLSL 4.50 to SPIR-V")):
         start = time.perf_counter()
-        jobs = [(variant, stage) for variant in all_variants for stage in ("vert", "frag")]
+        jobs = [(variant, stage) for variant in all_variants + [BACKGROUND] for stage in ("vert", "frag")]
+
+        def source(variant, stage):
+            if variant is BACKGROUND:
+                return background_stage_source(package, stage, dialect)
+            return stage_source(package, variant, stage, dialect)
+
         with tempfile.TemporaryDirectory() as directory, ThreadPoolExecutor(os.cpu_count() or 2) as pool:
             results = pool.map(lambda job: glslang_errors(
-                validator, stage_source(package, job[0], job[1], dialect), job[1], dialect, directory), jobs)
-            failed = ["%s %s: %s" % (name(variant), stage, " | ".join(errors[:3]))
+                validator, source(*job), job[1], dialect, directory), jobs)
+            failed = ["%s %s: %s" % ("background" if variant is BACKGROUND else name(variant), stage,
+                                     " | ".join(errors[:3]))
                       for (variant, stage), errors in zip(jobs, results) if errors]
         for line in failed[:10]:
             print("  " + line)
-        checks.check(not failed, "glslang accepts every variant as %s (%.1f s)" % (label, time.perf_counter() - start),
-                     "%d of %d stages fail; first: %s" % (len(failed), 2 * len(all_variants), failed[0] if failed else ""))
+        checks.check(not failed, "glslang accepts every variant and the background as %s (%.1f s)"
+                     % (label, time.perf_counter() - start),
+                     "%d of %d stages fail; first: %s" % (len(failed), len(jobs), failed[0] if failed else ""))
     return checks.summary()
 
 

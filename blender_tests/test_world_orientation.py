@@ -5,6 +5,8 @@ node with a full XYZ Euler rotation is rendered by Cycles and by the add-on's pr
 unshadowed Lambert formula at s = 8 (Funk-Hecke: B = integral L cos / pi, exactly what Cycles
 computes for a white diffuse surface, up to the order-8 truncation, ~1 %). The two agree; a preview
 with a different rotation does not (so the comparison can tell orientations apart).
+The World Background option draws the same rotated environment behind the sphere as Cycles does
+without a transparent film (issue 8, item 6), and leaves the sphere's pixels as they were.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_world_orientation.py -- --zip Z --out DIR
 """
 
@@ -47,6 +49,25 @@ def main():
     other = preview(os.path.join(args.out, "orientation_preview_other.exr"))
     mapping.inputs["Rotation"].default_value = ROTATION
     cycles = sdtest.cycles_render(scene, os.path.join(args.out, "orientation_cycles.exr"), SIZE)
+
+    scene.sd_lighting.world_background = True
+    behind = preview(os.path.join(args.out, "orientation_preview_background.exr"))
+    scene.sd_lighting.world_background = False
+    cycles_behind = sdtest.cycles_render(scene, os.path.join(args.out, "orientation_cycles_background.exr"),
+                                         SIZE, samples=64, transparent=False)
+    empty = (ours[..., 3] == 0.0) & (cycles[..., 3] < 0.01)
+    sphere = ours[..., 3] > 0.99
+    checks.check(np.all(behind[..., 3] == 1.0) and np.array_equal(behind[sphere], ours[sphere]),
+                 "the world background fills every empty pixel and leaves the sphere as it was")
+    background, wrong_background = sdtest.block_differences(
+        (behind, np.roll(behind, SIZE // 4, axis=1)), cycles_behind, empty, BLOCK)
+    checks.check(len(background) > 20 and np.median(background) < 0.02 and np.percentile(background, 90) < 0.05,
+                 "the world background = Cycles' world behind the sphere (block averages)",
+                 "median %.1f %%, 90th pct %.1f %% over %d blocks; shifted: median %.1f %%" % (
+                     100 * np.median(background), 100 * np.percentile(background, 90), len(background),
+                     100 * np.median(wrong_background)))
+    checks.check(np.median(wrong_background) > 3 * np.median(background),
+                 "a background shifted by a quarter of the view differs from Cycles'")
 
     mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
     checks.check(mask.mean() > 0.3, "both images show the sphere", "%.0f %% of pixels" % (100 * mask.mean()))

@@ -33,9 +33,9 @@
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
  *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
- *                        texture sd_band_limited_texture (SD_BAND_LIMITED_TEXTURE_WIDTH x _HEIGHT,
- *                        unrotated L~) at g R x (sd.local_to_environment) instead of summed from
- *                        sd.light[]
+ *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it
+ *                        for sd_equirect.glsl) at g R x (sd.local_to_environment) instead of
+ *                        summed from sd.light[]
  *
  * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
  * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture
@@ -116,45 +116,11 @@ void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
 #endif
 
 #ifdef SD_BAND_LIMITED_TEXTURE
-/* Texel (i, j) of the band-limited texture (rows bottom-first: j = 0 at the south
- * pole), wrapped in u (the seam) and continued across the poles: the virtual row past a pole is
- * the edge row half a turn round (colatitude -h/2 at phi is +h/2 at phi + pi). */
-vec3 sd_band_limited_texel(int i, int j)
-{
-  if (j < 0 || j >= SD_BAND_LIMITED_TEXTURE_HEIGHT) {
-    j = (j < 0) ? 0 : SD_BAND_LIMITED_TEXTURE_HEIGHT - 1;
-    i += SD_BAND_LIMITED_TEXTURE_WIDTH / 2;
-  }
-  /* i is in [-1, 3 W / 2] here; no % (undefined for negative operands) */
-  if (i < 0) {
-    i += SD_BAND_LIMITED_TEXTURE_WIDTH;
-  }
-  else if (i >= SD_BAND_LIMITED_TEXTURE_WIDTH) {
-    i -= SD_BAND_LIMITED_TEXTURE_WIDTH;
-  }
-  return texelFetch(sd_band_limited_texture, ivec2(i, j), 0).rgb;
-}
-
-/* L~(g R d) from the texture of the unrotated L~ (Blender's equirect orientation: u = 0.5 -
- * atan2(y, x) / 2pi, v = 1 - acos(z) / pi, texel centres at (i + 0.5) / W, (j + 0.5) / H),
- * bilinear between the four nearest texel centres (done here: exact wrap at the seam and across
- * the poles whatever the sampler state). */
+/* L~(g R d) from the band-limited texture of the unrotated L~ (sd_equirect.glsl: SD_EQUIRECT_MAP
+ * is sd_band_limited_texture). */
 vec3 sd_light_at(vec3 d)
 {
-  vec3 e = normalize(mat3(sd.local_to_environment) * d);
-  float u = 0.5 - atan(e.y, e.x) * 0.15915494309189535;
-  float v = 1.0 - acos(clamp(e.z, -1.0, 1.0)) * 0.3183098861837907;
-  float x = u * float(SD_BAND_LIMITED_TEXTURE_WIDTH) - 0.5;
-  float y = v * float(SD_BAND_LIMITED_TEXTURE_HEIGHT) - 0.5;
-  float x0 = floor(x);
-  float y0 = floor(y);
-  float fx = x - x0;
-  float fy = y - y0;
-  int i = int(x0);
-  int j = int(y0);
-  vec3 bottom = mix(sd_band_limited_texel(i, j), sd_band_limited_texel(i + 1, j), fx);
-  vec3 top = mix(sd_band_limited_texel(i, j + 1), sd_band_limited_texel(i + 1, j + 1), fx);
-  return mix(bottom, top, fy);
+  return sd_equirect(normalize(mat3(sd.local_to_environment) * d));
 }
 
 #endif

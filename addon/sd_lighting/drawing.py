@@ -150,6 +150,12 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, w
         data.draw(block, texture)
 
 
+def draw_background(scene, view, scale):
+    """The scene's environment behind what is drawn (the World Background option): L(g d) in the
+    direction d of each empty pixel, g the environment rotation, times scale."""
+    gpu_shading.draw_background(environment.source(scene), view, environment.rotation_matrix(scene), scale)
+
+
 def tag_viewports():
     """Redraws every 3D viewport (and its sidebar)."""
     import bpy
@@ -193,13 +199,15 @@ def _draw_handler():
         return
     try:
         objects = baked_objects(scene, context.view_layer)
-        if not objects:
+        if not objects and not settings.world_background:
             return
         view = View.from_region(context.region_data)
         gpu.state.depth_test_set('LESS_EQUAL')
         gpu.state.depth_mask_set(True)
         gpu.state.blend_set('NONE')
         draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
+        if settings.world_background:
+            draw_background(scene, view, exposure_scale(scene))
         gpu.state.depth_mask_set(False)
         gpu.state.depth_test_set('NONE')
         last_error = ""

@@ -202,6 +202,23 @@ def environment(src):
     return env
 
 
+BACKGROUND_MAX_WIDTH = 2048   # the world background's texture: finer maps are sampled down
+
+
+def background_texels(src):
+    """The environment as the world background draws it: L times the strength at the texel
+    centres of an equirect map (utils/transforms.equirect_directions: Blender's orientation, rows
+    bottom-first), nearest texel of the source, at most BACKGROUND_MAX_WIDTH wide (a cube map: 2 x
+    its face size); a uniform colour as 2 x 1. float32 [H, W, 3]."""
+    if src.kind == "uniform":
+        return np.broadcast_to(np.asarray(src.colour, dtype=np.float32) * src.strength, (1, 2, 3)).copy()
+    env = environment(src)
+    width = int(min(BACKGROUND_MAX_WIDTH, max(2 * env.height, 2)))
+    directions = transforms.equirect_directions(width, width // 2)
+    radiance = np.asarray(env.radiance(directions.reshape(-1, 3)), dtype=np.float32)
+    return (radiance * src.strength).reshape(width // 2, width, 3)
+
+
 def light_coefficients(src, order):
     """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied."""
     if src.kind == "uniform":

@@ -28,7 +28,7 @@ import os
 
 import numpy as np
 
-from . import attributes, materials, native
+from . import attributes, environment, materials, native
 from .utils import lobe_designs as lobe_design_cache
 from .utils import lobes, methods, transforms
 from .utils.bake_data import BAKE
@@ -37,25 +37,38 @@ from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_
                                    band_limited_texture_size)
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
+EQUIRECT_FILE = "sd_equirect.glsl"
 SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.glsl")
+BACKGROUND_FILES = ("sd_background_vert.glsl", "sd_background_frag.glsl")
+ALL_FILES = (EQUIRECT_FILE,) + SHADER_FILES + BACKGROUND_FILES
+BACKGROUND_SAMPLER = "sd_environment"
 
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
+_background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
 
 
 def shader_directory():
     """shaders/ inside the add-on (the zip), else the repository's shaders/."""
     for directory in (os.path.join(_HERE, "shaders"), os.path.join(_HERE, "..", "..", "shaders")):
-        if all(os.path.isfile(os.path.join(directory, f)) for f in SHADER_FILES):
+        if all(os.path.isfile(os.path.join(directory, f)) for f in ALL_FILES):
             return os.path.normpath(directory)
-    raise FileNotFoundError("the add-on's GLSL files (%s) are missing" % ", ".join(SHADER_FILES))
+    raise FileNotFoundError("the add-on's GLSL files (%s) are missing" % ", ".join(ALL_FILES))
 
 
 def _read_shader(name):
     with open(os.path.join(shader_directory(), name), encoding="utf-8") as f:
         return f.read()
+
+
+def stage_sources(files):
+    """(vertex, fragment) source of a program of `files` (library, vertex, fragment; or vertex,
+    fragment), each after sd_equirect.glsl, as create-infos take them (after their declarations)."""
+    *library, vert, frag = (_read_shader(name) for name in (EQUIRECT_FILE,) + tuple(files))
+    prefix = "\n".join(library) + "\n"
+    return prefix + vert, prefix + frag
 
 
 def clear_cache():
@@ -66,6 +79,7 @@ def clear_cache():
         _lobe_designs.close()
         _lobe_designs = None
     _band_limited_textures.clear()
+    _background.clear()
 
 
 def shader_program(variant):
@@ -92,9 +106,9 @@ def _compile(variant):
         getattr(interface, qualifier)(glsl_type.upper(), name)
     info.vertex_out(interface)
     info.fragment_out(0, 'VEC4', "fragColor")
-    lib, vert, frag = (_read_shader(name) for name in SHADER_FILES)
-    info.vertex_source(lib + "\n" + vert)
-    info.fragment_source(lib + "\n" + frag)
+    vert, frag = stage_sources(SHADER_FILES)
+    info.vertex_source(vert)
+    info.fragment_source(frag)
     program = gpu.shader.create_from_info(info)
     _shaders[variant] = (program, interface, info)  # keep the create-infos alive with the shader
     return _shaders[variant]
@@ -141,6 +155,56 @@ def band_limited_texture(source, light):
         texture = _rgba32f(width, height, texels)
         _band_limited_textures[key] = texture
     return texture
+
+
+def _background_shader():
+    """(GPUShader, batch of its screen-covering triangle) of the world background (compiled once)."""
+    compiled = _background.get("shader")
+    if compiled is None:
+        import gpu
+        info = gpu.types.GPUShaderCreateInfo()
+        info.define("SD_EQUIRECT_MAP", BACKGROUND_SAMPLER)
+        info.push_constant('MAT4', "sd_inverse_view_projection")
+        info.push_constant('MAT4', "sd_to_environment")
+        info.push_constant('FLOAT', "sd_scale")
+        info.sampler(0, 'FLOAT_2D', BACKGROUND_SAMPLER)
+        info.vertex_in(0, 'VEC2', "pos")
+        interface = gpu.types.GPUStageInterfaceInfo("sd_background_interface")
+        interface.smooth('VEC2', "sd_ndc")
+        info.vertex_out(interface)
+        info.fragment_out(0, 'VEC4', "fragColor")
+        vert, frag = stage_sources(BACKGROUND_FILES)
+        info.vertex_source(vert)
+        info.fragment_source(frag)
+        shader = gpu.shader.create_from_info(info)
+        batch = make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
+        compiled = _background["shader"] = (shader, interface, info, batch)   # infos kept alive
+    return compiled[0], compiled[3]
+
+
+def draw_background(source, view, to_environment, scale):
+    """Draws the environment of `source` (environment.Source) behind everything drawn so far:
+    in each pixel L(g d), d its ray (view: view.View), g = to_environment, times `scale` (the
+    exposure), at the far plane - with the depth test LESS_EQUAL it fills only what is empty."""
+    import gpu
+    from mathutils import Matrix
+    shader, batch = _background_shader()
+    texture = _background.get(source.key)
+    if texture is None:
+        texels = environment.background_texels(source)
+        height, width, _ = texels.shape
+        rgba = np.ones((height, width, 4), dtype=np.float32)
+        rgba[..., :3] = texels
+        texture = _background[source.key] = _rgba32f(width, height, rgba)
+    rotation = np.eye(4)
+    rotation[:3, :3] = to_environment
+    shader.bind()
+    shader.uniform_float("sd_inverse_view_projection", Matrix(np.linalg.inv(view.view_projection).tolist()))
+    shader.uniform_float("sd_to_environment", Matrix(rotation.tolist()))
+    shader.uniform_float("sd_scale", float(scale))
+    shader.uniform_sampler(BACKGROUND_SAMPLER, texture)
+    gpu.state.depth_mask_set(False)
+    batch.draw(shader)
 
 
 def gaunt_texture(light_order, visibility_order):

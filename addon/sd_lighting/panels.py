@@ -125,6 +125,7 @@ class SD_PT_lighting(bpy.types.Panel):
         row = box.row()
         row.prop(settings, "live_shading")
         row.prop(settings, "per_pixel")
+        box.prop(settings, "world_background")
         box.prop(settings, "band_limited_texture")
         box.prop(settings, "ringing_window")
         if context.active_object is not None:

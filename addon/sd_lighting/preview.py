@@ -2,7 +2,8 @@
 
 What is drawn is what the viewport's live shading shows (drawing.draw_objects, the same shader
 and data), plus the scene's other visible meshes in flat grey (the viewport shows them in
-Blender's own shading), on a transparent background. It waits for the ringing window's choice
+Blender's own shading), on a transparent background - or, with the World Background option, in
+front of the environment (opaque), as Cycles renders without a transparent film. It waits for the ringing window's choice
 (the viewport shades without one until it is made): an image made once shows what the viewport
 ends with, whenever it is asked for.
 
@@ -52,6 +53,8 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
 
     def draw():
         drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel, wait=True)
+        if scene.sd_lighting.world_background:
+            drawing.draw_background(scene, view, 1.0)
         if others:
             with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
                 from mathutils import Matrix

@@ -157,6 +157,11 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Per Pixel", default=False, update=_redraw,
         description="Evaluate the formula per pixel (the pixel's normal and view, the triangle's "
                     "per-vertex data blended) instead of per vertex (the seed's way)")
+    world_background: BoolProperty(
+        name="World Background", default=False, update=_redraw,
+        description="Draw the environment behind the scene in the live shading and the preview "
+                    "(turned with the environment, the exposure applied), as Cycles renders it "
+                    "without a transparent film")
     band_limited_texture: BoolProperty(
         name="Band-Limited Texture", default=False, update=_redraw,
         description=", ".join(m.label for m in methods.METHODS if m.band_limited_texture) +

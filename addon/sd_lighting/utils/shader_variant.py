@@ -137,8 +137,7 @@ class Variant:
             d["SD_VERTEX_TARGET"] = "1"
         if self.band_limited_texture:
             d["SD_BAND_LIMITED_TEXTURE"] = "1"
-            d["SD_BAND_LIMITED_TEXTURE_WIDTH"] = str(self.band_limited_texture[0])
-            d["SD_BAND_LIMITED_TEXTURE_HEIGHT"] = str(self.band_limited_texture[1])
+            d["SD_EQUIRECT_MAP"] = BAND_LIMITED_TEXTURE_SAMPLER[1]
         if self.material_count:
             d["SD_ALBEDO"] = "1"
             if self.material_slots:

@@ -52,3 +52,17 @@ def transform_points(matrix, points):
     """Points [N, 3] through a 4x4 affine matrix, float64."""
     matrix = np.asarray(matrix, dtype=np.float64)
     return np.asarray(points, dtype=np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def equirect_directions(width, height):
+    """The unit directions of the texel centres of a width x height equirect map in Blender's
+    orientation (u = 0.5 - atan2(y, x) / 2pi, v = 1 - acos(z) / pi; texel (i, j) centred at
+    u = (i + 0.5) / width, v = (j + 0.5) / height), rows bottom-first (j = 0 at the south pole),
+    as GPU textures hold them: float64 [height, width, 3]."""
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height) + 0.5) / height
+    phi = (0.5 - u)[None, :] * 2.0 * np.pi
+    theta = (1.0 - v)[:, None] * np.pi
+    sin_theta = np.sin(theta)
+    return np.stack(np.broadcast_arrays(sin_theta * np.cos(phi), sin_theta * np.sin(phi),
+                                        np.cos(theta)), axis=-1)

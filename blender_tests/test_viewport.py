@@ -162,6 +162,7 @@ class Test:
         package.preview.write_png(os.path.join(self.args.out, "viewport.png"),
                                   np.round(255 * np.clip(self.samples[::-1], 0, 1)).astype(np.uint8))
         drawing = package.drawing
+        shaded = []     # (x, y) of the vertices compared
         for obj in (self.ball, self.ground):
             cpu = drawing.cpu_reference(scene, obj, self.view)
             mesh = package.baking.baked_mesh(obj)
@@ -181,12 +182,57 @@ class Test:
             # transform), read back as they are stored.
             inside &= (cpu.min(axis=1) > 0.02) & (cpu.max(axis=1) < 0.98)
             px = sdtest.bilinear(self.samples, x[inside], y[inside])
+            shaded.append((x[inside], y[inside]))
             expected = package.preview.srgb_encode(cpu[inside])
             error = 255.0 * np.abs(px - expected).max(axis=1)
             checks.check(inside.sum() > 20 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,
                          "viewport shows sRGB(B of the CPU evaluator) on the %s" % obj.name,
                          "median %.2f / 255 over %d vertices, %.0f %% within 4 / 255" % (
                              np.median(error), inside.sum(), 100 * np.mean(error < 4.0)))
+
+        # The World Background option: the empty pixels (those of the Solid mode's background
+        # colour in the top row) show sRGB(L(g d)) of each pixel's ray d; the objects stay.
+        before = self.samples
+        empty = np.all(np.abs(before - np.median(before[-1], axis=0)) < 1e-6, axis=2)
+        scene.sd_lighting.world_background = True
+        self.samples = None
+        handler = self.read_viewport()
+        area.tag_redraw()
+        for _ in range(3):
+            yield
+        bpy.types.SpaceView3D.draw_handler_remove(handler, 'WINDOW')
+        scene.sd_lighting.world_background = False
+        if not checks.check(self.samples is not None and package.drawing.last_error == "",
+                            "viewport redrawn with the world background", package.drawing.last_error):
+            return
+        h, w = empty.shape
+        rows, columns = np.nonzero(empty)
+        ndc = np.stack([2.0 * (columns + 0.5) / w - 1.0, 2.0 * (rows + 0.5) / h - 1.0], axis=1)
+        inverse = np.linalg.inv(self.view.view_projection)
+        near, far = (np.c_[ndc, np.full(len(ndc), z), np.ones(len(ndc))] @ inverse.T for z in (0.0, 0.5))
+        rays = far[:, :3] / far[:, 3:] - near[:, :3] / near[:, 3:]
+        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        e = rays @ package.environment.rotation_matrix(scene).T
+        u = 0.5 - np.arctan2(e[:, 1], e[:, 0]) / (2.0 * np.pi)
+        v = 1.0 - np.arccos(np.clip(e[:, 2], -1.0, 1.0)) / np.pi
+        # The map, bilinear as Blender's Environment Texture (one texel of wrap and pole padding)
+        texels = package.environment.background_texels(package.environment.source(scene))
+        texels = np.concatenate([texels[:, -1:], texels, texels[:, :1]], axis=1)
+        texels = np.concatenate([texels[:1], texels, texels[-1:]], axis=0)
+        height, width = texels.shape[0] - 2, texels.shape[1] - 2
+        radiance = sdtest.bilinear(texels, u * width + 1.0, v * height + 1.0)
+        error = 255.0 * np.abs(self.samples[rows, columns, :3] - package.preview.srgb_encode(radiance)).max(axis=1)
+        checks.check(len(error) > 1000 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,
+                     "the world background fills the empty pixels with sRGB(L(g d))",
+                     "median %.2f / 255 over %d pixels, %.0f %% within 4 / 255" % (
+                         np.median(error), len(error), 100 * np.mean(error < 4.0)))
+        package.preview.write_png(os.path.join(self.args.out, "viewport_background.png"),
+                                  np.round(255 * np.clip(self.samples[::-1], 0, 1)).astype(np.uint8))
+        x, y = (np.concatenate(c) for c in zip(*shaded))
+        moved = 255.0 * np.abs(sdtest.bilinear(self.samples, x, y) - sdtest.bilinear(before, x, y)).max(axis=1)
+        checks.check(np.median(moved) < 0.5 and np.mean(moved < 2.0) > 0.95,
+                     "the world background leaves the shaded objects as they were",
+                     "median %.2f / 255 over %d vertices" % (np.median(moved), len(moved)))
 
     def tick(self):
         self.ticks += 1

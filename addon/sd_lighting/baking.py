@@ -615,7 +615,8 @@ class BakeJob:
 # was asked for.
 SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
                 "design_nodes_max", "design_nodes_mean", "unrefined_vertices", "refine_levels",
-                "refine_seconds", "refine_worst_left", "refine_budget_reached")
+                "refine_seconds", "refine_worst_left", "refine_estimated_left",
+                "refine_budget_reached")
 
 
 def _result_summary(task, floats):
@@ -636,6 +637,7 @@ def _result_summary(task, floats):
                        refine_seconds=float(task.refine_seconds),
                        refine_levels=int(refinement.levels) if refinement else 0,
                        refine_worst_left=float(refinement.worst_left) if refinement else 0.0,
+                       refine_estimated_left=float(refinement.estimated_left) if refinement else 0.0,
                        refine_budget_reached=bool(refinement.budget_reached) if refinement else False)
     offsets = result.get("design_offsets")
     if offsets is not None:

@@ -195,16 +195,17 @@ def _draw_overrides(layout, obj):
 def _draw_refinement(layout, info):
     """What the refinement of a bake did (its `sd_bake` dict)."""
     if not info.get("refine_levels"):
-        layout.label(text="Refine: no edge off by more than %.1f %%, nothing split (%.2f s)" % (
-            100 * info.get("refine_target", 0.0), info.get("refine_seconds", 0.0)))
+        layout.label(text="Refine: interpolation error about %.1f %%, nothing split (%.2f s)" % (
+            100 * info.get("refine_estimated_left", 0.0), info.get("refine_seconds", 0.0)))
         return
     layout.label(text="Refined %d -> %d vertices in %d levels (%.2f s)" % (
         info["unrefined_vertices"], info.get("vertices", 0), info["refine_levels"],
         info.get("refine_seconds", 0.0)))
     row = layout.row()
     row.alert = bool(info.get("refine_budget_reached"))
-    row.label(text="Largest edge error left %.1f %% (target %.1f %%)%s" % (
-        100 * info.get("refine_worst_left", 0.0), 100 * info.get("refine_target", 0.0),
+    row.label(text="Interpolation error left about %.1f %%, largest edge %.1f %% (target %.1f %%)%s" % (
+        100 * info.get("refine_estimated_left", 0.0), 100 * info.get("refine_worst_left", 0.0),
+        100 * info.get("refine_target", 0.0),
         ": Max Vertices stopped it" if info.get("refine_budget_reached") else ""))
 
 

@@ -16,11 +16,19 @@ and the error of an edge is the square root of that over the same mean of B² ov
 midpoints are baked in one pass in which every point traces the same ray directions
 (bake_transfer's common_rotation), so their difference is the signal's, not ray noise.
 
+Which edges: those whose midpoint is off by more than the target error, the ones that add most to
+the object's RMS interpolation error first - estimated from the tested midpoints as
+    E² = Σ_e a_e δ_e² / Σ_e a_e        (δ_e an edge's error, a_e a third of the area around it)
+- until E is within INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays)
+take the rest, adding in quadrature. So a smooth, dense mesh whose edges are off here and there
+by a little more than the target is left as it is, while a shadow across a large face is split
+down to its edge.
+
 The split is conforming, so no crack opens: an edge is marked as a place (the vertices at one
 point - copies split at a hard edge or seam, the corners of a triangle soup - share a `weld` id
 and mark their edges together); a triangle with two
 marked sides gets its third marked too, so each triangle is kept, halved (one side marked) or
-cut into four (all sides). Each level tests only the edges of the triangles the last one made;
+cut into four (all sides). Each level tests only the edges the last one made;
 refinement stops when no edge is marked, after MAX_LEVELS levels, or at the vertex budget (the
 worst edges are split first). Shading follows the mesh: a midpoint gets the normalised mean of
 its ends' normals (Blender and Cycles interpolate smooth normals across the face), their mean
@@ -36,6 +44,7 @@ import numpy as np
 CRITERION_ORDER = 6    # the order of T the test shades with: a shadow's edge, not just its mean
 CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
+INTERPOLATION_SHARE = 0.5   # of the target error, what the interpolation may take (the module's doc)
 DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity, benchmark_refine)
 
 
@@ -93,19 +102,17 @@ def split(triangles, side_edge, marked, midpoint):
     is kept, one with one is halved towards the opposite corner, one with two is cut into three
     (the corner between them, and the rest by the diagonal from the unsplit side's first corner),
     one with three into four. marked: bool [E]; midpoint: int [E], the vertex at the middle of
-    each marked edge. Returns (triangles, made [T']: whether each is new)."""
+    each marked edge. Returns the triangles."""
     t = triangles
     m = np.where(marked[side_edge], midpoint[side_edge], -1)   # [T, 3]: side k's midpoint or -1
     count = (m >= 0).sum(axis=1)
     out = [t[count == 0]]
-    made = [np.zeros(int((count == 0).sum()), dtype=bool)]
 
     four = count == 3
     if four.any():
         a, b, c = t[four].T
         ab, bc, ca = m[four].T
         out += [np.stack(x, axis=1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
-        made += [np.ones(int(four.sum()), dtype=bool)] * 4
 
     for marked_sides in (1, 2):
         rows = np.flatnonzero(count == marked_sides)
@@ -123,12 +130,10 @@ def split(triangles, side_edge, marked, midpoint):
         ab, bc, _ = np.take_along_axis(m[rows], turn, axis=1).T
         if marked_sides == 1:
             out += [np.stack((a, ab, c), axis=1), np.stack((ab, b, c), axis=1)]
-            made += [np.ones(rows.size, dtype=bool)] * 2
         else:
             out += [np.stack((ab, b, bc), axis=1), np.stack((a, ab, bc), axis=1),
                     np.stack((a, bc, c), axis=1)]
-            made += [np.ones(rows.size, dtype=bool)] * 3
-    return np.concatenate(out).astype(triangles.dtype), np.concatenate(made)
+    return np.concatenate(out).astype(triangles.dtype)
 
 
 def close_marks(side_edge, welded_edges, marked_welded):
@@ -156,12 +161,14 @@ def band_weights(light):
 
 @dataclass
 class Refinement:
-    """What refine() did: the refined surface, the levels run, the edges split and the largest
-    error left among the tested edges (relative)."""
+    """What refine() did: the refined surface, the levels run, the edges split, the largest error
+    of an edge left unsplit and the object's RMS interpolation error left as its tested edges
+    estimate it (both relative; an edge split in the last level counts as resolved)."""
     surface: Surface
     levels: int
     split_edges: int
     worst_left: float
+    estimated_left: float
     budget_reached: bool
 
 
@@ -170,32 +177,33 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
     rest_triangles) -> T [V, (s+1)²]: the transfer vectors of the object made of those vertices
     and triangles, with rest_triangles (indices into rest_vertices: the surface's other triangles)
     and the scene as occluders, every vertex tracing the same ray directions; weights: band_weights
-    of the light; target: the relative error an edge may keep; max_vertices: the budget. Raises
+    of the light; target: the relative error an edge may keep, and twice the RMS interpolation
+    error refinement aims at (INTERPOLATION_SHARE); max_vertices: the budget. Raises
     what bake raises (a cancel). Returns a Refinement."""
     triangles = np.asarray(surface.triangles)
     if len(surface.vertices) >= max_vertices:
-        return Refinement(surface, 0, 0, 0.0, True)
-    made = np.ones(len(triangles), dtype=bool)
-    tested = np.zeros(0, dtype=np.int64)   # the keys of the places whose midpoint was tested
+        return Refinement(surface, 0, 0, 0.0, 0.0, True)
+    known_keys = np.zeros(0, dtype=np.int64)   # the places tested so far (sorted keys) ...
+    known_errors = np.zeros(0)                 # ... and the error found at each
     scale = None
     levels = split_count = 0
-    worst_left = 0.0
+    worst_left = estimated_left = 0.0
     budget_reached = False
     for _ in range(max_levels):
         edges, side_edge = edges_of(triangles)
         welded_edges, keys = _places(surface.weld, edges)
-        candidate = np.zeros(len(edges), dtype=bool)
-        candidate[side_edge[made].ravel()] = True
-        candidate &= ~np.isin(keys, tested)
+        position = np.minimum(np.searchsorted(known_keys, keys), max(len(known_keys) - 1, 0))
+        seen = known_keys[position] == keys if len(known_keys) else np.zeros(len(keys), dtype=bool)
+        error = np.where(seen, known_errors[position] if len(known_keys) else 0.0, 0.0)
+        candidate = ~seen          # the edges the last split made (all of them at first)
         if not candidate.any():
             break
-        tested = np.union1d(tested, keys[candidate])
 
         # Bake the triangles with a candidate side, those sides split, with the rest as occluders.
         probe = surface.with_midpoints(edges, welded_edges)
         midpoint = len(surface.vertices) + np.arange(len(edges))
         around = candidate[side_edge].any(axis=1)
-        probed, _ = split(triangles[around], side_edge[around], candidate, midpoint)
+        probed = split(triangles[around], side_edge[around], candidate, midpoint)
         used, local = np.unique(probed, return_inverse=True)
         transfer = np.zeros((len(probe.vertices), len(weights)))
         transfer[used] = bake(probe.vertices[used], probe.normals[used], local.reshape(-1, 3),
@@ -204,38 +212,51 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
             scale = float(np.mean(transfer[used] ** 2 @ weights))
         a, b = edges[candidate, 0], edges[candidate, 1]
         delta = transfer[midpoint[candidate]] - 0.5 * (transfer[a] + transfer[b])
-        error = np.zeros(len(edges))
         error[candidate] = np.sqrt(delta ** 2 @ weights / scale) if scale > 0.0 else 0.0
+        order = np.argsort(np.r_[known_keys, keys[candidate]], kind="stable")
+        known_keys = np.r_[known_keys, keys[candidate]][order]
+        known_errors = np.r_[known_errors, error[candidate]][order]
+
+        # Per place: its worst copy's error and the area around it (a third of each triangle).
         place_error = np.zeros(welded_edges.max() + 1)
         np.maximum.at(place_error, welded_edges, error)
+        corners = surface.vertices[triangles]
+        area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+        edge_area = np.bincount(side_edge.ravel(), weights=np.repeat(area / 3.0, 3), minlength=len(edges))
+        place_area = np.bincount(welded_edges, weights=edge_area, minlength=len(place_error))
+        contribution = place_area * place_error ** 2
+        total, goal = contribution.sum(), (INTERPOLATION_SHARE * target) ** 2 * place_area.sum()
 
-        # The worst places first, as many as the budget holds once closed.
-        copies = np.bincount(welded_edges, minlength=len(place_error))
-        worst = np.argsort(-place_error, kind="stable")
-        worst = worst[place_error[worst] > target]
+        # The places over the target that add most to the object's error first, until what is
+        # left is within its share of the target; as many as the budget holds once closed.
+        worst = np.flatnonzero(place_error > target)
+        worst = worst[np.argsort(-contribution[worst], kind="stable")]
+        left = total - np.cumsum(contribution[worst])
+        keep = min(int(np.searchsorted(-left, -goal)) + 1, len(worst)) if total > goal else 0
         room = max_vertices - len(surface.vertices)
-        keep = len(worst)
+        copies = np.bincount(welded_edges, minlength=len(place_error))
+        marked = np.zeros(len(place_error), dtype=bool)
         while keep > 0:
-            marked = np.zeros(len(place_error), dtype=bool)
+            marked[:] = False
             marked[worst[:keep]] = True
             marked = close_marks(side_edge, welded_edges, marked)
             if copies[marked].sum() <= room:
                 break
             budget_reached = True
             keep //= 2
-        if keep == 0:
-            worst_left = float(place_error.max(initial=0.0))
-            break
         worst_left = float(place_error[~marked].max(initial=0.0))
+        estimated_left = float(np.sqrt(contribution[~marked].sum() / max(place_area.sum(), 1e-300)))
+        if keep == 0:
+            break
         split_marked = marked[welded_edges]
         order = np.cumsum(split_marked) - 1
         kept = surface.with_midpoints(edges[split_marked], welded_edges[split_marked])
-        triangles, made = split(triangles, side_edge, split_marked,
-                                len(surface.vertices) + np.where(split_marked, order, 0))
+        triangles = split(triangles, side_edge, split_marked,
+                          len(surface.vertices) + np.where(split_marked, order, 0))
         surface = replace(kept, triangles=triangles)
         levels += 1
         split_count += int(split_marked.sum())
         if budget_reached:
             break
     return Refinement(replace(surface, triangles=triangles), levels, split_count, worst_left,
-                      budget_reached)
+                      estimated_left, budget_reached)

@@ -18,8 +18,12 @@ midpoints are baked in one pass in which every point traces the same ray directi
 
 Which edges: those whose midpoint is off by more than the target error, the ones that add most to
 the object's RMS interpolation error first - estimated from the tested midpoints as
-    E² = Σ_e a_e δ_e² / Σ_e a_e        (δ_e an edge's error, a_e a third of the area around it)
-- until E is within INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays)
+    E² = (8/45) Σ_e a_e δ_e² / A       (δ_e an edge's error, a_e the area of the triangles beside
+                                        it, A the object's)
+since the interpolation error of a quadratic signal is a bump 4 λ_i λ_j δ_e along each edge, whose
+mean square over a triangle of area T is 16 ∫ λ_i² λ_j² / T = 16 · 2 · 2! 2! / 6! = 8/45 of δ_e²
+(the bumps' cross terms need signs the rotation average does not keep) - until E is within
+INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays)
 take the rest, adding in quadrature. So a smooth, dense mesh whose edges are off here and there
 by a little more than the target is left as it is, while a shadow across a large face is split
 down to its edge.
@@ -45,6 +49,7 @@ CRITERION_ORDER = 6    # the order of T the test shades with: a shadow's edge, n
 CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
 INTERPOLATION_SHARE = 0.5   # of the target error, what the interpolation may take (the module's doc)
+BUMP_MEAN_SQUARE = 8.0 / 45.0   # an edge's bump over a triangle beside it (the module's doc)
 DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity, benchmark_refine)
 
 
@@ -217,15 +222,16 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
         known_keys = np.r_[known_keys, keys[candidate]][order]
         known_errors = np.r_[known_errors, error[candidate]][order]
 
-        # Per place: its worst copy's error and the area around it (a third of each triangle).
+        # Per place: its worst copy's error and its share of E² (the module's doc).
         place_error = np.zeros(welded_edges.max() + 1)
         np.maximum.at(place_error, welded_edges, error)
         corners = surface.vertices[triangles]
         area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
-        edge_area = np.bincount(side_edge.ravel(), weights=np.repeat(area / 3.0, 3), minlength=len(edges))
+        edge_area = np.bincount(side_edge.ravel(), weights=np.repeat(area, 3), minlength=len(edges))
         place_area = np.bincount(welded_edges, weights=edge_area, minlength=len(place_error))
-        contribution = place_area * place_error ** 2
-        total, goal = contribution.sum(), (INTERPOLATION_SHARE * target) ** 2 * place_area.sum()
+        contribution = BUMP_MEAN_SQUARE * place_area * place_error ** 2
+        total_area = max(float(area.sum()), 1e-300)
+        total, goal = contribution.sum(), (INTERPOLATION_SHARE * target) ** 2 * total_area
 
         # The places over the target that add most to the object's error first, until what is
         # left is within its share of the target; as many as the budget holds once closed.
@@ -245,7 +251,7 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS):
             budget_reached = True
             keep //= 2
         worst_left = float(place_error[~marked].max(initial=0.0))
-        estimated_left = float(np.sqrt(contribution[~marked].sum() / max(place_area.sum(), 1e-300)))
+        estimated_left = float(np.sqrt(contribution[~marked].sum() / total_area))
         if keep == 0:
             break
         split_marked = marked[welded_edges]

@@ -69,8 +69,9 @@ class Test:
         for obj in (self.ball, self.ground):
             obj.data.materials.append(white)
         sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5))
+        # Refined: its passes share the progress bar with the bake and cancel like it
         sdtest.bake_settings(scene, 'msd_visibility', 'PHONG', 4, 2, rays=256, phong_exponent=4.0,
-                             select=[self.ball, self.ground])
+                             select=[self.ball, self.ground], refine=True)
         return scene
 
     def read_viewport(self):

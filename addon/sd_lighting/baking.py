@@ -157,18 +157,15 @@ class Geometry:
         return refine.Surface(self.vertices, self.normals, self.positions, weld, self.triangles,
                               self.material_slots, self.uvs)
 
-    def refined(self, refinement):
-        """The geometry of a refined copy (refine.Refinement of this one's surface)."""
-        return RefinedGeometry(refinement, self._mirrored)
+    def refined(self, surface):
+        """The geometry of a refined copy (refine.refine's surface from this one's)."""
+        return RefinedGeometry(surface, self._mirrored)
 
 
 class RefinedGeometry:
-    """A baked copy refined (utils/refine.py): the Geometry arrays of its surface, all triangles;
-    `refinement` says what was done."""
+    """A baked copy refined (utils/refine.py): the Geometry arrays of its surface, all triangles."""
 
-    def __init__(self, refinement, mirrored):
-        surface = refinement.surface
-        self.refinement = refinement
+    def __init__(self, surface, mirrored):
         self.vertices, self.normals, self.positions = surface.vertices, surface.normals, surface.positions
         self.triangles, self.material_slots, self.uvs = surface.triangles, surface.slots, surface.uvs
         self._mirrored = mirrored
@@ -228,6 +225,7 @@ class BakeTask:
         self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
         self.predicted_error = None   # of a chosen method's settings, once predicted
         self.baked = None             # the geometry baked: `geometry` or its refinement
+        self.refinement = None        # refine.Refinement, when the settings ask for one
         self.refine_seconds = 0.0
         self.result = None
         self._inputs = None
@@ -288,18 +286,26 @@ class BakeTask:
         self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
                                                 self.settings, stop)
 
-    def refined_geometry(self, sd, progress):
-        """The geometry to bake (any thread): the Geometry, or with `refine` on, its refinement
-        (utils/refine.py) tested against this task's light and occluders with common rays."""
+    def refine(self, sd, progress):
+        """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
+        (utils/refine.py, recorded in `refinement`) tested against this task's light and
+        occluders with common rays. progress(done, total) as bake_transfer's, over all levels."""
         s = self.settings
+        self.baked = self.geometry
         if not s.get("refine"):
-            return self.geometry
+            return
         occluders = self.occluders()
         kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
-                  "transfer_order": refine.CRITERION_ORDER, "common_rotation": True,
-                  "progress": progress}
+                  "transfer_order": refine.CRITERION_ORDER, "common_rotation": True}
+        levels = []
 
         def bake(vertices, normals, triangles, rest_vertices, rest_triangles):
+            level = len(levels)
+            levels.append(level)
+
+            def level_progress(done, total):   # each level a share of one bar
+                return progress(level * total + done, refine.MAX_LEVELS * total)
+
             verts, tris = [rest_vertices], [rest_triangles]
             if occluders:
                 verts.append(occluders["occluder_vertices"])
@@ -308,14 +314,14 @@ class BakeTask:
             if sum(len(t) for t in tris):
                 extra = {"occluder_vertices": np.concatenate(verts),
                          "occluder_triangles": np.concatenate(tris).astype(np.int32)}
-            return sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs,
-                                    **extra)["transfer"]
+            return sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs, **extra,
+                                    progress=level_progress)["transfer"]
 
-        surface = self.geometry.surface()
         weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
-        refinement = refine.refine(surface, bake, weights, float(s["refine_target"]),
-                                   int(s["refine_max_vertices"]))
-        return self.geometry.refined(refinement) if refinement.levels else self.geometry
+        self.refinement = refine.refine(self.geometry.surface(), bake, weights,
+                                        float(s["refine_target"]), int(s["refine_max_vertices"]))
+        if self.refinement.levels:
+            self.baked = self.geometry.refined(self.refinement.surface)
 
     def bake_arguments(self):
         s = self.settings
@@ -532,22 +538,29 @@ class BakeJob:
                 if self.cancel_requested:
                     raise sd.BakeCancelled("cancelled")
 
-                def progress(done, total, index=index):
-                    self.fraction = (index + (done / total if total else 1.0)) / count
-                    return not self.cancel_requested
+                def progress_in(start, end, index=index):
+                    """progress(done, total) moving this task's share of the bar from start to end."""
+                    def progress(done, total):
+                        part = done / total if total else 1.0
+                        self.fraction = (index + start + (end - start) * part) / count
+                        return not self.cancel_requested
+                    return progress
 
                 if task.automatic:
                     self.choosing = True
                     task.choose(lambda: self.cancel_requested)
                     self.choosing = False
+                # Refinement takes the first half of the task's bar, when it runs.
+                halfway = 0.5 if task.settings.get("refine") else 0.0
                 t0 = time.perf_counter()
                 self.refining = True
-                geometry = task.baked = task.refined_geometry(sd, progress)
+                task.refine(sd, progress_in(0.0, halfway))
                 self.refining = False
                 task.refine_seconds = time.perf_counter() - t0
+                geometry = task.baked
                 t0 = time.perf_counter()
                 result = sd.bake_transfer(geometry.vertices, geometry.normals, geometry.triangles,
-                                          progress=progress, **task.bake_arguments())
+                                          progress=progress_in(halfway, 1.0), **task.bake_arguments())
                 result = dict(result)
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
@@ -631,14 +644,13 @@ def _result_summary(task, floats):
         "bake_id": uuid.uuid4().hex,
         "inputs": task.inputs_hash(),
     }
-    refinement = getattr(task.baked, "refinement", None)
-    if task.settings.get("refine"):
+    refinement = task.refinement
+    if refinement is not None:
         summary.update(unrefined_vertices=int(len(task.geometry.vertices)),
-                       refine_seconds=float(task.refine_seconds),
-                       refine_levels=int(refinement.levels) if refinement else 0,
-                       refine_worst_left=float(refinement.worst_left) if refinement else 0.0,
-                       refine_estimated_left=float(refinement.estimated_left) if refinement else 0.0,
-                       refine_budget_reached=bool(refinement.budget_reached) if refinement else False)
+                       refine_seconds=float(task.refine_seconds), refine_levels=int(refinement.levels),
+                       refine_worst_left=float(refinement.worst_left),
+                       refine_estimated_left=float(refinement.estimated_left),
+                       refine_budget_reached=bool(refinement.budget_reached))
     offsets = result.get("design_offsets")
     if offsets is not None:
         counts = np.diff(np.asarray(offsets))

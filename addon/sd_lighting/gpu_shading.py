@@ -104,14 +104,21 @@ def _compile(variant):
     interface = gpu.types.GPUStageInterfaceInfo("sd_interface")
     for qualifier, glsl_type, name in variant.interface():
         getattr(interface, qualifier)(glsl_type.upper(), name)
-    info.vertex_out(interface)
-    info.fragment_out(0, 'VEC4', "fragColor")
-    vert, frag = stage_sources(SHADER_FILES)
-    info.vertex_source(vert)
-    info.fragment_source(frag)
-    program = gpu.shader.create_from_info(info)
+    program = _create(info, interface, SHADER_FILES)
     _shaders[variant] = (program, interface, info)  # keep the create-infos alive with the shader
     return _shaders[variant]
+
+
+def _create(info, interface, files):
+    """Compiles a create-info given its declarations, with the stage interface, one fragment
+    output fragColor and the sources of `files` (stage_sources)."""
+    import gpu
+    info.vertex_out(interface)
+    info.fragment_out(0, 'VEC4', "fragColor")
+    vert, frag = stage_sources(files)
+    info.vertex_source(vert)
+    info.fragment_source(frag)
+    return gpu.shader.create_from_info(info)
 
 
 def _rgba32f(width, height, texels):
@@ -171,12 +178,7 @@ def _background_shader():
         info.vertex_in(0, 'VEC2', "pos")
         interface = gpu.types.GPUStageInterfaceInfo("sd_background_interface")
         interface.smooth('VEC2', "sd_ndc")
-        info.vertex_out(interface)
-        info.fragment_out(0, 'VEC4', "fragColor")
-        vert, frag = stage_sources(BACKGROUND_FILES)
-        info.vertex_source(vert)
-        info.fragment_source(frag)
-        shader = gpu.shader.create_from_info(info)
+        shader = _create(info, interface, BACKGROUND_FILES)
         batch = make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
         compiled = _background["shader"] = (shader, interface, info, batch)   # infos kept alive
     return compiled[0], compiled[3]

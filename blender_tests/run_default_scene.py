@@ -107,6 +107,10 @@ def main():
               flush=True)
         for line in str(info.get("automatic", "")).splitlines():
             print("           " + line)
+        if "unrefined_vertices" in info:
+            print("           Refine: %d -> %d vertices in %d levels, interpolation error left about %.1f %%"
+                  % (info["unrefined_vertices"], info["vertices"], info["refine_levels"],
+                     100 * info["refine_estimated_left"]))
 
     blend = os.path.join(args.out, "sd_default_scene.blend")
     png = os.path.join(args.out, "sd_preview.png")

@@ -23,18 +23,16 @@ the object's RMS interpolation error first - estimated from the tested midpoints
 since the interpolation error of a quadratic signal is a bump 4 λ_i λ_j δ_e along each edge, whose
 mean square over a triangle of area T is 16 ∫ λ_i² λ_j² / T = 16 · 2 · 2! 2! / 6! = 8/45 of δ_e²
 (the bumps' cross terms need signs the rotation average does not keep) - until E is within
-INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays)
-take the rest, adding in quadrature. So a smooth, dense mesh whose edges are off here and there
-by a little more than the target is left as it is, while a shadow across a large face is split
-down to its edge.
+INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays) take the rest, adding
+in quadrature. So a smooth, dense mesh whose edges are off here and there by a little more than
+the target is left as it is, while a shadow across a large face is split down to its edge.
 
 The split is conforming, so no crack opens: an edge is marked as a place (the vertices at one
 point - copies split at a hard edge or seam, the corners of a triangle soup - share a `weld` id
-and mark their edges together); a triangle with two
-marked sides gets its third marked too, so each triangle is kept, halved (one side marked) or
-cut into four (all sides). Each level tests only the edges the last one made;
-refinement stops when no edge is marked, after MAX_LEVELS levels, or at the vertex budget (the
-worst edges are split first). Shading follows the mesh: a midpoint gets the normalised mean of
+and mark their edges together); a triangle with two marked sides gets its third marked too, so
+each triangle is kept, halved (one side marked) or cut into four (all sides). Each level tests
+only the edges the last one made; refinement stops when E is within its share, no edge is over
+the target, after MAX_LEVELS levels, or at the vertex budget. Shading follows the mesh: a midpoint gets the normalised mean of
 its ends' normals (Blender and Cycles interpolate smooth normals across the face), their mean
 UV and their material slot (a corner copy carries one slot).
 

@@ -3,9 +3,9 @@
 What is drawn is what the viewport's live shading shows (drawing.draw_objects, the same shader
 and data), plus the scene's other visible meshes in flat grey (the viewport shows them in
 Blender's own shading), on a transparent background - or, with the World Background option, in
-front of the environment (opaque), as Cycles renders without a transparent film. It waits for the ringing window's choice
-(the viewport shades without one until it is made): an image made once shows what the viewport
-ends with, whenever it is asked for.
+front of the environment (opaque), as Cycles renders without a transparent film. It waits for
+the ringing window's choice (the viewport shades without one until it is made): an image made
+once shows what the viewport ends with, whenever it is asked for.
 
 Files: `.exr` holds the scene-linear radiance B (float, no exposure, like a Cycles EXR); any
 other extension gets 8-bit RGBA PNG with 2^exposure applied and the sRGB transfer curve - the

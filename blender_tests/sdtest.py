@@ -277,6 +277,23 @@ def diffuse_material(name, colour=(1.0, 1.0, 1.0, 1.0), image=None):
     return material
 
 
+def principled_material(name, colour=(1.0, 1.0, 1.0, 1.0), roughness=0.5, metallic=0.0):
+    """A material of one Principled BSDF (Blender's default node, other inputs at their
+    defaults)."""
+    material = bpy.data.materials.new(name)
+    use_nodes(material)
+    tree = material.node_tree
+    for node in list(tree.nodes):
+        if node.type != 'OUTPUT_MATERIAL':
+            tree.nodes.remove(node)
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = colour
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Metallic"].default_value = metallic
+    tree.links.new(bsdf.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    return material
+
+
 def grid(scene, name="Ground", cuts=10, size=4.0, location=(0.0, 0.0, 0.0)):
     import bmesh
     mesh = bpy.data.meshes.new(name)

@@ -71,7 +71,7 @@ def check_lobe_designs(checks, package, scene, ball, view, directory):
     checks.check(gs.lobe_designs().pending() == [key], "the first draw returns while the lobe design builds",
                  "%.2f s" % seconds)
     data = drawing.object_data(ball, vertex_target=True)
-    checks.check(not data.design.final and data.variant.lobe_design_size == gauss,
+    checks.check(not data.designs[0].final and data.variant.lobe_design_size == gauss,
                  "meanwhile the Gauss rule shades", "%d nodes" % data.variant.lobe_design_size)
     status = gs.lobe_design_status()
     checks.check(len(status) == 1 and "Building" in status[0] and "degree %d" % (S + SV) in status[0],
@@ -84,7 +84,7 @@ def check_lobe_designs(checks, package, scene, ball, view, directory):
     checks.check(gs.lobe_designs().wait(600), "the lobe design is built")
     gpu = drawing.gpu_vertex_values(scene, ball, view)
     size = data.variant.lobe_design_size
-    checks.check(data.design.final and size < gauss, "then the small design shades",
+    checks.check(data.designs[0].final and size < gauss, "then the small design shades",
                  "%d nodes, Gauss %d" % (size, gauss))
     relative, _ = sdtest.relative_error(gpu, cpu)
     checks.check(relative <= TOLERANCE, "the small design shades exactly (GPU = CPU)", "%.2e" % relative)
@@ -97,7 +97,7 @@ def check_lobe_designs(checks, package, scene, ball, view, directory):
     gs._lobe_designs = lobe_designs.LobeDesigns(again, directory)
     drawing.gpu_vertex_values(scene, ball, view)
     data = drawing.object_data(ball, vertex_target=True)
-    checks.check(again.builds == 0 and data.design.final and data.variant.lobe_design_size == size,
+    checks.check(again.builds == 0 and data.designs[0].final and data.variant.lobe_design_size == size,
                  "a new session reads the design from disk, without building")
     gs.clear_cache()
 

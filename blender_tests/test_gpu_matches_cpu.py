@@ -5,7 +5,8 @@ shader (per-vertex path, and the per-pixel path evaluated at the vertex), read b
 with sdnative.shade on the same stored (float32) data, the same view, environment and rotation
 g R (a rotated world Mapping node and a rotated object with a mirrored, non-uniform scale).
 Passes when max |gpu - cpu| / max |cpu| <= 1e-3 for every method (float32 on the GPU vs float64 on
-the CPU).
+the CPU). The objects' material, a Principled BSDF of roughness 0.4 and metallic 0.2, gives the
+"MATERIAL" cases a Lambert lobe besides a Phong one; the target shows the two lobes' sum.
 
 The methods that can read it (MSD 12, 13) are also checked with the band-limited texture option
 (L~ looked up in the band-limited equirect texture, bilinear, instead of its SH sum) against the
@@ -48,6 +49,13 @@ CASES = [  # (method, lobe, sigma, s, s')
     ("prt_gaunt", "PHONG", 20.0, 6, 3),
     ("msd_lobe", "PHONG", 20.0, 8, 3),
     ("msd_visibility", "PHONG", 20.0, 6, 2),
+    # Lambert + Phong from the material (sigma from its roughness)
+    ("unshadowed", "MATERIAL", 0.0, 4, 2),
+    ("ambient_occlusion", "MATERIAL", 0.0, 4, 2),
+    ("prt_matrix", "MATERIAL", 0.0, 4, 2),
+    ("prt_gaunt", "MATERIAL", 0.0, 4, 2),
+    ("msd_lobe", "MATERIAL", 0.0, 4, 2),
+    ("msd_visibility", "MATERIAL", 0.0, 4, 2),
 ]
 
 
@@ -65,6 +73,9 @@ def main():
     ball.rotation_euler = (0.4, 0.1, -0.7)
     ball.scale = (0.8, -0.9, 0.7)
     ground = sdtest.grid(scene, cuts=8, size=4.0)
+    glossy = sdtest.principled_material("Glossy", (0.8, 0.3, 0.1, 1.0), roughness=0.4, metallic=0.2)
+    for obj in (ball, ground):
+        obj.data.materials.append(glossy)
     sdtest.camera(scene)
     settings = scene.sd_lighting
     settings.automatic_orders = False
@@ -81,9 +92,15 @@ def main():
         settings.phong_exponent = sigma
         result = bpy.ops.sd_lighting.bake()
         name = "%s %s%s s=%d s'=%d" % (method, material.lower(),
-                                       "" if material == "LAMBERT" else " %g" % sigma, s, sv)
+                                       " %g" % sigma if material == "PHONG" else "", s, sv)
         if not checks.check(result == {'FINISHED'}, "bake " + name):
             continue
+        if material == "MATERIAL":
+            bake = package.baking.bake_info(ball)
+            checks.check(bake["lobe"] == "phong" and bake["diffuse_lobe"] and
+                         abs(bake["exponent"] - 19.03) < 0.01, "the material bakes Lambert + Phong: "
+                         + name, "%s sigma %.2f, diffuse lobe %s" % (bake["lobe"], bake["exponent"],
+                                                                      bake["diffuse_lobe"]))
         textures = (False, True) if package.utils.methods.get(method).band_limited_texture else (False,)
         for texture in textures:
             settings.band_limited_texture = texture

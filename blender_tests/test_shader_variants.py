@@ -1,10 +1,10 @@
 """Every shader variant compiles: on this Blender's GPU backend, and under glslang's strict front
 ends.
 
-Variants: every method x lobe (Lambert, Phong; PRT (2) Lambert only) x orders (s, s') in ORDERS
+Variants: every method x lobes (Lambert, Phong, both; PRT (2) Lambert only) x orders (s, s') in ORDERS
 (0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn / vertex-target, and the
 band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each drawn variant with
-material albedos (slots and an image texture): 238 programs, each built by gpu_shading exactly as
+material albedos (slots and an image texture): 350 programs, each built by gpu_shading exactly as
 the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
@@ -58,7 +58,8 @@ def variants(package):
     shader_variant = _module(package, "utils.shader_variant")
     sd = package.native.get()
     for method in _module(package, "utils.methods").METHODS:
-        for glossy in ((False,) if method.lambert_only else (False, True)):
+        for glossy, both in (((False, False),) if method.lambert_only else
+                             ((False, False), (True, False), (True, True))):
             for s, sv in ORDERS:
                 data = method.data
                 if data is None:
@@ -67,10 +68,13 @@ def variants(package):
                     stride = (int(np.prod(data.shape(s, sv))) + 3) // 4
                 else:
                     stride = {"scalar": 1, "design": DESIGN_TEXELS}[data.packing]
-                design = 0
+                design = diffuse_design = 0
                 if method.lobe_design:  # the Gauss rule the live shading starts with: the largest
                     design = len(sd.zonal_design("phong" if glossy else "lambert", PHONG_EXPONENT,
                                                  s + sv, "gauss")[1])
+                    if both:
+                        diffuse_design = len(sd.zonal_design("lambert", 1.0, s + sv, "gauss")[1])
+                lobes = {"diffuse_lobe": both, "diffuse_design_size": diffuse_design}
                 gaunt = len(sd.gaunt_coefficients(s, sv, s + sv)[1]) if method.gaunt_table else 0
                 textures = [()]
                 if method.band_limited_texture:
@@ -79,17 +83,18 @@ def variants(package):
                     for vertex_target in (False, True):
                         for texture in textures:
                             yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt,
-                                                         per_pixel, vertex_target, texture)
+                                                         per_pixel, vertex_target, texture, **lobes)
                             if (s, sv) == ALBEDO_ORDERS and not vertex_target:
                                 yield shader_variant.Variant(
                                     method, glossy, s, sv, stride, design, gaunt, per_pixel,
                                     vertex_target, texture, material_count=3, material_slots=True,
-                                    albedo_texture=True)
+                                    albedo_texture=True, **lobes)
 
 
 def name(variant):
-    return "%s%s s=%d s'=%d%s%s%s" % (
-        variant.method.id, " phong" if variant.glossy else "", variant.light_order,
+    return "%s%s%s s=%d s'=%d%s%s%s" % (
+        variant.method.id, " phong" if variant.glossy else "",
+        " +lambert" if variant.diffuse_lobe else "", variant.light_order,
         variant.visibility_order, " per-pixel" if variant.per_pixel else "",
         " vertex-target" if variant.vertex_target else "",
         " texture" if variant.band_limited_texture else "")
@@ -170,7 +175,7 @@ def main():
     print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
                                 else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
     all_variants = list(variants(package))
-    checks.check(len(all_variants) == 238, "variants enumerated", "%d" % len(all_variants))
+    checks.check(len(all_variants) == 350, "variants enumerated", "%d" % len(all_variants))
 
     # 1. This Blender's GPU backend.
     failed, start = [], time.perf_counter()

@@ -21,13 +21,17 @@
  *   SD_METHOD_MSD_VISIBILITY     eq. (13), Theorem 2.2: sum_nu lambda_Vnu L~(x_Vnu) w~(x_Vnu . a)
  * and:
  *   SD_GLOSSY            Phong lobe around the mirrored view (otherwise Lambert around the normal)
+ *   SD_DIFFUSE_LOBE      (with SD_GLOSSY) a Lambert lobe besides the Phong one: lobe 1, read with
+ *                        the same per-vertex data (sd_shade_diffuse)
  *   SD_LIGHT_COUNT       (s+1)^2 environment coefficients
  *   SD_VIS_COUNT         (s'+1)^2 visibility coefficients (methods with V~ or M)
  *   SD_VIS_ORDER         s' (truncated lobe of eq. 13)
  *   SD_BASIS_ORDER/COUNT order of the SH basis evaluated at a direction, and its (order+1)^2
  *   SD_SH_DIAGONAL, SD_SH_A, SD_SH_B, SD_SH_TABLE_SIZE   its recurrence constants (see below)
- *   SD_LOBE_VEC4S        vec4s holding the Funk-Hecke factors w_l (four per vec4)
- *   SD_LOBE_DESIGN_SIZE  nodes of the lobe design (eq. 12)
+ *   SD_LOBE_VEC4S        vec4s holding one lobe's Funk-Hecke factors w_l (four per vec4); lobe 1's
+ *                        follow lobe 0's in sd.lobe[]
+ *   SD_LOBE_DESIGN_SIZE  nodes of the lobe design (eq. 12); SD_DIFFUSE_DESIGN_SIZE those of lobe
+ *                        1's, after lobe 0's in sd.design[]
  *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none); for eq. (13) the nodes
  *                        of the vertex's design of V
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
@@ -125,10 +129,11 @@ vec3 sd_light_at(vec3 d)
 
 #endif
 
-/* Funk-Hecke factor w_l of the lobe (w_0 = 1), from the frame block. */
-float sd_lobe_factor(int l)
+/* Funk-Hecke factor w_l of lobe 0 (the only one, or Phong) or 1 (Lambert; w_0 = 1), from the
+ * frame block. */
+float sd_lobe_factor(int lobe, int l)
 {
-  return sd.lobe[l / 4][l % 4];
+  return sd.lobe[lobe * SD_LOBE_VEC4S + l / 4][l % 4];
 }
 
 #if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT) && !defined(SD_BAND_LIMITED_TEXTURE)
@@ -145,18 +150,18 @@ vec3 sd_light_sum(float y[SD_BASIS_COUNT])
 
 #if defined(SD_METHOD_PRT_MATRIX) || defined(SD_METHOD_PRT_GAUNT)
 /* The lobe's Funk-Hecke expansion at the axis: w_l y_lm(a) (PRT 8-10). */
-void sd_lobe_basis(vec3 a, out float y[SD_BASIS_COUNT])
+void sd_lobe_basis(vec3 a, int lobe, out float y[SD_BASIS_COUNT])
 {
   sd_sh_basis(a, y);
   for (int l = 0; l <= SD_BASIS_ORDER; l++) {
     for (int i = l * l; i < (l + 1) * (l + 1); i++) {
-      y[i] *= sd_lobe_factor(l);
+      y[i] *= sd_lobe_factor(lobe, l);
     }
   }
 }
 #endif
 
-/* The lobe axis a: the normal for Lambert, the mirrored view v_n = 2 (n.v) n - v for Phong;
+/* Lobe 0's axis a: the normal for Lambert, the mirrored view v_n = 2 (n.v) n - v for Phong;
  * normalised (as the CPU evaluator does). */
 vec3 sd_lobe_axis(vec3 normal, vec3 view)
 {
@@ -198,30 +203,28 @@ void sd_frame_around(vec3 a, out vec3 t1, out vec3 t2)
 
 #ifdef SD_METHOD_MSD_VISIBILITY
 /* The lobe truncated at order s': w~(t) = sum_{l<=s'} (2l+1) w_l P_l(t). */
-float sd_truncated_lobe(float t)
+float sd_truncated_lobe(float t, int lobe)
 {
   float p_prev = 1.0;
   float p = t;
-  float sum = sd_lobe_factor(0);
+  float sum = sd_lobe_factor(lobe, 0);
   if (SD_VIS_ORDER >= 1) {
-    sum += 3.0 * sd_lobe_factor(1) * t;
+    sum += 3.0 * sd_lobe_factor(lobe, 1) * t;
   }
   for (int l = 2; l <= SD_VIS_ORDER; l++) {
     float fl = float(l);
     float next = ((2.0 * fl - 1.0) * t * p - (fl - 1.0) * p_prev) / fl;
     p_prev = p;
     p = next;
-    sum += (2.0 * fl + 1.0) * sd_lobe_factor(l) * p;
+    sum += (2.0 * fl + 1.0) * sd_lobe_factor(lobe, l) * p;
   }
   return sum;
 }
 #endif
 
-/* B for vertex p seen along `view` (unit, from the surface to the eye) with surface normal
- * `normal`, both in the object's local frame. */
-vec3 sd_shade(int p, vec3 normal, vec3 view)
+/* B of lobe 0 or 1 with axis a (local frame) for vertex p. */
+vec3 sd_shade_lobe(int p, vec3 a, int lobe)
 {
-  vec3 a = sd_lobe_axis(normal, view);
   vec3 rgb = vec3(0.0);
 
 #if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
@@ -233,7 +236,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
     for (int i = l * l; i < (l + 1) * (l + 1); i++) {
       band += sd.light[i].rgb * y[i];
     }
-    rgb += sd_lobe_factor(l) * band;
+    rgb += sd_lobe_factor(lobe, l) * band;
   }
 #  ifdef SD_METHOD_AMBIENT_OCCLUSION
   rgb *= sd_vertex_texel(p, 0).x;
@@ -254,7 +257,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 #elif defined(SD_METHOD_PRT_MATRIX)
   /* Eqs. (8)-(9): T_i = sum_j M_ij w_j y_j(a), B = sum_i L_i T_i; M row-major in the texels. */
   float y[SD_BASIS_COUNT];
-  sd_lobe_basis(a, y);
+  sd_lobe_basis(a, lobe, y);
   for (int i = 0; i < SD_LIGHT_COUNT; i++) {
     float t_i = 0.0;
     for (int j = 0; j < SD_VIS_COUNT; j++) {
@@ -266,7 +269,7 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 #elif defined(SD_METHOD_PRT_GAUNT)
   /* Eq. (10): sum over G_abc != 0 of L_a V~_b G_abc w_c y_c(a). */
   float y[SD_BASIS_COUNT];
-  sd_lobe_basis(a, y);
+  sd_lobe_basis(a, lobe, y);
   float v[SD_VIS_COUNT];
   for (int j = 0; j < SD_VIS_COUNT; j++) {
     v[j] = sd_vertex_coefficient(p, 0, j);
@@ -286,7 +289,14 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
     v[j] = sd_vertex_coefficient(p, 0, j);
   }
   float y[SD_BASIS_COUNT];
-  for (int nu = 0; nu < SD_LOBE_DESIGN_SIZE; nu++) {
+#  ifdef SD_DIFFUSE_LOBE
+  int first = (lobe == 0) ? 0 : SD_LOBE_DESIGN_SIZE;
+  int end = (lobe == 0) ? SD_LOBE_DESIGN_SIZE : SD_LOBE_DESIGN_SIZE + SD_DIFFUSE_DESIGN_SIZE;
+#  else
+  int first = 0;
+  int end = SD_LOBE_DESIGN_SIZE;
+#  endif
+  for (int nu = first; nu < end; nu++) {
     vec4 node = sd.design[nu];
     vec3 x = node.x * t1 + node.y * t2 + node.z * a;
     sd_sh_basis(x, y);
@@ -308,12 +318,27 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
     if (node.w <= 0.0) {
       break;
     }
-    rgb += (node.w * sd_truncated_lobe(dot(node.xyz, a))) * sd_light_at(node.xyz);
+    rgb += (node.w * sd_truncated_lobe(dot(node.xyz, a), lobe)) * sd_light_at(node.xyz);
   }
 #endif
 
   return rgb;
 }
+
+/* B of lobe 0 for vertex p seen along `view` (unit, from the surface to the eye) with surface
+ * normal `normal`, both in the object's local frame. */
+vec3 sd_shade(int p, vec3 normal, vec3 view)
+{
+  return sd_shade_lobe(p, sd_lobe_axis(normal, view), 0);
+}
+
+#ifdef SD_DIFFUSE_LOBE
+/* B of the Lambert lobe 1 for vertex p with surface normal `normal`. */
+vec3 sd_shade_diffuse(int p, vec3 normal)
+{
+  return sd_shade_lobe(p, normalize(normal), 1);
+}
+#endif
 
 /* Unit direction to the eye, in the object's local frame, from the point `offset` away from the
  * object's origin (in world axes: mat3(sd.model) * pos). sd.camera holds the eye relative to that

@@ -8,7 +8,8 @@
  * SD_VERTEX_TARGET (tests): vertex p is drawn as a point at pixel (p % width, p / width) of a
  * float target, so the readback holds exactly what the shader computed for every vertex.
  * SD_ALBEDO: the vertex's material slot picks its albedo from sd.albedo (SD_MATERIAL_SLOTS: the
- * attribute material_slot, else slot 0), passed on with the UV of the albedo texture.
+ * attribute material_slot, else slot 0), passed on with the UV of the albedo texture, and with
+ * SD_DIFFUSE_LOBE the slot's lobe weights; the Lambert lobe's B goes in sd_diffuse_color.
  */
 void main()
 {
@@ -29,9 +30,13 @@ void main()
 
 #ifdef SD_ALBEDO
 #  ifdef SD_MATERIAL_SLOTS
-  sd_albedo = sd.albedo[int(material_slot + 0.5)];
+  int slot = int(material_slot + 0.5);
 #  else
-  sd_albedo = sd.albedo[0];
+  int slot = 0;
+#  endif
+  sd_albedo = sd.albedo[slot];
+#  ifdef SD_DIFFUSE_LOBE
+  sd_lobe_weights = sd.lobe_weights[slot];
 #  endif
 #  ifdef SD_ALBEDO_TEXTURE
   sd_uv = uv;
@@ -45,5 +50,8 @@ void main()
   sd_corners = corners;
 #else
   sd_color = sd.params.x * sd_shade(gl_VertexID, normalize(nrm), sd_view_direction(mat3(sd.model) * pos));
+#  ifdef SD_DIFFUSE_LOBE
+  sd_diffuse_color = sd.params.x * sd_shade_diffuse(gl_VertexID, nrm);
+#  endif
 #endif
 }

@@ -339,8 +339,10 @@ def bake_settings(scene, obj, env_source):
     settings = scene.sd_lighting
     fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
     method_id = fixed.get("method", settings.method)
-    lobe, exponent = materials.lobe_for(obj, settings)
-    common = {"lobe": lobe, "exponent": float(exponent), "seed": int(settings.seed),
+    lobe_set = materials.lobe_for(obj, settings)
+    lobe, exponent = lobe_set.lobe, lobe_set.exponent
+    common = {"lobe": lobe, "exponent": float(exponent), "diffuse_lobe": lobe_set.diffuse,
+              "seed": int(settings.seed),
               "environment": env_source.description, "refine": bool(settings.refine),
               "refine_target": float(settings.target_error),
               "refine_max_vertices": int(settings.refine_max_vertices)}
@@ -349,8 +351,8 @@ def bake_settings(scene, obj, env_source):
                     rays=int(fixed.get("rays", settings.rays)))
     method = methods.get(method_id)
     if method.lambert_only and lobe != "lambert":
-        raise BakeError("%s needs a Lambert material; %s is Phong (sigma %.3g)"
-                        % (method.label, obj.name, exponent))
+        raise BakeError("%s needs a Lambert material; %s is %s"
+                        % (method.label, obj.name, lobe_set.label))
     if "light_order" in fixed:
         order = fixed["light_order"]
     elif settings.automatic_orders:

@@ -24,7 +24,7 @@ import logging
 import numpy as np
 
 from . import attributes, baking, environment, gpu_shading, materials, native
-from .utils import methods, transforms
+from .utils import lobes, methods, transforms
 from .utils.bake_data import BAKE
 from .view import View
 
@@ -225,7 +225,8 @@ def cpu_reference(scene, obj, view):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
     environment (windowed against ringing: waits for the window's choice) and rotation the live
     shading uses, clamped at 0 per channel as the shader shows it (displayed radiance is never
-    negative; sdnative.shade itself is the raw formula); exposure not applied. [N, 3]."""
+    negative; sdnative.shade itself is the raw formula); with a Lambert lobe besides the Phong one,
+    the sum of the two, as the shader's vertex target shows it; exposure not applied. [N, 3]."""
     mesh = baking.baked_mesh(obj)
     bake = dict(mesh[BAKE])
     method = methods.get(bake["method"])
@@ -238,10 +239,10 @@ def cpu_reference(scene, obj, view):
     g = environment.rotation_matrix(scene)
     r = transforms.rotation_part(matrix)
     kwargs = {key: data[key] for key in method.shade_inputs}
-    shaded = native.get().shade(method.id, light, data["normals"],
-                                views=view.view_directions(world, r.T), rotation=g @ r,
-                                lobe=bake["lobe"], exponent=float(bake["exponent"]), **kwargs)
-    return np.maximum(shaded, 0.0)
+    return sum(np.maximum(native.get().shade(method.id, light, data["normals"],
+                                             views=view.view_directions(world, r.T), rotation=g @ r,
+                                             lobe=lobe, exponent=exponent, **kwargs), 0.0)
+               for lobe, exponent in lobes.Lobes.of_bake(bake).shaded())
 
 
 def gpu_vertex_values(scene, obj, view, per_pixel=False, wait=True):

@@ -10,7 +10,7 @@ What a draw reads:
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
   gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);
 - the uniform block `sd` (Variant.frame_fields), rebuilt every frame; for MSD (12) it holds the
-  lobe's design (utils/lobe_designs.py: the Gauss product rule until the small design, built in a
+  lobes' designs (utils/lobe_designs.py: the Gauss product rule until the small design, built in a
   worker thread, is there; then the variant is swapped);
 - for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
 - with the band-limited texture option (methods that can read it), the band-limited environment
@@ -18,8 +18,9 @@ What a draw reads:
   instead of summing (s+1)^2 SH terms per direction;
 - the albedo B is multiplied by (materials.py), read from the object's materials at every draw:
   one colour per material slot in the block, a vertex attribute `material_slot` where the bake
-  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`. An object
-  whose albedos are all white gets a variant without any of it.
+  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`; with a
+  Lambert and a Phong lobe, each slot's lobe weights. A one-lobe object whose albedos are all
+  white gets a variant without any of it.
 Variants are compiled on first use and cached.
 """
 
@@ -283,8 +284,8 @@ class ObjectData:
         bake = dict(mesh[BAKE])
         self.bake = bake
         self.method = methods.get(bake["method"])
-        self.lobe = bake["lobe"]
-        self.exponent = float(bake["exponent"])
+        self.lobes = lobes.Lobes.of_bake(bake)
+        self.lobe, self.exponent = self.lobes.lobe, self.lobes.exponent
         self.light_order = int(bake["light_order"])
         self.visibility_order = int(bake["visibility_order"])
         self.vertex_count = len(mesh.vertices)
@@ -298,18 +299,19 @@ class ObjectData:
         self.gaunt_texture, gaunt_count = (None, 0)
         if self.method.gaunt_table:
             self.gaunt_texture, gaunt_count = gaunt_texture(s, sv)
-        self.design = None
-        if self.method.lobe_design:
-            self.design = lobe_design(self.lobe, self.exponent, s + sv)
+        self.designs = self._designs()
         self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
-        self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride,
-                               len(self.design.weights) if self.design is not None else 0, gaunt_count,
-                               per_pixel, vertex_target,
-                               band_limited_texture_size(s) if self.uses_band_limited_texture else ())
+        design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
+        self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
+                               gaunt_count, per_pixel, vertex_target,
+                               band_limited_texture_size(s) if self.uses_band_limited_texture else (),
+                               diffuse_lobe=self.lobes.diffuse, diffuse_design_size=design_sizes[1])
         self.shader = shader_program(self.variant)
-        factors = native.get().zonal_coefficients(self.lobe, self.exponent, self.variant.lobe_order)
-        self.lobe_factors = np.zeros(4 * self.variant.lobe_vec4s, dtype=np.float32)
-        self.lobe_factors[:len(factors)] = factors
+        per_lobe = 4 * self.variant.lobe_vec4s
+        self.lobe_factors = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
+        for k, (lobe, exponent) in enumerate(self.lobes.shaded()):
+            factors = native.get().zonal_coefficients(lobe, exponent, self.variant.lobe_order)
+            self.lobe_factors[k * per_lobe:k * per_lobe + len(factors)] = factors
 
         positions = attributes.read_positions(mesh)
         normals = attributes.read_normals(mesh)
@@ -344,20 +346,31 @@ class ObjectData:
                                         indices=triangles)
         self.ubo = None
 
+    def _designs(self):
+        """The lobes' designs for eq. (12) (methods with lobe_design), else []."""
+        if not self.method.lobe_design:
+            return []
+        degree = self.light_order + self.visibility_order
+        return [lobe_design(lobe, exponent, degree) for lobe, exponent in self.lobes.shaded()]
+
     def _use_albedos(self, albedos):
-        """The block's albedo rows for the materials' current albedos (materials.object_albedos),
-        switching to the variant they need: none when all are white. Returns the rows or None."""
+        """The block's albedo and lobe weight rows for the materials' current albedos
+        (materials.object_albedos), switching to the variant they need: none when one lobe's
+        albedos are all white. Returns {field: rows}."""
         if self.variant.vertex_target:
-            return None
+            return {}
         rows = np.zeros((self.slot_count, 4))
         rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
+        weights = np.zeros((self.slot_count, 4))
+        weights[:, :3] = lobes.DIFFUSE_ONLY
         image = None
         for slot, albedo in enumerate(albedos[:self.slot_count]):
             rows[slot, :3] = albedo.colour
+            weights[slot, :3] = albedo.weights
             if albedo.image is not None and self.has_uvs:
                 rows[slot, 3] = 1.0
                 image = albedo.image
-        white = image is None and bool(np.all(rows[:, :3] == 1.0))
+        white = not self.lobes.diffuse and image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
                                       albedo_texture=image is not None)
@@ -366,7 +379,9 @@ class ObjectData:
             self.shader = shader_program(variant)
             self.ubo = None
         self.albedo_image = image
-        return None if white else rows
+        if white:
+            return {}
+        return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.diffuse else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=()):
@@ -380,7 +395,7 @@ class ObjectData:
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
-        albedo_rows = self._use_albedos(list(albedos))
+        surface_rows = self._use_albedos(list(albedos))
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:
             camera[:3] -= np.asarray(model, dtype=np.float64)[:3, 3]
@@ -390,10 +405,9 @@ class ObjectData:
                   "light": light, "lobe": self.lobe_factors}
         if self.variant.band_limited_texture:
             values["local_to_environment"] = local_to_environment
-        if self.design is not None:
-            values["design"] = self.design.texels()
-        if albedo_rows is not None:
-            values["albedo"] = albedo_rows
+        if self.designs:
+            values["design"] = np.concatenate([d.texels() for d in self.designs])
+        values.update(surface_rows)
         return self.variant.frame_block(values)
 
     def draw(self, block, band_limited_texture=None):
@@ -414,13 +428,15 @@ class ObjectData:
         self.batch.draw(self.shader)
 
     def refresh_design(self):
-        """Swaps the final lobe design in for the Gauss rule standing in, once it is built: a
-        variant of the new size and a new uniform buffer."""
-        if self.design is None or self.design.final:
+        """Swaps the final lobe designs in for the Gauss rules standing in, once they are built: a
+        variant of the new sizes and a new uniform buffer."""
+        if all(d.final for d in self.designs):
             return
-        design = lobe_design(self.lobe, self.exponent, self.light_order + self.visibility_order)
-        if design is not self.design:
-            self.design = design
-            self.variant = dataclasses.replace(self.variant, lobe_design_size=len(design.weights))
+        designs = self._designs()
+        if any(new is not old for new, old in zip(designs, self.designs)):
+            self.designs = designs
+            sizes = [len(d.weights) for d in designs] + [0]
+            self.variant = dataclasses.replace(self.variant, lobe_design_size=sizes[0],
+                                               diffuse_design_size=sizes[1])
             self.shader = shader_program(self.variant)
             self.ubo = None

@@ -1,16 +1,20 @@
-"""What an object's materials give the shading: the BRDF lobe (the rule is utils/lobes.py) and
-the albedo B is multiplied by.
+"""What an object's materials give the shading: the BRDF lobes (the rule is utils/lobes.py) and
+the albedo and lobe weights B is multiplied by.
 
 A material's surface BSDF is the Principled or Diffuse BSDF feeding its active Material Output's
 Surface, else the first such node in its tree. Its albedo is the BSDF's base colour: a constant,
 or an Image Texture plugged straight into it (read through the UV map the node's Vector input
-names, or the mesh's active render UV map). What Lambert or Phong with an albedo cannot express
-(the Principled specular layer of a rough dielectric, colour computed by other nodes, a second
-image texture on one object) is approximated, and `Albedo.note` says how. A material without such
+names, or the mesh's active render UV map). A Principled BSDF's metallic, roughness and specular
+inputs split it between a Lambert and a Phong lobe (utils/lobes.py); an object's Phong exponent is
+that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the
+specular layer of a rough dielectric, Fresnel's rise at grazing angles, colour computed by other
+nodes, a second image texture on one object, another slot's roughness) is approximated, and
+`Albedo.note` says how. A material without such
 a BSDF uses its viewport colour; a face without a material has Blender's default surface, a 0.8
 grey diffuse (as Cycles renders it).
 """
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Optional
 
@@ -28,6 +32,11 @@ class Albedo:
     image: object = None            # bpy.types.Image, or None
     uv_map: Optional[str] = None    # the image's UV map ("": the active render one)
     note: str = ""                  # what is approximated, for the panel
+    # (diffuse, metal, dielectric): with a Lambert and a Phong lobe, Lambert's colour is diffuse x
+    # the albedo and Phong's metal x the albedo + dielectric (utils/lobes.principled_weights)
+    weights: tuple = lobes.DIFFUSE_ONLY
+    bsdf_lobes: lobes.Lobes = lobes.Lobes()
+    why: str = "Lambert"            # how the lobes follow from the BSDF, for the panel
 
 
 def _bsdf_nodes(material):
@@ -65,6 +74,27 @@ def _uv_map(image_node):
     return ""
 
 
+def _dielectric_reflectance(node):
+    if node.inputs.get("Specular IOR Level") is not None:    # Blender 4.0 and later
+        return lobes.dielectric_reflectance(_input_value(node, "IOR", 1.5),
+                                            _input_value(node, "Specular IOR Level", 0.5))
+    return lobes.dielectric_reflectance(specular=_input_value(node, "Specular", 0.5))
+
+
+def _principled(node):
+    """(weights, Lobes, why, note) of a Principled BSDF."""
+    roughness, metallic = _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0)
+    f0 = _dielectric_reflectance(node)
+    weights = lobes.principled_weights(roughness, metallic, f0)
+    found, why = lobes.lobes_from_principled(roughness, metallic, f0)
+    notes = []
+    if found.lobe == "lambert" and f0 > 0.0:
+        notes.append("specular layer folded into Lambert")
+    elif weights[2] > 0.0:
+        notes.append("specular F0 %.3f, no Fresnel rise at grazing angles" % f0)
+    return weights, found, why, notes
+
+
 def albedo(material):
     """The Albedo of one material (None: an empty slot, Blender's default surface)."""
     if material is None:
@@ -72,21 +102,20 @@ def albedo(material):
     node = surface_bsdf(material)
     if node is None:
         return Albedo(tuple(material.diffuse_color)[:3], note="no Principled or Diffuse BSDF: "
-                      "its viewport colour")
+                      "its viewport colour", why="no Principled or Diffuse BSDF -> Lambert")
     socket = _colour_socket(node)
     colour = tuple(socket.default_value)[:3]
-    note = ""
-    if node.type == 'BSDF_PRINCIPLED' and lobes.lobe_from_principled(
-            _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0))[0][0] == "lambert":
-        specular = _input_value(node, "Specular IOR Level", _input_value(node, "Specular", 0.0))
-        if specular > 0.0:
-            note = "specular layer not shaded (Lambert)"
+    weights, found, why, notes = lobes.DIFFUSE_ONLY, lobes.Lobes(), "Diffuse BSDF -> Lambert", []
+    if node.type == 'BSDF_PRINCIPLED':
+        weights, found, why, notes = _principled(node)
+    image = uv_map = None
     if socket.is_linked:
         source = socket.links[0].from_node
         if source.type == 'TEX_IMAGE' and source.image is not None:
-            return Albedo(colour, source.image, _uv_map(source), note)
-        note = "colour from node %s shown as the input's default" % source.name
-    return Albedo(colour, note=note)
+            image, uv_map = source.image, _uv_map(source)
+        else:
+            notes.append("colour from node %s shown as the input's default" % source.name)
+    return Albedo(colour, image, uv_map, "; ".join(notes), weights, found, why)
 
 
 def object_albedos(obj):
@@ -96,7 +125,8 @@ def object_albedos(obj):
     out = [albedo(slot.material) for slot in slots] or [Albedo()]
     image = texture_image(out)
     return [a if a.image is None or a.image == image else
-            Albedo(a.colour, note="second image texture (%s) shown as a flat colour" % a.image.name)
+            dataclasses.replace(a, image=None, uv_map=None,
+                                note="second image texture (%s) shown as a flat colour" % a.image.name)
             for a in out]
 
 
@@ -124,24 +154,30 @@ def albedo_summary(obj):
     return lines
 
 
-def lobe_from_material(obj):
-    """("lambert", 1.0) or ("phong", sigma) for the object's material, and a short explanation."""
-    for slot in getattr(obj, "material_slots", ()):
-        node = surface_bsdf(slot.material)
-        if node is None:
-            continue
-        if node.type == 'BSDF_DIFFUSE':
-            return ("lambert", 1.0), "%s: Diffuse BSDF -> Lambert" % slot.material.name
-        lobe, why = lobes.lobe_from_principled(_input_value(node, "Roughness", 0.5),
-                                               _input_value(node, "Metallic", 0.0))
-        return lobe, "%s: %s" % (slot.material.name, why)
-    return ("lambert", 1.0), "no Principled BSDF -> Lambert"
+def lobes_from_material(obj):
+    """The object's Lobes from its materials, and a line saying why: Lambert when a slot needs a
+    diffuse lobe, Phong with the first glossy slot's exponent when one needs a glossy lobe."""
+    albedos = [albedo(slot.material) for slot in getattr(obj, "material_slots", ())
+               if slot.material is not None]
+    if not albedos:
+        return lobes.Lobes(), "no material -> Lambert"
+    names = [slot.material.name for slot in obj.material_slots if slot.material is not None]
+    glossy = [(a, name) for a, name in zip(albedos, names) if a.bsdf_lobes.lobe == "phong"]
+    if not glossy:
+        return lobes.Lobes(), "%s: %s" % (names[0], albedos[0].why)
+    first, name = glossy[0]
+    diffuse = any(a.weights[0] > 0.0 for a in albedos)
+    found = lobes.Lobes("phong", first.bsdf_lobes.exponent, diffuse)
+    why = "%s: %s" % (name, first.why)
+    if diffuse and not first.bsdf_lobes.diffuse:
+        why += "; Lambert for %s" % next(n for a, n in zip(albedos, names) if a.weights[0] > 0.0)
+    return found, why
 
 
 def lobe_for(obj, settings):
-    """The lobe to bake and shade `obj` with under the scene's settings: (name, exponent)."""
+    """The Lobes to bake and shade `obj` with under the scene's settings."""
     if settings.material_source == 'LAMBERT':
-        return "lambert", 1.0
+        return lobes.Lobes()
     if settings.material_source == 'PHONG':
-        return "phong", float(settings.phong_exponent)
-    return lobe_from_material(obj)[0]
+        return lobes.Lobes("phong", float(settings.phong_exponent))
+    return lobes_from_material(obj)[0]

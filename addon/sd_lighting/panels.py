@@ -4,7 +4,7 @@ import bpy
 
 from . import (analysis, baking, drawing, environment, gpu_shading, live_rebake, materials, native,
                operators, prediction)
-from .utils import cost, methods, ringing
+from .utils import cost, lobes, methods, ringing
 
 
 class SD_PT_lighting(bpy.types.Panel):
@@ -81,7 +81,7 @@ class SD_PT_lighting(bpy.types.Panel):
         if settings.material_source == 'PHONG':
             box.prop(settings, "phong_exponent")
         elif settings.material_source == 'MATERIAL' and context.active_object is not None:
-            box.label(text=materials.lobe_from_material(context.active_object)[1][:60])
+            box.label(text=materials.lobes_from_material(context.active_object)[1][:60])
         if context.active_object is not None:
             for line in materials.albedo_summary(context.active_object):
                 box.label(text=line[:100])
@@ -152,10 +152,7 @@ class SD_PT_lighting(bpy.types.Panel):
         method = methods.BY_ID.get(info.get("method"))
         col = box.column(align=True)
         col.label(text="Method: %s" % (method.label if method else info.get("method")))
-        lobe = info.get("lobe", "?")
-        if lobe == "phong":
-            lobe = "Phong, sigma %.3g" % info.get("exponent", 0.0)
-        col.label(text="Material: %s" % lobe.capitalize() if lobe == "lambert" else "Material: " + lobe)
+        col.label(text="Material: %s" % lobes.Lobes.of_bake(info).label)
         col.label(text="s = %d, s' = %d, %d rays" % (info.get("light_order", 0),
                                                    info.get("visibility_order", 0), info.get("rays", 0)))
         col.label(text="%d vertices, %d floats = %d bytes per vertex" % (

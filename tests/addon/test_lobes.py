@@ -1,8 +1,11 @@
-"""Roughness -> Phong sigma and the Lambert/Phong decision of a Principled BSDF."""
+"""Roughness -> Phong sigma, and how a Principled BSDF splits between the Lambert and Phong
+lobes."""
 
 import pytest
 
 from sd_lighting.utils import lobes
+
+F0 = 0.04   # IOR 1.5
 
 
 @pytest.mark.parametrize("roughness, sigma", [(0.5, 7.5), (0.3, 61.228395), (0.2, 312.0),
@@ -12,18 +15,55 @@ def test_exponent_from_roughness(roughness, sigma):
     assert lobes.exponent_from_roughness(roughness) == pytest.approx(sigma, rel=1e-4)
 
 
-def test_rough_dielectrics_are_lambert():
-    assert lobes.lobe_from_principled(0.5, 0.0)[0] == ("lambert", 1.0)
-    assert lobes.lobe_from_principled(0.9, 0.49)[0] == ("lambert", 1.0)
+@pytest.mark.parametrize("kwargs, f0", [({}, 0.04), ({"ior": 1.5, "ior_level": 0.5}, 0.04),
+                                        ({"ior": 1.5, "ior_level": 1.0}, 0.08),
+                                        ({"ior": 1.5, "ior_level": 0.0}, 0.0),
+                                        ({"ior": 2.0, "ior_level": 0.5}, 1.0 / 9.0),
+                                        ({"specular": 0.5}, 0.04), ({"specular": 1.0}, 0.08),
+                                        ({"ior": 1e6, "ior_level": 1.0}, 1.0)])
+def test_dielectric_reflectance(kwargs, f0):
+    assert lobes.dielectric_reflectance(**kwargs) == pytest.approx(f0, rel=1e-3)
 
 
-def test_smooth_or_metallic_is_phong():
-    (name, sigma), why = lobes.lobe_from_principled(0.3, 0.0)
-    assert name == "phong" and sigma == pytest.approx(61.228395, rel=1e-6)
-    assert why == "roughness 0.30 -> Phong sigma 61.2"
-    assert lobes.lobe_from_principled(0.8, 0.5)[0] == ("phong", 1.0)
+def test_rough_dielectrics_are_lambert_alone():
+    assert lobes.lobes_from_principled(0.5, 0.0, F0)[0] == lobes.Lobes()
+    assert lobes.principled_weights(0.9, 0.0, F0) == lobes.DIFFUSE_ONLY
 
 
-def test_the_thresholds_are_half():
-    assert lobes.lobe_from_principled(0.49, 0.0)[0][0] == "phong"
-    assert lobes.lobe_from_principled(0.5, 0.5)[0][0] == "phong"
+def test_metals_are_phong_alone():
+    found, why = lobes.lobes_from_principled(0.3, 1.0, F0)
+    assert found == lobes.Lobes("phong", pytest.approx(61.228395, rel=1e-6), False)
+    assert lobes.principled_weights(0.3, 1.0, F0) == (0.0, 1.0, 0.0)
+    assert why == "metallic 1.00, roughness 0.30 -> Phong sigma 61.2"
+
+
+def test_smooth_dielectrics_have_both_lobes():
+    found, why = lobes.lobes_from_principled(0.3, 0.0, F0)
+    assert found.lobe == "phong" and found.diffuse
+    assert found.label == "Lambert + Phong sigma 61.2"
+    assert why == "roughness 0.30 -> Lambert + Phong sigma 61.2"
+    diffuse, metal, dielectric = lobes.principled_weights(0.3, 0.0, F0)
+    assert (diffuse, metal, dielectric) == pytest.approx((0.96, 0.0, 0.04))
+
+
+def test_partly_metallic_surfaces_split_energy():
+    """Half metal: half of the base colour goes to the glossy lobe; the dielectric half splits by
+    F0, so a white surface reflects all of the light whatever the mix."""
+    diffuse, metal, dielectric = lobes.principled_weights(0.8, 0.5, F0)
+    assert (diffuse, metal, dielectric) == pytest.approx((0.48, 0.5, 0.02))
+    assert diffuse + metal + dielectric == pytest.approx(1.0)
+    assert lobes.lobes_from_principled(0.8, 0.5, F0)[0] == lobes.Lobes("phong", 1.0, True)
+
+
+def test_the_roughness_threshold_is_half():
+    assert lobes.lobes_from_principled(0.49, 0.0, F0)[0].lobe == "phong"
+    assert lobes.lobes_from_principled(0.5, 0.0, F0)[0].lobe == "lambert"
+    assert lobes.lobes_from_principled(0.5, 0.01, F0)[0].lobe == "phong"
+
+
+def test_a_bake_record_names_its_lobes():
+    assert lobes.Lobes.of_bake({"lobe": "lambert", "exponent": 1.0}) == lobes.Lobes()
+    both = lobes.Lobes.of_bake({"lobe": "phong", "exponent": 8.0, "diffuse_lobe": 1})
+    assert both == lobes.Lobes("phong", 8.0, True)
+    assert both.shaded() == [("phong", 8.0), ("lambert", 1.0)]
+    assert lobes.Lobes("phong", 8.0).shaded() == [("phong", 8.0)]

@@ -1,5 +1,6 @@
 """Shader variants: defines, samplers and the uniform block (std140) against the GLSL."""
 
+import dataclasses
 import itertools
 import re
 
@@ -12,15 +13,18 @@ from sd_lighting.utils.shader_variant import BlockField, Variant
 
 def all_variants():
     for method in methods.METHODS:
-        for glossy, per_pixel, target, texture, albedo in itertools.product((False, True), repeat=5):
+        for lobes, per_pixel, target, texture, albedo in itertools.product(
+                ("lambert", "phong", "both"), (False, True), (False, True), (False, True), (False, True)):
             if texture and not method.band_limited_texture:
                 continue
-            yield Variant(method, glossy, 4, 2, 0 if method.data is None else 3,
+            both = lobes == "both"
+            yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
                           18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                           per_pixel, target,
                           shader_variant.band_limited_texture_size(4) if texture else (),
                           material_count=2 if albedo else 0, material_slots=albedo,
-                          albedo_texture=albedo)
+                          albedo_texture=albedo, diffuse_lobe=both,
+                          diffuse_design_size=12 if both and method.lobe_design else 0)
 
 
 def test_defines_of_a_known_variant(sdnative):
@@ -86,6 +90,28 @@ def test_albedo_variants_read_only_what_the_materials_need(sdnative):
     assert [f for f in textured.frame_fields() if f.name == "albedo"][0].length == 3
 
 
+def test_a_lambert_lobe_besides_the_phong_one(sdnative):
+    """Two lobes: the Lambert lobe's factors and design follow the Phong lobe's in the block, the
+    vertex stage passes its B on, and each slot has its lobe weights."""
+    msd_lobe = methods.get("msd_lobe")
+    one = Variant(msd_lobe, True, 4, 2, 3, lobe_design_size=18, material_count=2, material_slots=True)
+    two = dataclasses.replace(one, diffuse_lobe=True, diffuse_design_size=12)
+    defines = two.defines(sdnative.sh_recurrence_constants)
+    assert defines["SD_DIFFUSE_LOBE"] == "1" and defines["SD_DIFFUSE_DESIGN_SIZE"] == "12"
+    assert "SD_DIFFUSE_LOBE" not in one.defines(sdnative.sh_recurrence_constants)
+    rows = {f.name: f.rows for f in two.frame_fields()}
+    assert rows["lobe"] == 2 * {f.name: f.rows for f in one.frame_fields()}["lobe"]
+    assert rows["design"] == 30 and rows["lobe_weights"] == 2
+    assert "lobe_weights" not in [f.name for f in one.frame_fields()]
+    assert ("smooth", "vec3", "sd_diffuse_color") in two.interface()
+    assert ("flat", "vec4", "sd_lobe_weights") in two.interface()
+    per_pixel = dataclasses.replace(two, per_pixel=True)
+    assert [m for _, _, m in per_pixel.interface()] == ["sd_origin_offset", "sd_normal", "sd_bary",
+                                                        "sd_corners", "sd_albedo", "sd_lobe_weights"]
+    with pytest.raises(ValueError):
+        Variant(msd_lobe, False, 4, 2, 3, diffuse_lobe=True)
+
+
 def test_every_input_and_interface_member_is_one_the_glsl_reads(glsl_source):
     # The vertex inputs and the stage interface are declared from the variant (gpu_shading and the
     # strict-GLSL test alike): each name must be one the GLSL reads, and per pixel adds the
@@ -119,8 +145,9 @@ def std140_offsets(struct_text):
     return offsets, offset + (-offset) % 16
 
 
-@pytest.mark.parametrize("variant", list(all_variants()), ids=lambda v: "%s%s%s" % (
-    v.method.id, "-texture" if v.band_limited_texture else "", "-glossy" if v.glossy else ""))
+@pytest.mark.parametrize("variant", list(all_variants()), ids=lambda v: "%s%s%s%s" % (
+    v.method.id, "-texture" if v.band_limited_texture else "", "-glossy" if v.glossy else "",
+    "-diffuse" if v.diffuse_lobe else ""))
 def test_struct_text_and_packing_agree_by_std140(variant):
     offsets, size = std140_offsets(variant.frame_struct())
     rng = np.random.default_rng(0)

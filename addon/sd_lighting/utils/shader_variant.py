@@ -79,7 +79,7 @@ class BlockField:
 class Variant:
     """Everything the shader is specialised on."""
     method: methods.Method
-    glossy: bool
+    glossy: bool                  # lobe 0 is Phong (else Lambert)
     light_order: int
     visibility_order: int
     data_stride: int = 0          # texels per vertex in the data texture (0: none)
@@ -91,6 +91,16 @@ class Variant:
     material_count: int = 0       # albedos in the block, one per material slot (0: white, none)
     material_slots: bool = False  # the vertices carry their slot (objects with several)
     albedo_texture: bool = False  # a slot's albedo is an image texture, read through `uv`
+    diffuse_lobe: bool = False    # a Lambert lobe 1 besides the Phong lobe 0 (glossy)
+    diffuse_design_size: int = 0  # nodes of lobe 1's design (methods with lobe_design)
+
+    def __post_init__(self):
+        if self.diffuse_lobe and not self.glossy:
+            raise ValueError("a second, Lambert lobe goes with a Phong lobe 0")
+
+    @property
+    def lobe_count(self):
+        return 2 if self.diffuse_lobe else 1
 
     @property
     def basis_order(self):
@@ -127,8 +137,12 @@ class Variant:
             d["SD_SH_TABLE_SIZE"] = str(len(tables["a"]))
         if self.glossy:
             d["SD_GLOSSY"] = "1"
+        if self.diffuse_lobe:
+            d["SD_DIFFUSE_LOBE"] = "1"
         if self.method.lobe_design:
             d["SD_LOBE_DESIGN_SIZE"] = str(self.lobe_design_size)
+            if self.diffuse_lobe:
+                d["SD_DIFFUSE_DESIGN_SIZE"] = str(self.diffuse_design_size)
         if self.method.gaunt_table:
             d["SD_GAUNT_COUNT"] = str(self.gaunt_count)
         if self.per_pixel:
@@ -164,9 +178,13 @@ class Variant:
                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
         else:
             out = [("smooth", "vec3", "sd_color")]
+            if self.diffuse_lobe:
+                out.append(("smooth", "vec3", "sd_diffuse_color"))
         if self.material_count:
             # a triangle's corners share their slot (utils/corners.py splits vertices between slots)
             out.append(("flat", "vec4", "sd_albedo"))
+            if self.diffuse_lobe:
+                out.append(("flat", "vec4", "sd_lobe_weights"))
             if self.albedo_texture:
                 out.append(("smooth", "vec2", "sd_uv"))
         return out
@@ -192,14 +210,18 @@ class Variant:
                   BlockField("camera", "vec4"),            # eye - object origin (w = 1), or direction to it (w = 0)
                   BlockField("params", "vec4"),            # 2^exposure, target width, height, depth bias
                   BlockField("light", "vec4", (self.light_order + 1) ** 2),  # L(g R x), rgb
-                  BlockField("lobe", "vec4", self.lobe_vec4s)]               # Funk-Hecke factors
+                  # Funk-Hecke factors, lobe 0's then lobe 1's
+                  BlockField("lobe", "vec4", self.lobe_vec4s * self.lobe_count)]
         if self.band_limited_texture:
             fields.append(BlockField("local_to_environment", "mat4"))  # g R: the texture is unrotated
         if self.method.lobe_design:
-            fields.append(BlockField("design", "vec4", self.lobe_design_size))  # x, y, z, lambda
+            # x, y, z, lambda; lobe 0's nodes, then lobe 1's
+            fields.append(BlockField("design", "vec4", self.lobe_design_size + self.diffuse_design_size))
         if self.material_count:
             # per slot: linear rgb, and 1 where the albedo is the image texture instead
             fields.append(BlockField("albedo", "vec4", self.material_count))
+            if self.diffuse_lobe:   # per slot: (diffuse, metal, dielectric) of materials.Albedo
+                fields.append(BlockField("lobe_weights", "vec4", self.material_count))
         return fields
 
     def frame_struct(self):

@@ -10,7 +10,9 @@ measured at every vertex against sdnative.reference. Its diffuse material compil
 variant without the glossy path. Before a bake, the bake-time predictor measures a chosen
 method's error too (the panel's line). An override of the object (method and s') is kept while the rest
 is still chosen. A cancel while the settings are being chosen stops within a second and leaves
-every bake as it was.
+every bake as it was. A red plastic (Principled, roughness 0.3) is measured as what it shows, a
+Lambert lobe with most of the light and a glossy Phong lobe: its predicted error is far below that
+of the same sphere shaded as the Phong lobe alone, at no higher s.
 Run (headless, GPU through a Workbench render):
     blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_automatic.py -- --zip Z --out DIR
 """
@@ -168,7 +170,41 @@ def main():
     checks.check("automatic" in info and info["automatic"].startswith("Overridden: visibility_order = 3")
                  and (not chosen.uses_visibility_order or info["visibility_order"] == 3),
                  "the automatic mode keeps the override", info.get("automatic", "")[:80])
+    plastic(checks, package, scene)
     return checks.summary()
+
+
+def plastic(checks, package, scene):
+    """The red plastic's lobes and choice against the Phong lobe alone (see the module's doc)."""
+    ball = sdtest.ico_sphere(scene, "Plastic", subdivisions=3, location=(30.0, 0.0, 60.0))
+    ball.data.materials.append(sdtest.principled_material("Plastic", (0.8, 0.15, 0.05, 1.0), 0.3))
+    settings = scene.sd_lighting
+    sdtest.select_only([ball])
+    settings.material_source = 'PHONG'
+    settings.phong_exponent = package.utils.lobes.exponent_from_roughness(0.3)
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the plastic as the Phong lobe alone")
+    alone = dict(ball["sd_bake"])
+    settings.material_source = 'MATERIAL'
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the plastic sphere")
+    mixed = dict(ball["sd_bake"])
+    checks.check(mixed["lobe"] == "phong" and mixed["diffuse_lobe"] and mixed["lobe_weights"] and
+                 0.8 < mixed["diffuse_share"] < 0.95 and abs(mixed["exponent"] - alone["exponent"]) < 1e-3,
+                 "a plastic bakes a Lambert lobe besides the Phong one, with most of the light",
+                 "%s sigma %.1f, Lambert's share %.2f" % (mixed["lobe"], mixed["exponent"],
+                                                          mixed["diffuse_share"]))
+    checks.check(mixed["predicted_error"] < 0.5 * alone["predicted_error"] and
+                 mixed["light_order"] <= alone["light_order"],
+                 "the plastic's error is measured on both lobes: far below the glossy lobe's alone",
+                 "s = %d, %.1f %% against s = %d, %.1f %%" % (
+                     mixed["light_order"], 100 * mixed["predicted_error"], alone["light_order"],
+                     100 * alone["predicted_error"]))
+    package.gpu_context.ensure()
+    data = package.drawing.object_data(ball)
+    data.frame_block(np.eye(4), np.eye(4), (0.0, 0.0, 1.0, 1.0), np.zeros(((mixed["light_order"] + 1) ** 2, 3)),
+                     np.eye(3), 1.0, albedos=package.materials.object_albedos(ball))
+    defines = data.variant.defines(package.native.get().sh_recurrence_constants)
+    checks.check({"SD_GLOSSY", "SD_DIFFUSE_LOBE", "SD_LOBE_WEIGHTS"} <= set(defines),
+                 "its shader variant shades both lobes with the slot's weights")
 
 
 sdtest.run(main)

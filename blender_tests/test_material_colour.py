@@ -11,6 +11,13 @@ without baking again (albedos are read at every draw).
 Corner data: a flat-shaded cube's baked copy has one vertex per face corner (24) with the face
 normals; the smooth sphere keeps its vertices, split only along the material boundary and the UV
 seam; a flat-shaded icosphere shades flat like Cycles, unlike the same mesh baked smooth.
+
+Principled BSDFs (GLOSSY): a red plastic (roughness 0.3), gold (metallic 1, roughness 0.4) and a
+half-metallic blue (roughness 0.3) on a smooth icosphere, baked from the material (Lambert +
+Phong, or Phong alone for the metal, weighted per pixel by utils/lobes.py) and previewed with the
+unshadowed formula at s = 12, against Cycles from two seeds: relative RMS of block averages and
+bias per channel within GLOSSY's limits; the plastic shown as one Phong lobe of its colour (the
+add-on before the split) is far off.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR
 """
 
@@ -26,6 +33,10 @@ import numpy as np  # noqa: E402
 SIZE = 120
 BLOCK = 6
 RED = (0.8, 0.15, 0.05, 1.0)
+GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, largest |bias| per channel
+    ("plastic", RED, 0.3, 0.0, 0.04, 0.04),
+    ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.17, 0.05),
+    ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.09, 0.03)]
 
 
 def uv_sphere(scene):
@@ -158,7 +169,41 @@ def main():
     checks.check(np.percentile(wrong, 90) > 2 * np.percentile(relative, 90),
                  "the same mesh shaded smooth differs from Cycles' flat faces",
                  "90th pct %.1f %%" % (100 * np.percentile(wrong, 90)))
+    facets.hide_set(True)
+    facets.hide_render = True
+    glossy(checks, package, scene, preview, args.out)
     return checks.summary()
+
+
+def glossy(checks, package, scene, preview, out):
+    """The GLOSSY materials against Cycles (see the module's doc)."""
+    ball = sdtest.ico_sphere(scene, "Glossy", subdivisions=5, location=(0.0, 0.0, 0.0))
+    for name, colour, roughness, metallic, limit, bias_limit in GLOSSY:
+        ball.data.materials.clear()
+        ball.data.materials.append(sdtest.principled_material(name, colour, roughness, metallic))
+        stem = os.path.join(out, name.replace(" ", "_"))
+        cycles, noise = sdtest.cycles_pair(scene, stem, SIZE, 512, BLOCK)
+        sdtest.bake_settings(scene, 'unshadowed', 'MATERIAL', 12, select=[ball])
+        checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the %s sphere" % name)
+        ours = preview(name.replace(" ", "_") + "_preview.exr")
+        mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+        a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
+        error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
+        bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+        checks.check(error <= limit and np.abs(bias).max() <= bias_limit,
+                     "%s (roughness %.1f, metallic %.1f) = Cycles" % (name, roughness, metallic),
+                     "relative RMS %.1f %% (limit %.0f %%, Cycles' noise %.2f %%), bias per channel "
+                     "%s %% (limit %.0f %%)" % (100 * error, 100 * limit, 100 * noise,
+                                                np.round(100 * bias, 1), 100 * bias_limit))
+        if metallic == 0.0:
+            sdtest.bake_settings(scene, 'unshadowed', 'PHONG', 12,
+                                 phong_exponent=package.utils.lobes.exponent_from_roughness(roughness),
+                                 select=[ball])
+            checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it as one Phong lobe")
+            one = sdtest.block_averages(preview(name + "_one_lobe.exr"), mask, BLOCK)
+            one_error = np.sqrt(np.mean((one - b) ** 2) / np.mean(b ** 2))
+            checks.check(one_error > 5 * error, "one Phong lobe of its colour is far off",
+                         "relative RMS %.1f %%" % (100 * one_error))
 
 
 sdtest.run(main)

@@ -1,11 +1,12 @@
 """Every shader variant compiles: on this Blender's GPU backend, and under glslang's strict front
 ends.
 
-Variants: every method x lobes (Lambert, Phong, both; PRT (2) Lambert only) x orders (s, s') in ORDERS
-(0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn / vertex-target, and the
-band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each drawn variant with
-material albedos (slots and an image texture): 350 programs, each built by gpu_shading exactly as
-the live shading builds it (defines, frame block, samplers, interface).
+Variants: every method x lobes (Lambert, Phong, Lambert + Phong; PRT (2) Lambert only) x orders
+(s, s') in ORDERS (0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn /
+vertex-target, and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each
+drawn variant with material albedos (slots and an image texture; Lambert + Phong with the slots'
+Principled weights, and Phong alone with them as a metal has): N_VARIANTS programs, each built by
+gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
@@ -45,6 +46,7 @@ import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
+N_VARIANTS = 366        # the programs variants() enumerates
 DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
 
@@ -74,7 +76,7 @@ def variants(package):
                                                  s + sv, "gauss")[1])
                     if both:
                         diffuse_design = len(sd.zonal_design("lambert", 1.0, s + sv, "gauss")[1])
-                lobes = {"diffuse_lobe": both, "diffuse_design_size": diffuse_design}
+                lobes = {"lobe_weights": both, "diffuse_lobe": both, "diffuse_design_size": diffuse_design}
                 gaunt = len(sd.gaunt_coefficients(s, sv, s + sv)[1]) if method.gaunt_table else 0
                 textures = [()]
                 if method.band_limited_texture:
@@ -89,6 +91,11 @@ def variants(package):
                                     method, glossy, s, sv, stride, design, gaunt, per_pixel,
                                     vertex_target, texture, material_count=3, material_slots=True,
                                     albedo_texture=True, **lobes)
+                                if glossy and not both:   # Principled metals: weights, one lobe
+                                    yield shader_variant.Variant(
+                                        method, glossy, s, sv, stride, design, gaunt, per_pixel,
+                                        vertex_target, texture, material_count=3, material_slots=True,
+                                        albedo_texture=True, lobe_weights=True)
 
 
 def name(variant):
@@ -175,7 +182,7 @@ def main():
     print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
                                 else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
     all_variants = list(variants(package))
-    checks.check(len(all_variants) == 350, "variants enumerated", "%d" % len(all_variants))
+    checks.check(len(all_variants) == N_VARIANTS, "variants enumerated", "%d" % len(all_variants))
 
     # 1. This Blender's GPU backend.
     failed, start = [], time.perf_counter()

@@ -22,21 +22,44 @@ vec3 sd_surface_albedo()
 #endif
 }
 
-/* The surface's radiance from lobe 0's B and (SD_DIFFUSE_LOBE) the Lambert lobe's: the albedo
- * times the one lobe's, or the Lambert lobe times diffuse x albedo plus the Phong lobe times
- * metal x albedo + dielectric, with the slot's weights (diffuse, metal, dielectric) - the vertex
- * target (no albedos) shows the two lobes' sum. */
-vec3 sd_surface(vec3 lobe0, vec3 diffuse)
+#ifdef SD_LOBE_WEIGHTS
+/* (A, B) of a GGX lobe with Schlick's Fresnel: its directional albedo is F0 A + B at n.v and the
+ * roughness (Karis' analytic fit of the split-sum table, "Physically Based Shading on Mobile",
+ * 2014), scaled to A + B = 1: what a rough lobe loses to single scattering, Cycles' multiple-
+ * scattering GGX keeps (a lobe with F0 = 1 reflects all the light). */
+vec2 sd_environment_brdf(float n_dot_v, float roughness)
+{
+  vec4 r = roughness * vec4(-1.0, -0.0275, -0.572, 0.022) + vec4(1.0, 0.0425, 1.04, -0.04);
+  float a004 = min(r.x * r.x, exp2(-9.28 * max(n_dot_v, 0.0))) * r.x + r.y;
+  vec2 ab = vec2(-1.04, 1.04) * a004 + r.zw;
+  return ab / (ab.x + ab.y);
+}
+#endif
+
+/* The surface's radiance from lobe 0's B and (SD_DIFFUSE_LOBE) the Lambert lobe's: with
+ * SD_LOBE_WEIGHTS the slot's Principled split (utils/lobes.py): Phong times the specular layer's
+ * albedo mix(F0, albedo, metallic) A + B, Lambert times (1 - metallic) albedo, less the dielectric
+ * layer's F0 A + B where the layer lies over the diffuse (layer 1; 2: added to it; 0: no layer);
+ * otherwise the albedo times the one lobe's B, or on the vertex target (no albedos) the two
+ * lobes' sum. */
+vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 {
   vec3 albedo = sd_surface_albedo();
   lobe0 = max(lobe0, vec3(0.0));
-#ifdef SD_DIFFUSE_LOBE
   diffuse = max(diffuse, vec3(0.0));
-#  ifdef SD_ALBEDO
-  return diffuse * (sd_lobe_weights.x * albedo) + lobe0 * (sd_lobe_weights.y * albedo + vec3(sd_lobe_weights.z));
-#  else
-  return diffuse + lobe0;
+#if defined(SD_LOBE_WEIGHTS)
+  float metal = sd_lobe_weights.x;
+  float f0 = sd_lobe_weights.y;
+  float layer = step(0.5, sd_lobe_weights.w);
+  float over = layer * (1.0 - step(1.5, sd_lobe_weights.w));
+  vec2 ab = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
+  vec3 rgb = lobe0 * (layer * (mix(vec3(f0), albedo, metal) * ab.x + vec3(ab.y)));
+#  ifdef SD_DIFFUSE_LOBE
+  rgb += diffuse * ((1.0 - metal) * (1.0 - over * (f0 * ab.x + ab.y))) * albedo;
 #  endif
+  return rgb;
+#elif defined(SD_DIFFUSE_LOBE)
+  return lobe0 + diffuse;
 #else
   return lobe0 * albedo;
 #endif
@@ -66,11 +89,15 @@ void main()
   sd_add_corner(sd_bary.x, sd_corners.x, normal, view, rgb, diffuse);
   sd_add_corner(sd_bary.y, sd_corners.y, normal, view, rgb, diffuse);
   sd_add_corner(sd_bary.z, sd_corners.z, normal, view, rgb, diffuse);
-  fragColor = vec4(sd_surface(sd.params.x * rgb, sd.params.x * diffuse), 1.0);
+  fragColor = vec4(sd_surface(sd.params.x * rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
 #else
 #  ifdef SD_DIFFUSE_LOBE
   diffuse = sd_diffuse_color;
 #  endif
-  fragColor = vec4(sd_surface(sd_color, diffuse), 1.0);
+  float n_dot_v = 1.0;
+#  ifdef SD_LOBE_WEIGHTS
+  n_dot_v = sd_n_dot_v;
+#  endif
+  fragColor = vec4(sd_surface(sd_color, diffuse, n_dot_v), 1.0);
 #endif
 }

@@ -9,7 +9,8 @@
  * float target, so the readback holds exactly what the shader computed for every vertex.
  * SD_ALBEDO: the vertex's material slot picks its albedo from sd.albedo (SD_MATERIAL_SLOTS: the
  * attribute material_slot, else slot 0), passed on with the UV of the albedo texture, and with
- * SD_DIFFUSE_LOBE the slot's lobe weights; the Lambert lobe's B goes in sd_diffuse_color.
+ * SD_LOBE_WEIGHTS the slot's lobe weights and n.v. SD_DIFFUSE_LOBE: the Lambert lobe's B goes in
+ * sd_diffuse_color.
  */
 void main()
 {
@@ -35,7 +36,7 @@ void main()
   int slot = 0;
 #  endif
   sd_albedo = sd.albedo[slot];
-#  ifdef SD_DIFFUSE_LOBE
+#  ifdef SD_LOBE_WEIGHTS
   sd_lobe_weights = sd.lobe_weights[slot];
 #  endif
 #  ifdef SD_ALBEDO_TEXTURE
@@ -49,9 +50,14 @@ void main()
   sd_bary = bary;
   sd_corners = corners;
 #else
-  sd_color = sd.params.x * sd_shade(gl_VertexID, normalize(nrm), sd_view_direction(mat3(sd.model) * pos));
+  vec3 normal = normalize(nrm);
+  vec3 view = sd_view_direction(mat3(sd.model) * pos);
+  sd_color = sd.params.x * sd_shade(gl_VertexID, normal, view);
 #  ifdef SD_DIFFUSE_LOBE
-  sd_diffuse_color = sd.params.x * sd_shade_diffuse(gl_VertexID, nrm);
+  sd_diffuse_color = sd.params.x * sd_shade_diffuse(gl_VertexID, normal);
+#  endif
+#  ifdef SD_LOBE_WEIGHTS
+  sd_n_dot_v = dot(normal, view);
 #  endif
 #endif
 }

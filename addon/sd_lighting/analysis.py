@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import environment, native
-from .utils import accuracy, automatic, bake_time, cost, methods
+from .utils import accuracy, automatic, bake_time, cost, lobes, methods
 
 AUTOMATIC = "automatic"     # the scene's and an object's method setting for the automatic mode
 MEASURED_RAYS = 256         # rays per vertex of the measurement (the error at others follows)
@@ -48,7 +48,7 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
                   triangle_pixels)
 
 
-def _table(inputs, geometry, occluders, lobe, exponent, method_ids, max_order, rays, stop):
+def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop):
     eye = inputs.eye
 
     def views(points):
@@ -59,15 +59,17 @@ def _table(inputs, geometry, occluders, lobe, exponent, method_ids, max_order, r
 
     sample = accuracy.Sample.of_mesh(geometry.vertices, geometry.normals, geometry.triangles,
                                      occluders, views)
-    return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe, exponent,
-                               inputs.rotation, method_ids, max_order, rays, stop=stop)
+    return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
+                               lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
+                               stop=stop, diffuse_share=lobe_set.diffuse_share)
 
 
-def choose(inputs, geometry, occluders, lobe, exponent, stop):
+def choose(inputs, geometry, occluders, lobe_set, stop):
     """The automatic.Choice for one object (any thread): geometry a baking.Geometry, occluders
-    bake_transfer's occluder keywords (or {}); stop() True cancels (InterruptedError)."""
+    bake_transfer's occluder keywords (or {}), lobe_set its utils/lobes.Lobes; stop() True cancels
+    (InterruptedError)."""
     sd = native.get()
-    table = _table(inputs, geometry, occluders, lobe, exponent, [m.id for m in methods.METHODS],
+    table = _table(inputs, geometry, occluders, lobe_set, [m.id for m in methods.METHODS],
                    inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop)
     return automatic.choose(table, inputs.target_error, lambda s, sv: cost.gaunt_terms(sd, s, sv),
                             len(geometry.vertices), os.cpu_count() or 1, bake_time.CONFIRM_SECONDS,
@@ -79,6 +81,6 @@ def predict(inputs, geometry, occluders, settings, stop):
     thread), measured as the automatic mode measures every setting."""
     setting = accuracy.Setting(settings["method"], int(settings["light_order"]),
                                int(settings["visibility_order"]), int(settings["rays"]))
-    table = _table(inputs, geometry, occluders, settings["lobe"], settings["exponent"],
-                   [setting.method], setting.light_order, setting.rays, stop)
+    table = _table(inputs, geometry, occluders, lobes.Lobes.of_bake(settings), [setting.method],
+                   setting.light_order, setting.rays, stop)
     return table.error(setting)

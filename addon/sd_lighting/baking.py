@@ -30,7 +30,7 @@ import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
 from .view import View
-from .utils import automatic, corners, methods, refine, transforms
+from .utils import automatic, corners, lobes, methods, refine, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -265,7 +265,7 @@ class BakeTask:
     def choose(self, stop):
         """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
-                                 self.settings["lobe"], self.settings["exponent"], stop)
+                                 lobes.Lobes.of_bake(self.settings), stop)
         per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
             per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
@@ -342,6 +342,7 @@ def bake_settings(scene, obj, env_source):
     lobe_set = materials.lobe_for(obj, settings)
     lobe, exponent = lobe_set.lobe, lobe_set.exponent
     common = {"lobe": lobe, "exponent": float(exponent), "diffuse_lobe": lobe_set.diffuse,
+              "lobe_weights": lobe_set.weighted, "diffuse_share": lobe_set.diffuse_share,
               "seed": int(settings.seed),
               "environment": env_source.description, "refine": bool(settings.refine),
               "refine_target": float(settings.target_error),

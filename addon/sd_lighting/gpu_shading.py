@@ -18,9 +18,9 @@ What a draw reads:
   instead of summing (s+1)^2 SH terms per direction;
 - the albedo B is multiplied by (materials.py), read from the object's materials at every draw:
   one colour per material slot in the block, a vertex attribute `material_slot` where the bake
-  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`; with a
-  Lambert and a Phong lobe, each slot's lobe weights. A one-lobe object whose albedos are all
-  white gets a variant without any of it.
+  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`; for
+  lobes from Principled BSDFs, each slot's lobe weights (utils/lobes.py). An object with neither
+  weights nor a colour other than white gets a variant without any of it.
 Variants are compiled on first use and cached.
 """
 
@@ -305,7 +305,8 @@ class ObjectData:
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
-                               diffuse_lobe=self.lobes.diffuse, diffuse_design_size=design_sizes[1])
+                               lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
+                               diffuse_design_size=design_sizes[1])
         self.shader = shader_program(self.variant)
         per_lobe = 4 * self.variant.lobe_vec4s
         self.lobe_factors = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
@@ -361,16 +362,15 @@ class ObjectData:
             return {}
         rows = np.zeros((self.slot_count, 4))
         rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
-        weights = np.zeros((self.slot_count, 4))
-        weights[:, :3] = lobes.DIFFUSE_ONLY
+        weights = np.tile(lobes.DIFFUSE_ONLY, (self.slot_count, 1))
         image = None
         for slot, albedo in enumerate(albedos[:self.slot_count]):
             rows[slot, :3] = albedo.colour
-            weights[slot, :3] = albedo.weights
+            weights[slot] = albedo.weights
             if albedo.image is not None and self.has_uvs:
                 rows[slot, 3] = 1.0
                 image = albedo.image
-        white = not self.lobes.diffuse and image is None and bool(np.all(rows[:, :3] == 1.0))
+        white = not self.lobes.weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
                                       albedo_texture=image is not None)
@@ -381,7 +381,7 @@ class ObjectData:
         self.albedo_image = image
         if white:
             return {}
-        return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.diffuse else {}))
+        return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.weighted else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=()):

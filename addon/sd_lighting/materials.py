@@ -7,9 +7,8 @@ or an Image Texture plugged straight into it (read through the UV map the node's
 names, or the mesh's active render UV map). A Principled BSDF's metallic, roughness and specular
 inputs split it between a Lambert and a Phong lobe (utils/lobes.py); an object's Phong exponent is
 that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the
-specular layer of a rough dielectric, Fresnel's rise at grazing angles, colour computed by other
-nodes, a second image texture on one object, another slot's roughness) is approximated, and
-`Albedo.note` says how. A material without such
+specular layer of a rough dielectric, GGX's shape, colour computed by other nodes, a second image
+texture on one object, another slot's roughness) is approximated, and `Albedo.note` says how. A material without such
 a BSDF uses its viewport colour; a face without a material has Blender's default surface, a 0.8
 grey diffuse (as Cycles renders it).
 """
@@ -17,6 +16,8 @@ grey diffuse (as Cycles renders it).
 import dataclasses
 from dataclasses import dataclass
 from typing import Optional
+
+import numpy as np
 
 from . import compat
 from .utils import lobes
@@ -32,9 +33,7 @@ class Albedo:
     image: object = None            # bpy.types.Image, or None
     uv_map: Optional[str] = None    # the image's UV map ("": the active render one)
     note: str = ""                  # what is approximated, for the panel
-    # (diffuse, metal, dielectric): with a Lambert and a Phong lobe, Lambert's colour is diffuse x
-    # the albedo and Phong's metal x the albedo + dielectric (utils/lobes.principled_weights)
-    weights: tuple = lobes.DIFFUSE_ONLY
+    weights: tuple = lobes.DIFFUSE_ONLY   # utils/lobes.principled_weights
     bsdf_lobes: lobes.Lobes = lobes.Lobes()
     why: str = "Lambert"            # how the lobes follow from the BSDF, for the panel
 
@@ -74,8 +73,14 @@ def _uv_map(image_node):
     return ""
 
 
+def _layered(node):
+    """Whether the Principled BSDF is Blender 4.0's, whose specular layer lies over the diffuse
+    and takes its energy from it (it has Specular IOR Level where the earlier one had Specular)."""
+    return node.inputs.get("Specular IOR Level") is not None
+
+
 def _dielectric_reflectance(node):
-    if node.inputs.get("Specular IOR Level") is not None:    # Blender 4.0 and later
+    if _layered(node):
         return lobes.dielectric_reflectance(_input_value(node, "IOR", 1.5),
                                             _input_value(node, "Specular IOR Level", 0.5))
     return lobes.dielectric_reflectance(specular=_input_value(node, "Specular", 0.5))
@@ -85,13 +90,13 @@ def _principled(node):
     """(weights, Lobes, why, note) of a Principled BSDF."""
     roughness, metallic = _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0)
     f0 = _dielectric_reflectance(node)
-    weights = lobes.principled_weights(roughness, metallic, f0)
+    weights = lobes.principled_weights(roughness, metallic, f0, _layered(node))
     found, why = lobes.lobes_from_principled(roughness, metallic, f0)
     notes = []
     if found.lobe == "lambert" and f0 > 0.0:
         notes.append("specular layer folded into Lambert")
-    elif weights[2] > 0.0:
-        notes.append("specular F0 %.3f, no Fresnel rise at grazing angles" % f0)
+    elif found.lobe == "phong":
+        notes.append("GGX shown as Phong")
     return weights, found, why, notes
 
 
@@ -166,11 +171,13 @@ def lobes_from_material(obj):
     if not glossy:
         return lobes.Lobes(), "%s: %s" % (names[0], albedos[0].why)
     first, name = glossy[0]
-    diffuse = any(a.weights[0] > 0.0 for a in albedos)
-    found = lobes.Lobes("phong", first.bsdf_lobes.exponent, diffuse)
+    diffuse = [n for a, n in zip(albedos, names) if a.weights[0] < 1.0]   # not wholly metal
+    specular, lambert = np.sum([lobes.reflected(a.colour, a.weights) for a in albedos], axis=0)
+    share = lambert / (specular + lambert) if diffuse and specular + lambert > 0.0 else 0.0
+    found = lobes.Lobes("phong", first.bsdf_lobes.exponent, bool(diffuse), True, float(share))
     why = "%s: %s" % (name, first.why)
     if diffuse and not first.bsdf_lobes.diffuse:
-        why += "; Lambert for %s" % next(n for a, n in zip(albedos, names) if a.weights[0] > 0.0)
+        why += "; Lambert for %s" % diffuse[0]
     return found, why
 
 

@@ -36,11 +36,11 @@ FLOOR = {"occluder_vertices": np.array([[-9.0, -9, 0], [9, -9, 0], [9, 9, 0], [-
 
 
 def table(sdnative, environment, occluders=None, lobe="lambert", exponent=1.0, ids=ALL, max_order=6,
-          rays=256):
+          rays=256, diffuse_share=0.0):
     light = lambda s: np.asarray(environment.sh(s)).reshape(-1, 3)  # noqa: E731
     sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=occluders, count=48)
     return accuracy.ErrorTable(sdnative, sample, environment, light, lobe, exponent, np.eye(3), ids,
-                               max_order, rays)
+                               max_order, rays, diffuse_share=diffuse_share)
 
 
 def choose(sdnative, errors, target=0.02):
@@ -141,6 +141,23 @@ def test_a_glossy_material_never_gets_the_lambert_only_method(sdnative, forest):
     errors = table(sdnative, forest, FLOOR, lobe="phong", exponent=8.0)
     assert not any(key[0] == "prt_diffuse" for key in errors.measured)
     assert choose(sdnative, errors).setting.method != "prt_diffuse"
+
+
+def test_a_plastic_needs_the_order_of_its_mix_not_of_its_glossy_lobe(sdnative, forest):
+    """A Lambert lobe reflecting most of the light besides a sharp Phong lobe: the error of the
+    sum is measured, so the plastic meets the target at a far lower s than Phong alone."""
+    glossy, plastic = (table(sdnative, forest, lobe="phong", exponent=60.0, ids=["unshadowed"],
+                             max_order=12, diffuse_share=share) for share in (0.0, 0.9))
+    lambert = table(sdnative, forest, ids=["unshadowed"], max_order=12)
+    at = lambda errors, s: errors.error(accuracy.Setting("unshadowed", s, 0, 256))  # noqa: E731
+    assert at(plastic, 4) < 0.5 * at(glossy, 4)
+    assert at(plastic, 4) > at(lambert, 4)     # the glossy tenth still counts
+    plastic_order, glossy_order = (choose(sdnative, errors).setting.light_order
+                                   for errors in (plastic, glossy))
+    assert plastic_order < glossy_order
+    # the reference is the weighted sum of the lobes' references
+    assert np.allclose(plastic.reference, 0.1 * glossy.reference + 0.9 * lambert.reference, rtol=0.05,
+                       atol=0.02 * np.abs(lambert.reference).max())
 
 
 def sky(sdnative, sun):

@@ -1,5 +1,5 @@
 """Roughness -> Phong sigma, and how a Principled BSDF splits between the Lambert and Phong
-lobes."""
+lobes (the shader's colours from the weights: test_material_colour against Cycles)."""
 
 import pytest
 
@@ -32,27 +32,34 @@ def test_rough_dielectrics_are_lambert_alone():
 
 def test_metals_are_phong_alone():
     found, why = lobes.lobes_from_principled(0.3, 1.0, F0)
-    assert found == lobes.Lobes("phong", pytest.approx(61.228395, rel=1e-6), False)
-    assert lobes.principled_weights(0.3, 1.0, F0) == (0.0, 1.0, 0.0)
+    assert found == lobes.Lobes("phong", pytest.approx(61.228395, rel=1e-6), False, True)
+    assert lobes.principled_weights(0.3, 1.0, F0) == (1.0, F0, 0.3, lobes.LAYER_OVER)
     assert why == "metallic 1.00, roughness 0.30 -> Phong sigma 61.2"
 
 
 def test_smooth_dielectrics_have_both_lobes():
     found, why = lobes.lobes_from_principled(0.3, 0.0, F0)
-    assert found.lobe == "phong" and found.diffuse
+    assert found.lobe == "phong" and found.diffuse and found.weighted
     assert found.label == "Lambert + Phong sigma 61.2"
     assert why == "roughness 0.30 -> Lambert + Phong sigma 61.2"
-    diffuse, metal, dielectric = lobes.principled_weights(0.3, 0.0, F0)
-    assert (diffuse, metal, dielectric) == pytest.approx((0.96, 0.0, 0.04))
+    assert lobes.principled_weights(0.3, 0.0, F0) == (0.0, F0, 0.3, lobes.LAYER_OVER)
+    assert lobes.principled_weights(0.3, 0.0, F0, layer_over=False)[3] == lobes.LAYER_ADDED
 
 
-def test_partly_metallic_surfaces_split_energy():
-    """Half metal: half of the base colour goes to the glossy lobe; the dielectric half splits by
-    F0, so a white surface reflects all of the light whatever the mix."""
-    diffuse, metal, dielectric = lobes.principled_weights(0.8, 0.5, F0)
-    assert (diffuse, metal, dielectric) == pytest.approx((0.48, 0.5, 0.02))
-    assert diffuse + metal + dielectric == pytest.approx(1.0)
-    assert lobes.lobes_from_principled(0.8, 0.5, F0)[0] == lobes.Lobes("phong", 1.0, True)
+def test_partly_metallic_surfaces_have_both_lobes():
+    assert lobes.principled_weights(0.8, 0.5, F0) == (0.5, F0, 0.8, lobes.LAYER_OVER)
+    assert lobes.lobes_from_principled(0.8, 0.5, F0)[0] == lobes.Lobes("phong", 1.0, True, True)
+    assert lobes.principled_weights(0.3, 1.7, F0)[0] == 1.0      # inputs clamped to [0, 1]
+
+
+def test_reflected_light_per_lobe():
+    grey = (0.5, 0.5, 0.5)
+    assert lobes.reflected(grey, lobes.DIFFUSE_ONLY) == pytest.approx((0.0, 0.5))
+    assert lobes.reflected(grey, lobes.principled_weights(0.3, 0.0, F0)) == pytest.approx((F0, 0.96 * 0.5))
+    assert lobes.reflected(grey, lobes.principled_weights(0.3, 0.0, F0, layer_over=False)) == \
+        pytest.approx((F0, 0.5))
+    assert lobes.reflected(grey, lobes.principled_weights(0.3, 1.0, F0)) == pytest.approx((0.5, 0.0))
+    assert lobes.reflected((1.0, 0.0, 0.0), lobes.DIFFUSE_ONLY)[1] == pytest.approx(0.2126)
 
 
 def test_the_roughness_threshold_is_half():
@@ -63,7 +70,7 @@ def test_the_roughness_threshold_is_half():
 
 def test_a_bake_record_names_its_lobes():
     assert lobes.Lobes.of_bake({"lobe": "lambert", "exponent": 1.0}) == lobes.Lobes()
-    both = lobes.Lobes.of_bake({"lobe": "phong", "exponent": 8.0, "diffuse_lobe": 1})
-    assert both == lobes.Lobes("phong", 8.0, True)
+    both = lobes.Lobes.of_bake({"lobe": "phong", "exponent": 8.0, "diffuse_lobe": 1, "lobe_weights": 1})
+    assert both == lobes.Lobes("phong", 8.0, True, True)
     assert both.shaded() == [("phong", 8.0), ("lambert", 1.0)]
     assert lobes.Lobes("phong", 8.0).shaded() == [("phong", 8.0)]

@@ -14,16 +14,20 @@ from sd_lighting.utils.shader_variant import BlockField, Variant
 def all_variants():
     for method in methods.METHODS:
         for lobes, per_pixel, target, texture, albedo in itertools.product(
-                ("lambert", "phong", "both"), (False, True), (False, True), (False, True), (False, True)):
+                ("lambert", "phong", "metal", "both"), (False, True), (False, True), (False, True),
+                (False, True)):
             if texture and not method.band_limited_texture:
                 continue
             both = lobes == "both"
+            if lobes != "lambert" and method.lambert_only:
+                continue
             yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
                           18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                           per_pixel, target,
                           shader_variant.band_limited_texture_size(4) if texture else (),
                           material_count=2 if albedo else 0, material_slots=albedo,
-                          albedo_texture=albedo, diffuse_lobe=both,
+                          albedo_texture=albedo, lobe_weights=lobes in ("metal", "both"),
+                          diffuse_lobe=both,
                           diffuse_design_size=12 if both and method.lobe_design else 0)
 
 
@@ -92,24 +96,31 @@ def test_albedo_variants_read_only_what_the_materials_need(sdnative):
 
 def test_a_lambert_lobe_besides_the_phong_one(sdnative):
     """Two lobes: the Lambert lobe's factors and design follow the Phong lobe's in the block, the
-    vertex stage passes its B on, and each slot has its lobe weights."""
+    vertex stage passes its B and n.v on, and each slot has its lobe weights; the vertex target
+    reads no weights."""
     msd_lobe = methods.get("msd_lobe")
     one = Variant(msd_lobe, True, 4, 2, 3, lobe_design_size=18, material_count=2, material_slots=True)
-    two = dataclasses.replace(one, diffuse_lobe=True, diffuse_design_size=12)
+    two = dataclasses.replace(one, lobe_weights=True, diffuse_lobe=True, diffuse_design_size=12)
     defines = two.defines(sdnative.sh_recurrence_constants)
     assert defines["SD_DIFFUSE_LOBE"] == "1" and defines["SD_DIFFUSE_DESIGN_SIZE"] == "12"
-    assert "SD_DIFFUSE_LOBE" not in one.defines(sdnative.sh_recurrence_constants)
+    assert defines["SD_LOBE_WEIGHTS"] == "1"
+    assert not {"SD_DIFFUSE_LOBE", "SD_LOBE_WEIGHTS"} & set(one.defines(sdnative.sh_recurrence_constants))
     rows = {f.name: f.rows for f in two.frame_fields()}
     assert rows["lobe"] == 2 * {f.name: f.rows for f in one.frame_fields()}["lobe"]
     assert rows["design"] == 30 and rows["lobe_weights"] == 2
     assert "lobe_weights" not in [f.name for f in one.frame_fields()]
-    assert ("smooth", "vec3", "sd_diffuse_color") in two.interface()
-    assert ("flat", "vec4", "sd_lobe_weights") in two.interface()
+    assert [m for _, _, m in two.interface()] == ["sd_color", "sd_diffuse_color", "sd_n_dot_v",
+                                                  "sd_albedo", "sd_lobe_weights"]
     per_pixel = dataclasses.replace(two, per_pixel=True)
     assert [m for _, _, m in per_pixel.interface()] == ["sd_origin_offset", "sd_normal", "sd_bary",
                                                         "sd_corners", "sd_albedo", "sd_lobe_weights"]
+    target = dataclasses.replace(two, material_count=0, material_slots=False, vertex_target=True)
+    assert "SD_LOBE_WEIGHTS" not in target.defines(sdnative.sh_recurrence_constants)
+    assert [m for _, _, m in target.interface()] == ["sd_color", "sd_diffuse_color"]
     with pytest.raises(ValueError):
-        Variant(msd_lobe, False, 4, 2, 3, diffuse_lobe=True)
+        Variant(msd_lobe, False, 4, 2, 3, lobe_weights=True)
+    with pytest.raises(ValueError):
+        Variant(msd_lobe, True, 4, 2, 3, diffuse_lobe=True)
 
 
 def test_every_input_and_interface_member_is_one_the_glsl_reads(glsl_source):

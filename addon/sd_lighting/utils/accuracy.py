@@ -103,17 +103,21 @@ class ErrorTable:
     rotation: g R, the environment's rotation into the bake frame (as shade's `rotation`);
     methods: the ids (utils/methods.py) to measure; orders s up to max_order and s' up to
     MAX_VISIBILITY_ORDER; rays: the bake's rays per vertex; stop: returns True to cancel (the
-    measurement then raises InterruptedError)."""
+    measurement then raises InterruptedError); diffuse_share: with a Phong lobe, the share of a
+    Lambert lobe shaded besides it (utils/lobes.Lobes): B and its reference are then the two
+    lobes' sum with these weights."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
-                 max_order, rays, seed=0, stop=None):
+                 max_order, rays, seed=0, stop=None, diffuse_share=0.0):
         self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
         self.max_order = int(max_order)
+        self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
+        if diffuse_share > 0.0:
+            self._lobes.append(("lambert", 1.0, float(diffuse_share)))
         self.methods = tuple(m for m in methods
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
-        views = sample.views if sample.views is not None else sample.normals
-        self._views = views if lobe != "lambert" else None
+        self._views = sample.views if sample.views is not None else sample.normals
         self.reference, error = self._reference(environment, seed, stop)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
@@ -146,13 +150,19 @@ class ErrorTable:
                 raise InterruptedError("cancelled")
             used, local = np.unique(sample.triangles[first:first + REFERENCE_TRIANGLES],
                                     return_inverse=True)
-            views = None if self._views is None else self._views[used]
-            radiance[used], error[used] = self._sd.reference(
+            # a vertex shared with an earlier group is computed again, to the same values
+            parts = [(weight, self._sd.reference(
                 environment, sample.vertices[used], sample.normals[used],
-                local.reshape(-1, 3).astype(np.int32), views=views, rotation=self._rotation,
-                lobe=self.lobe, exponent=self.exponent, samples=REFERENCE_SAMPLES, seed=seed,
-                **sample.occluders)
+                local.reshape(-1, 3).astype(np.int32), views=self._lobe_views(lobe, used),
+                rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
+                seed=seed, **sample.occluders)) for lobe, exponent, weight in self._lobes]
+            radiance[used] = sum(weight * np.asarray(value) for weight, (value, _) in parts)
+            error[used] = np.sqrt(sum((weight * np.asarray(e)) ** 2 for weight, (_, e) in parts))
         return radiance, error
+
+    def _lobe_views(self, lobe, used=slice(None)):
+        """The sampled views a lobe reads (Lambert: none)."""
+        return self._views[used] if lobe != "lambert" else None
 
     def _bake(self, methods, seed, stop):
         arguments = {}
@@ -172,10 +182,11 @@ class ErrorTable:
                 data[key] = np.ascontiguousarray(bake[key][(slice(None),) + tuple(slice(0, n) for n in shape)])
         if method.uses_visibility_order:
             data["visibility_order"] = sv
-        shaded = self._sd.shade(method.id, self._light(s), self._sample.normals, views=self._views,
-                                rotation=self._rotation, lobe=self.lobe, exponent=self.exponent,
-                                **data)
-        return np.maximum(shaded, 0.0)     # displayed radiance is never negative
+        # displayed radiance is never negative, lobe by lobe (the shader's sd_surface)
+        return sum(weight * np.maximum(self._sd.shade(
+            method.id, self._light(s), self._sample.normals, views=self._lobe_views(lobe),
+            rotation=self._rotation, lobe=lobe, exponent=exponent, **data), 0.0)
+            for lobe, exponent, weight in self._lobes)
 
     def error(self, setting):
         """The predicted relative RMS error of a setting (KeyError for one not measured)."""

@@ -91,12 +91,18 @@ class Variant:
     material_count: int = 0       # albedos in the block, one per material slot (0: white, none)
     material_slots: bool = False  # the vertices carry their slot (objects with several)
     albedo_texture: bool = False  # a slot's albedo is an image texture, read through `uv`
-    diffuse_lobe: bool = False    # a Lambert lobe 1 besides the Phong lobe 0 (glossy)
+    lobe_weights: bool = False    # the slots' Principled weights colour the Phong lobe 0 (glossy)
+    diffuse_lobe: bool = False    # a Lambert lobe 1 besides it (lobe_weights)
     diffuse_design_size: int = 0  # nodes of lobe 1's design (methods with lobe_design)
 
     def __post_init__(self):
-        if self.diffuse_lobe and not self.glossy:
-            raise ValueError("a second, Lambert lobe goes with a Phong lobe 0")
+        if (self.lobe_weights and not self.glossy) or (self.diffuse_lobe and not self.lobe_weights):
+            raise ValueError("lobe weights go with a Phong lobe 0, a Lambert lobe 1 with weights")
+
+    @property
+    def weighted(self):
+        """Whether the drawn colour reads the slots' lobe weights (not the vertex target's)."""
+        return self.lobe_weights and self.material_count > 0
 
     @property
     def lobe_count(self):
@@ -158,6 +164,8 @@ class Variant:
                 d["SD_MATERIAL_SLOTS"] = "1"
             if self.albedo_texture:
                 d["SD_ALBEDO_TEXTURE"] = "1"
+            if self.weighted:
+                d["SD_LOBE_WEIGHTS"] = "1"
         return d
 
     def vertex_inputs(self):
@@ -180,10 +188,12 @@ class Variant:
             out = [("smooth", "vec3", "sd_color")]
             if self.diffuse_lobe:
                 out.append(("smooth", "vec3", "sd_diffuse_color"))
+            if self.weighted:
+                out.append(("smooth", "float", "sd_n_dot_v"))
         if self.material_count:
             # a triangle's corners share their slot (utils/corners.py splits vertices between slots)
             out.append(("flat", "vec4", "sd_albedo"))
-            if self.diffuse_lobe:
+            if self.weighted:
                 out.append(("flat", "vec4", "sd_lobe_weights"))
             if self.albedo_texture:
                 out.append(("smooth", "vec2", "sd_uv"))
@@ -220,7 +230,7 @@ class Variant:
         if self.material_count:
             # per slot: linear rgb, and 1 where the albedo is the image texture instead
             fields.append(BlockField("albedo", "vec4", self.material_count))
-            if self.diffuse_lobe:   # per slot: (diffuse, metal, dielectric) of materials.Albedo
+            if self.weighted:   # per slot: utils/lobes.principled_weights
                 fields.append(BlockField("lobe_weights", "vec4", self.material_count))
         return fields
 

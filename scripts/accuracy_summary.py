@@ -104,9 +104,11 @@ def plot(report, averaged, cost, label, name, out):
 
 
 def strip(work, out):
+    """strip.png from the run's images (WORK/strip.npz); without them (the summary made again from
+    the stored JSON) the run's strip.png already in `out`, if any."""
     path = os.path.join(work, "strip.npz")
     if not os.path.isfile(path):
-        return None
+        return "strip.png" if os.path.isfile(os.path.join(out, "strip.png")) else None
     data = np.load(path)
     images = {k[6:]: data[k] for k in data.files if k.startswith("image:")}
     vertex = {k[7:]: data[k] for k in data.files if k.startswith("vertex:")}
@@ -226,6 +228,21 @@ def findings(report, averaged):
                                    LABELS[r["method"]], r["s"], "" if r["s_v"] is None else ", s' = %d" % r["s_v"],
                                    "" if r["rays"] is None else ", %d rays" % r["rays"]) for r in rows})),
                                rows[0]["bake_seconds"], rows[0]["bytes_per_vertex"]))
+    comparison = automatic_against_hand_picked(report)
+    if comparison:
+        def over(key, against):
+            return ratio_text([c["automatic"][key] / c[against][key] for c in comparison if c[against]])
+        better = sum(c["automatic"]["rel_rms"] <= c["fixed"]["rel_rms"] for c in comparison)
+        out.append("- Automatic (2 %% target) against the fixed defaults (%s), against Cycles per vertex over %d "
+                   "scene x HDRI cases: CPU frame cost %s, bake time %s, memory %s; error %s against %s "
+                   "(lower or equal in %d of %d). Against the cheapest hand-picked setting at equal or lower "
+                   "error (found in %d cases): frame cost %s, bake time %s, memory %s." % (
+                       report["recommended"], len(comparison), over("frame_ns", "fixed"),
+                       over("bake_seconds", "fixed"), over("bytes_per_vertex", "fixed"),
+                       ratio_text_percent([c["automatic"]["rel_rms"] for c in comparison]),
+                       ratio_text_percent([c["fixed"]["rel_rms"] for c in comparison]), better,
+                       len(comparison), sum(c["best"] is not None for c in comparison),
+                       over("frame_ns", "best"), over("bake_seconds", "best"), over("bytes_per_vertex", "best")))
     compared = [p for p in report.get("predictions", []) if not p["noise_limited"] and not p["extrapolated"]]
     if compared:
         ratios = [p["ratio"] for p in compared]
@@ -236,6 +253,39 @@ def findings(report, averaged):
                    "1/sqrt(rays) noise model %s; glossy against the front-facing error a user sees %s." % (
                        min(ratios), max(ratios), float(np.median(ratios)), len(compared),
                        ratio_text(extrapolated), ratio_text(front)))
+    return out
+
+
+def frame_costs(report):
+    """{(scene, method, s, s'): median CPU frame ns per vertex over the Monte Carlo grid's Lambert
+    rows} (the frame cost does not depend on the rays or the HDRI)."""
+    groups = defaultdict(list)
+    for row in report["rows"]:
+        if row["reference"] == "monte_carlo" and row["material"] == "lambert" and row.get("frame_ns_per_vertex"):
+            groups[row["scene"], row["method"], row["s"], row.get("s_v")].append(row["frame_ns_per_vertex"])
+    return {key: float(np.median(values)) for key, values in groups.items()}
+
+
+def automatic_against_hand_picked(report):
+    """Per scene and HDRI (against Cycles, per vertex, SH sum): the automatic mode's choice, the
+    fixed defaults (the report's `recommended`) and the cheapest hand-picked Cycles setting at
+    equal or lower error, each with its error and costs. The automatic mode's label is the Cycles
+    setting whose label begins "Automatic". Returns a list of dicts."""
+    costs = frame_costs(report)
+    rows = [r for r in report["rows"] if r["reference"] == "cycles" and r["material"] == "lambert"
+            and r["light"] == "sh" and r["shading"] == "vertex"]
+    out = []
+    for scene, hdri in sorted({(r["scene"], r["hdri"]) for r in rows}):
+        here = [dict(r, frame_ns=costs.get((scene, r["method"], r["s"], r["s_v"]))) for r in rows
+                if r["scene"] == scene and r["hdri"] == hdri]
+        automatic = next((r for r in here if r["setting"].startswith("Automatic")), None)
+        fixed = next((r for r in here if r["setting"] == report["recommended"]), None)
+        if automatic is None or fixed is None or automatic["frame_ns"] is None:
+            continue
+        picked = [r for r in here if r is not automatic and r["frame_ns"] is not None
+                  and r["rel_rms"] <= automatic["rel_rms"]]
+        best = min(picked, key=lambda r: (r["frame_ns"], r["bake_seconds"], r["bytes_per_vertex"])) if picked else None
+        out.append({"scene": scene, "hdri": hdri, "automatic": automatic, "fixed": fixed, "best": best})
     return out
 
 
@@ -360,6 +410,22 @@ def markdown(report, averaged, plots, strip_file):
                 row["scene"], row["hdri"], row["setting"] if row["material"] == "lambert" else row["material"],
                 row["s"], row["shading"], row["light"], percent(row["rel_rms"]), percent(row["p99"]),
                 percent(row["reference_se"]), row["bake_seconds"]))
+
+    comparison = automatic_against_hand_picked(report)
+    if comparison:
+        def cell(row):
+            return "%s: %s, %.0f ns, %.2f s, %d B" % (
+                setting(row), percent(row["rel_rms"]), row["frame_ns"], row["bake_seconds"], row["bytes_per_vertex"])
+        lines += ["", "## Automatic against hand-picked settings (issue 10)", "",
+                  "Against Cycles, per vertex: the automatic mode's choice, the fixed defaults (%s) and the "
+                  "cheapest of the hand-picked settings above whose error is equal or lower (CPU frame cost "
+                  "from the grid, then bake time and memory); each as setting: error, frame ns per vertex, bake "
+                  "seconds, bytes per vertex." % report["recommended"], "",
+                  "| scene | HDRI | automatic | fixed defaults | cheapest hand-picked at equal error |",
+                  "|---|---|---|---|---|"]
+        for c in comparison:
+            lines.append("| %s | %s | %s | %s | %s |" % (c["scene"], c["hdri"], cell(c["automatic"]), cell(c["fixed"]),
+                                                     cell(c["best"]) if c["best"] else "none as accurate"))
 
     lines += ["", "## Plots", ""]
     lines += ["![%s](%s)" % (p, p) for p in plots]

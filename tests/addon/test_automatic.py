@@ -177,12 +177,19 @@ def test_a_soft_sky_gets_a_lower_order_than_a_sunny_one(sdnative):
     assert soft.setting.light_order < sunny.setting.light_order
 
 
-def test_an_unreachable_target_takes_the_most_accurate_setting_and_says_so(sdnative, forest):
+def test_an_unreachable_target_takes_the_cheapest_setting_near_the_most_accurate(sdnative, forest):
     errors = table(sdnative, forest, ids=["unshadowed"], max_order=2)
     choice = choose(sdnative, errors, target=1e-4)
     assert not choice.met_target
     assert choice.setting.light_order == 2
     assert "no setting reaches" in choice.reasons[1]
+    # a plastic's error creeps down from s = 3 on (about 6.4, 6.2 %): s = 3 is as good as s = 4
+    errors = table(sdnative, forest, lobe="phong", exponent=60.0, ids=["unshadowed"], max_order=4,
+                   diffuse_share=0.9)
+    at = [errors.error(accuracy.Setting("unshadowed", s, 0, 256)) for s in range(5)]
+    near = [s for s in range(5) if at[s] <= automatic.NEAR_BEST * min(at)]
+    assert near[0] < 4 == int(np.argmin(at))
+    assert choose(sdnative, errors, target=1e-4).setting.light_order == near[0]
 
 
 def test_an_override_is_kept_and_the_rest_still_chosen(sdnative, forest):

@@ -243,6 +243,15 @@ def findings(report, averaged):
                        ratio_text_percent([c["fixed"]["rel_rms"] for c in comparison]), better,
                        len(comparison), sum(c["best"] is not None for c in comparison),
                        over("frame_ns", "best"), over("bake_seconds", "best"), over("bytes_per_vertex", "best")))
+    graded = [c for c in comparison if c["grid"]]
+    if graded:
+        out.append("- Over the whole grid (against the Monte Carlo reference, the automatic choice's setting at "
+                   "the nearest grid rays at or below its own): the cheapest setting at equal or lower error has "
+                   "%s of the automatic choice's CPU frame cost (%d of %d scene x HDRI cases: the same frame cost "
+                   "or more)." % (ratio_text([c["grid"]["best"]["frame_ns_per_vertex"] /
+                                                c["grid"]["automatic"]["frame_ns_per_vertex"] for c in graded]),
+                                  sum(c["grid"]["best"]["frame_ns_per_vertex"] >=
+                                      c["grid"]["automatic"]["frame_ns_per_vertex"] for c in graded), len(graded)))
     compared = [p for p in report.get("predictions", []) if not p["noise_limited"] and not p["extrapolated"]]
     if compared:
         ratios = [p["ratio"] for p in compared]
@@ -285,8 +294,33 @@ def automatic_against_hand_picked(report):
         picked = [r for r in here if r is not automatic and r["frame_ns"] is not None
                   and r["rel_rms"] <= automatic["rel_rms"]]
         best = min(picked, key=lambda r: (r["frame_ns"], r["bake_seconds"], r["bytes_per_vertex"])) if picked else None
-        out.append({"scene": scene, "hdri": hdri, "automatic": automatic, "fixed": fixed, "best": best})
+        out.append({"scene": scene, "hdri": hdri, "automatic": automatic, "fixed": fixed, "best": best,
+                    "grid": grid_at_equal_error(report, automatic)})
     return out
+
+
+def grid_at_equal_error(report, automatic):
+    """The automatic choice against the whole Monte Carlo grid (Lambert, same scene and HDRI): its
+    setting's grid row at the largest grid ray count not above its own (so an error at least its
+    own: the comparison favours the hand-picked side), and the cheapest grid setting (frame cost,
+    then bake time, memory) with an error no larger. None when the grid lacks the setting."""
+    grid = [r for r in report["rows"] if r["reference"] == "monte_carlo" and r["material"] == "lambert"
+            and r["scene"] == automatic["scene"] and r["hdri"] == automatic["hdri"] and r.get("frame_ns_per_vertex")]
+    rays = automatic["rays"]
+    below = [n for n in report["config"]["rays"] if rays is None or n <= rays]
+    same = [r for r in grid if (r["method"], r["s"], r.get("s_v")) == (automatic["method"], automatic["s"], automatic["s_v"])
+            and (r["rays"] is None or r["rays"] == max(below, default=None))]
+    if not same:
+        return None
+    proxy = same[0]
+    best = min((r for r in grid if r["rel_rms"] <= proxy["rel_rms"]),
+               key=lambda r: (r["frame_ns_per_vertex"], r["bake_seconds"], r["bytes_per_vertex"]))
+    return {"automatic": proxy, "best": best}
+
+
+def grid_cell(row):
+    return "%s: %s, %.0f ns, %.2f s, %d B" % (setting(row), percent(row["rel_rms"]), row["frame_ns_per_vertex"],
+                                            row["bake_seconds"], row["bytes_per_vertex"])
 
 
 def ratio_text_percent(values):
@@ -426,6 +460,18 @@ def markdown(report, averaged, plots, strip_file):
         for c in comparison:
             lines.append("| %s | %s | %s | %s | %s |" % (c["scene"], c["hdri"], cell(c["automatic"]), cell(c["fixed"]),
                                                      cell(c["best"]) if c["best"] else "none as accurate"))
+        lines += ["", "Over the whole grid (Lambert, against the Monte Carlo reference at the probes): the "
+                  "automatic choice's setting (at the largest grid ray count not above its own, so an error at "
+                  "least its own) and the cheapest grid setting with an error no larger; setting: error, CPU frame "
+                  "ns per vertex, bake seconds, bytes per vertex.", "",
+                  "| scene | HDRI | automatic's setting | cheapest at equal or lower error | frame cost ratio |",
+                  "|---|---|---|---|---|"]
+        for c in comparison:
+            if c["grid"]:
+                a, b = c["grid"]["automatic"], c["grid"]["best"]
+                lines.append("| %s | %s | %s | %s | %.2f |" % (
+                    c["scene"], c["hdri"], grid_cell(a), grid_cell(b),
+                    b["frame_ns_per_vertex"] / a["frame_ns_per_vertex"]))
 
     lines += ["", "## Plots", ""]
     lines += ["![%s](%s)" % (p, p) for p in plots]

@@ -1,10 +1,11 @@
-"""What refinement costs and gives: for each asset and HDRI of test_cycles_parity.py, the preview
-against Cycles (relative RMS over 4 x 4 blocks) with Refine off and at each vertex budget, beside
-the bake's time, vertices and memory - measured in one run, printed as a table with ratios to the
-unrefined bake.
+"""What refinement and least squares cost and give: for each asset and HDRI of
+test_cycles_parity.py, the preview against Cycles (relative RMS over 4 x 4 blocks) with Refine off
+and at each vertex budget, each with Least Squares off and on, beside the bake's time, vertices
+and memory - measured in one run, printed as a table with ratios to the plain bake (neither).
 
     blender -b --factory-startup --python blender_tests/benchmark_refine.py -- --zip Z --out DIR
-        [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 2,4,8]
+        [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 100000,250000]
+        [--least-squares off,on]
 """
 
 import argparse
@@ -24,13 +25,15 @@ def options():
     parser.add_argument("--assets", default=",".join(parity.ASSETS))
     parser.add_argument("--hdris", default=",".join(parity.HDRIS))
     parser.add_argument("--budgets", default="100000,250000,500000")
+    parser.add_argument("--least-squares", default="off,on")
     return parser.parse_known_args(argv)[0]
 
 
 def main():
     args, opts = sdtest.arguments(), options()
     sdtest.install_addon(args.zip)
-    budgets = [int(b) for b in opts.budgets.split(",")]
+    budgets = [int(b) for b in opts.budgets.split(",") if b]
+    fits = [{"off": False, "on": True}[x] for x in opts.least_squares.split(",")]
     rows = []
     for name in opts.assets.split(","):
         scene, obj, texture = parity.build(name)
@@ -41,19 +44,21 @@ def main():
             for budget in [None] + budgets:
                 if budget is not None:
                     scene.sd_lighting.refine_max_vertices = budget
-                image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr")
-                rms = parity.compare(image, theirs)[0]
-                rows.append((name, hdri[:-4], budget, rms, info, noise))
-                print("%s %s budget %s: %.1f %% (Cycles noise %.2f %%), %d vertices, %.2f s, %s"
-                      % (name, hdri, budget, 100 * rms, 100 * noise, info["vertices"], info["seconds"],
-                         info["method"]), flush=True)
-    print("\n| asset | HDRI | refine | error vs Cycles | vertices | bake | bake / unrefined | memory |")
-    print("|---|---|---|---|---|---|---|---|")
-    for name, hdri, budget, rms, info, noise in rows:
-        base = next(r[4] for r in rows if r[0] == name and r[1] == hdri and r[2] is None)
-        print("| %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
-            name, hdri, "off" if budget is None else "max %d vertices" % budget, 100 * rms,
-            info["vertices"], info["seconds"], info["seconds"] / max(base["seconds"], 1e-9),
+                for fit in fits:
+                    image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr", fit)
+                    rms = parity.compare(image, theirs)[0]
+                    seconds = info["seconds"] + info.get("refine_seconds", 0.0)
+                    rows.append((name, hdri[:-4], budget, fit, rms, info, seconds))
+                    print("%s %s budget %s, least squares %s: %.1f %% (Cycles noise %.2f %%), %d vertices, "
+                          "%.2f s, %s" % (name, hdri, budget, fit, 100 * rms, 100 * noise, info["vertices"],
+                                          seconds, info["method"]), flush=True)
+    print("\n| asset | HDRI | refine | least squares | error vs Cycles | vertices | bake | bake / plain | memory |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, hdri, budget, fit, rms, info, seconds in rows:
+        base = next(r[6] for r in rows if r[0] == name and r[1] == hdri and r[2] is None and r[3] == fits[0])
+        print("| %s | %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
+            name, hdri, "off" if budget is None else "max %d vertices" % budget, "on" if fit else "off",
+            100 * rms, info["vertices"], seconds, seconds / max(base, 1e-9),
             info["vertices"] * info["bytes_per_vertex"] / 1e6))
     return 0
 

@@ -327,12 +327,13 @@ def select_only(objects):
 
 
 def bake_settings(scene, method, material, light_order, visibility_order=None, rays=256,
-                  phong_exponent=None, select=(), refine=False):
+                  phong_exponent=None, select=(), refine=False, least_squares=False):
     """Sets what the next bake uses (fixed orders, no automatic s; no refinement unless asked:
-    the baked copy then has the evaluated mesh's vertices) and selects `select`; returns the
-    scene's settings."""
+    the baked copy then has the evaluated mesh's vertices; no least-squares fit unless asked: the
+    vertices keep the values baked at them) and selects `select`; returns the scene's settings."""
     settings = scene.sd_lighting
     settings.refine = refine
+    settings.least_squares = least_squares
     settings.method = method
     settings.material_source = material
     if phong_exponent is not None:
@@ -459,7 +460,6 @@ def cycles_render(scene, path, size, samples=512, seed=1, transparent=True):
     render.filepath = path
     bpy.ops.render.render(write_still=True)
     return load_exr(path)
-
 
 
 def cycles_pair(scene, path_stem, size, samples, block):

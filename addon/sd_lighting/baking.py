@@ -30,7 +30,7 @@ import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
 from .view import View
-from .utils import automatic, corners, lobes, methods, refine, transforms
+from .utils import automatic, corners, least_squares, lobes, methods, refine, transforms
 from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
@@ -286,6 +286,21 @@ class BakeTask:
         self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
                                                 self.settings, stop)
 
+    def bake(self, sd, progress):
+        """sdnative.bake_transfer of the baked copy (any thread), least-squares fitted when the
+        settings ask for it and the method's data can be (utils/least_squares.py). Returns the
+        result dict."""
+        geometry = self.baked
+        points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
+        fitted = self.settings.get("least_squares") and least_squares.applies(
+            methods.get(self.settings["method"]))
+        if fitted:
+            points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
+        result = dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
+        if fitted:
+            result = least_squares.fit(sd, result, geometry.vertices, geometry.triangles)
+        return result
+
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
         (utils/refine.py, recorded in `refinement`) tested against this task's light and
@@ -346,7 +361,8 @@ def bake_settings(scene, obj, env_source):
               "seed": int(settings.seed),
               "environment": env_source.description, "refine": bool(settings.refine),
               "refine_target": float(settings.target_error),
-              "refine_max_vertices": int(settings.refine_max_vertices)}
+              "refine_max_vertices": int(settings.refine_max_vertices),
+              "least_squares": bool(settings.least_squares)}
     if method_id == analysis.AUTOMATIC:
         return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
                     rays=int(fixed.get("rays", settings.rays)))
@@ -560,11 +576,8 @@ class BakeJob:
                 task.refine(sd, progress_in(0.0, halfway))
                 self.refining = False
                 task.refine_seconds = time.perf_counter() - t0
-                geometry = task.baked
                 t0 = time.perf_counter()
-                result = sd.bake_transfer(geometry.vertices, geometry.normals, geometry.triangles,
-                                          progress=progress_in(halfway, 1.0), **task.bake_arguments())
-                result = dict(result)
+                result = task.bake(sd, progress_in(halfway, 1.0))
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
                 fallbacks = len(result["fallback_normals"])

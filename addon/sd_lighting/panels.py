@@ -4,7 +4,7 @@ import bpy
 
 from . import (analysis, baking, drawing, environment, gpu_shading, live_rebake, materials, native,
                operators, prediction)
-from .utils import cost, lobes, methods, ringing
+from .utils import cost, least_squares, lobes, methods, ringing
 
 
 class SD_PT_lighting(bpy.types.Panel):
@@ -70,6 +70,7 @@ class SD_PT_lighting(bpy.types.Panel):
         sub = row.row(align=True)
         sub.enabled = settings.refine
         sub.prop(settings, "refine_max_vertices")
+        box.prop(settings, "least_squares")
         obj = context.active_object
         if obj is not None and obj.type == 'MESH':
             _draw_overrides(box, obj)
@@ -161,6 +162,10 @@ class SD_PT_lighting(bpy.types.Panel):
             col.label(text="Design nodes per vertex: %.1f mean, %d max" % (
                 info.get("design_nodes_mean", 0.0), info.get("design_nodes_max", 0)))
         col.label(text="Baked in %.2f s" % info.get("seconds", 0.0))
+        if info.get("least_squares") and method is not None and method.data is not None:
+            col.label(text="Least squares: fitted to the vertices and face centres"
+                      if least_squares.applies(method) else
+                      "Least squares: not for %s's designs (kept as baked)" % method.label)
         if "unrefined_vertices" in info:
             _draw_refinement(col, info)
         if "automatic" in info:

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from . import baking, native
-from .utils import bake_time
+from .utils import bake_time, least_squares, methods
 
 _predictors = {}          # settings key -> BakeTimePredictor (the latest few)
 _KEPT = 8
@@ -31,7 +31,7 @@ def settings_key(context):
         return None
     names = ("method", "material_source", "phong_exponent", "automatic_orders", "target_error",
              "max_automatic_order", "light_order", "visibility_order", "rays", "environment_source",
-             "environment_path")
+             "environment_path", "least_squares")
     world = scene.world.name if scene.world is not None else ""
     return tuple(getattr(settings, name) for name in names) + (world, meshes)
 
@@ -56,8 +56,17 @@ def sample_jobs(tasks):
         kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
         return kwargs
 
-    return [bake_time.SampleJob(task.geometry.vertices, task.geometry.normals, task.geometry.triangles,
-                                lambda stop, task=task: arguments(task, stop), task)
+    def baked(task):
+        """The mesh the bake traces: with Least Squares (unless an MSD (13) bake is asked for),
+        each triangle split at its centroid (utils/least_squares.py)."""
+        geometry = task.geometry
+        mesh = (geometry.vertices, geometry.normals, geometry.triangles)
+        if task.settings.get("least_squares") and (task.automatic or least_squares.applies(
+                methods.get(task.settings["method"]))):
+            return least_squares.centroid_split(*mesh)
+        return mesh
+
+    return [bake_time.SampleJob(*baked(task), lambda stop, task=task: arguments(task, stop), task)
             for task in tasks]
 
 

@@ -140,6 +140,11 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Before the bake, split the baked copy's triangles where the light between "
                     "their vertices is not linear (a shadow across a large face) by more than the "
                     "target error, up to the vertex budget. The object's own mesh is not changed")
+    least_squares: BoolProperty(
+        name="Least Squares", default=True,
+        description="Fit the baked vertex values so that their interpolation across each face best "
+                    "matches the light at the faces' centres as well as at the vertices (bakes about "
+                    "3x the rays; all methods but MSD (13), whose designs are kept as baked)")
     refine_max_vertices: IntProperty(
         name="Max Vertices", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
         description="Most vertices a refined copy may have (its bake time and memory grow with "

@@ -1,5 +1,6 @@
 // Bindings of the visibility / transfer precompute (sdlighting/visibility.h): bake_transfer,
-// bake_visibility, the ray-direction hook and the BakeCancelled exception.
+// bake_visibility, the ray-direction hook and the BakeCancelled exception; and the least-squares
+// vertex fit of baked values (sdlighting/vertex_fit.h).
 //
 // Arrays are checked here (shapes, dtypes, finiteness) so that bad input raises ValueError naming the
 // argument; the library's std::invalid_argument surfaces as ValueError too. The bake runs without
@@ -8,6 +9,7 @@
 #include "mesh_arrays.h"
 #include "bindings.h"
 #include "sdlighting/spherical_harmonics.h"
+#include "sdlighting/vertex_fit.h"
 #include "sdlighting/visibility.h"
 #include "sdlighting/weighted_design.h"
 
@@ -162,6 +164,59 @@ py::array_t<double> py_vertex_ray_directions(int rays, std::uint64_t seed, py::s
   return points_array(sd::vertex_ray_directions(rays, seed, static_cast<size_t>(vertex)));
 }
 
+// Penalty rows from (R, 4) integer vertices and (R, 4) coefficients.
+std::vector<sd::PenaltyRow> read_penalties(const py::object& vertices, const DoubleArray& coefficients) {
+  using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  const py::array a = py::array::ensure(vertices);
+  if (!a || a.ndim() != 2 || a.shape(1) != 4 || (a.shape(0) > 0 && a.dtype().kind() != 'i' && a.dtype().kind() != 'u')) {
+    value_error("penalty_vertices must be an integer array of shape (R, 4)");
+  }
+  if (coefficients.ndim() != 2 || coefficients.shape(0) != a.shape(0) || coefficients.shape(1) != 4) {
+    value_error("penalty_coefficients must have shape (" + std::to_string(a.shape(0)) + ", 4), got " +
+                shape_string(coefficients));
+  }
+  const IndexArray indices = IndexArray::ensure(a);
+  std::vector<sd::PenaltyRow> rows(static_cast<size_t>(a.shape(0)));
+  for (size_t r = 0; r < rows.size(); ++r) {
+    for (int k = 0; k < 4; ++k) {
+      rows[r].vertices[k] = indices.data()[4 * r + k];
+      rows[r].coefficients[k] = coefficients.data()[4 * r + k];
+    }
+  }
+  return rows;
+}
+
+py::array py_fit_vertex_values(std::int64_t vertex_count, const py::object& sample_triangles,
+                               const DoubleArray& barycentric, const DoubleArray& weights, const DoubleArray& values,
+                               const py::object& penalty_vertices, const DoubleArray& penalty_coefficients,
+                               double smoothness, int threads) {
+  if (vertex_count < 0) value_error("vertex_count must be >= 0, got " + std::to_string(vertex_count));
+  sd::MeshSamples samples;
+  samples.triangles = read_triangles("sample_triangles", sample_triangles);
+  samples.barycentric = read_points("sample_barycentric", barycentric);
+  const size_t count = samples.triangles.size();
+  if (weights.ndim() != 1 || static_cast<size_t>(weights.shape(0)) != count) {
+    value_error("sample_weights must have shape (" + std::to_string(count) + ",), got " + shape_string(weights));
+  }
+  samples.weights.assign(weights.data(), weights.data() + count);
+  if (values.ndim() < 1 || static_cast<size_t>(values.shape(0)) != count) {
+    value_error("values must have shape (" + std::to_string(count) + ", ...), got " + shape_string(values));
+  }
+  std::vector<py::ssize_t> shape(values.shape(), values.shape() + values.ndim());
+  size_t channels = 1;
+  for (size_t k = 1; k < shape.size(); ++k) channels *= static_cast<size_t>(shape[k]);
+  const std::vector<double> flat(values.data(), values.data() + count * channels);
+  const std::vector<sd::PenaltyRow> penalties = read_penalties(penalty_vertices, penalty_coefficients);
+  std::vector<double> fitted;
+  {
+    py::gil_scoped_release release;
+    fitted = sd::fit_vertex_values(static_cast<size_t>(vertex_count), samples, flat, channels, penalties,
+                                   smoothness, threads);
+  }
+  shape[0] = static_cast<py::ssize_t>(vertex_count);
+  return adopt(std::move(fitted), std::move(shape));
+}
+
 }  // namespace
 
 void bind_visibility(py::module_& m) {
@@ -231,6 +286,27 @@ cancelled, RuntimeError naming the vertex if a design cannot be certified. Relea
         R"doc(Visibility V~ of order `order` (s' in [0, MAX_VISIBILITY_ORDER]) for every vertex: the same
 bake as bake_transfer(..., visibility_order=order)["visibility"], shape (N, (order+1)**2). Its
 column 0 is the ambient occlusion. Arguments as for bake_transfer. Releases the GIL.)doc");
+
+  m.def("fit_vertex_values", &py_fit_vertex_values, py::arg("vertex_count"), py::arg("sample_triangles"),
+        py::arg("sample_barycentric"), py::arg("sample_weights"), py::arg("values"),
+        py::arg("penalty_vertices"), py::arg("penalty_coefficients"), py::arg("smoothness") = 0.0,
+        py::arg("threads") = 0,
+        R"doc(Least-squares vertex values (Kavan, Bargteil and Sloan, "Least Squares Vertex Baking", 2011):
+the per-vertex X whose linear interpolation best matches samples spread over the triangles,
+    minimize  sum_s w_s |sum_k b_sk X[t_sk] - F_s|^2 + smoothness * d * sum_r |sum_k c_rk X[v_rk]|^2
+with d the mean diagonal of the first term's normal matrix (so smoothness is relative) and r the
+penalty rows (a regulariser: linear combinations of up to 4 vertices' values that should vanish),
+solved by a sparse Cholesky factorization.
+
+vertex_count: V >= 0.  sample_triangles: (S, 3) integer vertex indices of each sample's triangle
+(a sample at a vertex: any triangle with barycentric coordinates (1, 0, 0)).
+sample_barycentric: (S, 3) finite.  sample_weights: (S,) finite, >= 0 (the area each stands for).
+values: (S, ...) finite: every trailing entry is a channel, fitted independently.
+penalty_vertices: (R, 4) integer vertex indices, penalty_coefficients: (R, 4) finite (0: slot
+unused).  smoothness: >= 0.
+threads: for the channels' solves, 0 = every hardware thread.
+Returns (V, ...) float64. Raises ValueError on bad input, RuntimeError when a vertex (or a part of
+the mesh) has no sample of positive weight to fix its value. Releases the GIL.)doc");
 
   m.def("vertex_ray_directions", &py_vertex_ray_directions, py::arg("rays"), py::arg("seed"), py::arg("vertex"),
         R"doc(The ray directions bake_transfer uses for vertex index `vertex` with this seed: a spherical

@@ -245,3 +245,28 @@ def test_calls_refuse_allocations_beyond_the_budget(sd):
         with pytest.raises(ValueError, match=f"would need .* GB, more than the {budget}"):
             call()
     assert sd.gaunt_coefficients(8, 8, 16)[0].shape[1] == 3  # orders in use stay well inside
+
+
+FIT = {"vertex_count": 3, "sample_triangles": [[0, 1, 2]] * 4,
+       "sample_barycentric": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.2, 0.3, 0.5]],
+       "sample_weights": [1.0] * 4, "values": [[1.0], [2.0], [0.5], [2.0]],
+       "penalty_vertices": np.zeros((0, 4), np.int32), "penalty_coefficients": np.zeros((0, 4))}
+
+
+@pytest.mark.parametrize("change,error,match", [
+    ({"vertex_count": -1}, ValueError, "vertex_count"),
+    ({"sample_triangles": [[0, 1, 5]] * 4}, ValueError, "index 5"),
+    ({"sample_triangles": [[0, 1]] * 4}, ValueError, "sample_triangles"),
+    ({"sample_barycentric": [[NAN, 0.0, 0.0]] * 4}, ValueError, "NaN|finite"),
+    ({"sample_weights": [1.0]}, ValueError, "sample_weights"),
+    ({"sample_weights": [1.0, -2.0, 1.0, 1.0]}, ValueError, "weight"),
+    ({"values": [[1.0], [INF], [1.0], [1.0]]}, ValueError, "finite"),
+    ({"values": [1.0, 2.0, 3.0]}, ValueError, "values"),
+    ({"penalty_vertices": [[0, 1, 0, 0]], "penalty_coefficients": [[1.0, -1.0]]}, ValueError, "penalty_coefficients"),
+    ({"penalty_vertices": [[0, 9, 0, 0]], "penalty_coefficients": [[1.0, -1.0, 0.0, 0.0]]}, ValueError, "index 9"),
+    ({"vertex_count": 4}, RuntimeError, "no sample"),     # vertex 3 is in no sample
+])
+def test_fit_vertex_values(sd, change, error, match):
+    with pytest.raises(error, match=match):
+        sd.fit_vertex_values(**dict(FIT, **change))
+    assert sd.fit_vertex_values(**FIT).shape == (3, 1)

@@ -1,0 +1,128 @@
+"""Least-squares vertex values (issue 8, item 2): the baked per-vertex arrays fitted so that their
+linear interpolation over each triangle best matches samples spread over it, after Kavan, Bargteil
+and Sloan, "Least Squares Vertex Baking" (EGSR 2011); the solve is sdnative.fit_vertex_values
+(a sparse Cholesky factorization, native/include/sdlighting/vertex_fit.h).
+
+The samples: every vertex, and the centroid of every triangle, baked together as one mesh in
+which each triangle is split at its centroid (`centroid_split`: the same surface, so each point's
+rays start off its own faces as a vertex's do). Their weights are the quadrature rule that is exact
+for quadratics over a triangle of area a - a/12 at each corner, 3a/4 at the centroid - so the fit
+minimizes the interpolation's squared error integrated over the surface as far as a quadratic
+signal goes. A light regulariser (SMOOTHNESS, relative to the samples' weight) against banding
+penalizes the jump of the interpolant's gradient across each edge two triangles share
+(`gradient_jumps`): zero for a linear signal, which the fit therefore keeps exactly, and absent
+across hard edges and seams, whose sides are different vertices. The bake traces rays from V + T
+points instead of V (about 3x the rays on a closed mesh).
+
+Which arrays: the linear ones (ambient occlusion, V~, T, M - `FITTED`), so every method but MSD
+(13), whose per-vertex design of V is a positive rule for the vertex's own rays (`applies`). The
+fitted ambient occlusion is clamped to [0, 1]; SH coefficients keep the fit's values (the shading
+clamps B at 0).
+
+Nothing here needs Blender.
+"""
+
+import numpy as np
+
+SMOOTHNESS = 0.01
+FITTED = ("ambient_occlusion", "visibility", "transfer", "product_matrices")
+CENTROID_WEIGHT = 0.75      # of a triangle's area, at its centroid (the rule above)
+CORNER_WEIGHT = 1.0 / 12.0  # at each of its corners
+ANCHOR = 1e-3               # the least weight of a vertex's own sample, of the mean one
+
+
+def applies(method):
+    """Whether a method's baked data are fitted (utils/methods.Method): all but the designs."""
+    return method.data is not None and all(key in FITTED for key in method.data.keys)
+
+
+def centroid_split(vertices, normals, triangles):
+    """(points, normals, triangles): the V vertices followed by the T centroids (their normal the
+    normalised mean of the corners'), and each triangle (a, b, c) as (p, a, b), (p, b, c),
+    (p, c, a) around its centroid p - the same surface, winding kept."""
+    vertices, normals = np.asarray(vertices, np.float64), np.asarray(normals, np.float64)
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    centroids = vertices[triangles].mean(axis=1)
+    mean = normals[triangles].sum(axis=1)
+    length = np.linalg.norm(mean, axis=1, keepdims=True)
+    centroid_normals = np.divide(mean, length, out=np.zeros_like(mean), where=length > 0.0)
+    p = len(vertices) + np.arange(len(triangles))
+    a, b, c = triangles.T
+    split = np.stack([np.stack([p, a, b], 1), np.stack([p, b, c], 1), np.stack([p, c, a], 1)], 1).reshape(-1, 3)
+    return (np.concatenate([vertices, centroids]), np.concatenate([normals, centroid_normals]),
+            split.astype(np.int32))
+
+
+def samples(vertices, triangles):
+    """(sample_triangles, barycentric, weights) of the V vertex samples then the T centroid samples
+    (centroid_split's points), weighted by the rule of the module's doc."""
+    vertices = np.asarray(vertices, np.float64)
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    a, b, c = (vertices[triangles[:, k]] for k in range(3))
+    areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    corner = np.zeros(len(vertices))
+    np.add.at(corner, triangles.ravel(), np.repeat(CORNER_WEIGHT * areas, 3))
+    # a vertex of no face of positive area (loose, or of degenerate faces only) keeps its own value
+    positive = corner[corner > 0.0]
+    corner = np.maximum(corner, ANCHOR * (positive.mean() if len(positive) else 1.0))
+    own = np.repeat(np.arange(len(vertices))[:, None], 3, axis=1)
+    sample_triangles = np.concatenate([own, triangles]).astype(np.int32)
+    barycentric = np.concatenate([np.tile([1.0, 0.0, 0.0], (len(vertices), 1)),
+                                  np.full((len(triangles), 3), 1.0 / 3.0)])
+    return sample_triangles, barycentric, np.concatenate([corner, CENTROID_WEIGHT * areas])
+
+
+def gradient_jumps(vertices, triangles):
+    """The regulariser's rows (vertices (R, 4) int32, coefficients (R, 4)): for each edge (a, b)
+    that exactly two triangles (a, b, c) and (b, a, d) share, the derivative of the interpolant
+    across the edge into each triangle, (x_c - (1 - t) x_a - t x_b) / h with t and h the foot
+    and height of the opposite vertex over the edge, summed over the two sides (zero when the
+    interpolant is one linear function across the edge), times the edge's length (so that the
+    square is of the values' scale)."""
+    vertices = np.asarray(vertices, np.float64)
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    sides = np.concatenate([triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]], triangles[:, [2, 0, 1]]])
+    keys = np.sort(sides[:, :2], axis=1)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    shared = counts[inverse] == 2
+    order = np.argsort(inverse[shared], kind="stable")
+    pairs = sides[shared][order].reshape(-1, 2, 3)       # the two sides of each shared edge
+    a, b = pairs[:, 0, 0], pairs[:, 0, 1]
+    opposite = pairs[:, :, 2]                             # c, d
+    edge = vertices[b] - vertices[a]
+    length2 = np.einsum("ij,ij->i", edge, edge)
+    coefficients = np.zeros((len(pairs), 4))
+    usable = length2 > 0.0
+    for side in range(2):
+        offset = vertices[opposite[:, side]] - vertices[a]
+        t = np.einsum("ij,ij->i", offset, edge) / np.where(usable, length2, 1.0)
+        height = np.linalg.norm(offset - t[:, None] * edge, axis=1)
+        usable &= height > 1e-9 * np.sqrt(length2)
+        inverse_height = 1.0 / np.where(height > 0.0, height, 1.0)
+        coefficients[:, 0] -= (1.0 - t) * inverse_height
+        coefficients[:, 1] -= t * inverse_height
+        coefficients[:, 2 + side] = inverse_height
+    rows = np.stack([a, b, opposite[:, 0], opposite[:, 1]], axis=1)[usable]
+    return rows.astype(np.int32), (coefficients * np.sqrt(length2)[:, None])[usable]
+
+
+def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS):
+    """The bake of centroid_split's mesh (bake_transfer's dict) as a bake of the V vertices: the
+    FITTED arrays least-squares fitted, every other per-point array cut to the vertices' rows."""
+    n = len(vertices)
+    sample_triangles, barycentric, weights = samples(vertices, triangles)
+    penalties = gradient_jumps(vertices, triangles)
+    out = dict(result)
+    for key in FITTED:
+        if key in result:
+            values = np.asarray(result[key], np.float64)
+            out[key] = sd.fit_vertex_values(n, sample_triangles, barycentric, weights, values,
+                                            *penalties, smoothness=smoothness)
+    if "ambient_occlusion" in out:
+        out["ambient_occlusion"] = np.clip(out["ambient_occlusion"], 0.0, 1.0)
+    for key in ("normals", "ray_origins"):
+        out[key] = np.asarray(result[key])[:n]
+    fallbacks = np.asarray(result["fallback_normals"])
+    out["fallback_normals"] = fallbacks[fallbacks < n]
+    return out

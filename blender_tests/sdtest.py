@@ -257,40 +257,39 @@ def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.
     return obj
 
 
+def _material(name, bsdf_type):
+    """A material whose node tree is one new BSDF node of `bsdf_type` feeding the output:
+    (material, the BSDF node)."""
+    material = bpy.data.materials.new(name)
+    use_nodes(material)
+    tree = material.node_tree
+    for node in list(tree.nodes):
+        if node.type != 'OUTPUT_MATERIAL':
+            tree.nodes.remove(node)
+    bsdf = tree.nodes.new(bsdf_type)
+    tree.links.new(bsdf.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    return material, bsdf
+
+
 def diffuse_material(name, colour=(1.0, 1.0, 1.0, 1.0), image=None):
     """A material of one Diffuse BSDF (Lambert in the add-on and in Cycles) of the colour, or of the
     image plugged into its colour. A white one makes the live shading show B itself (an object
     without a material has Blender's default 0.8 grey surface)."""
-    material = bpy.data.materials.new(name)
-    use_nodes(material)
-    tree = material.node_tree
-    for node in list(tree.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            tree.nodes.remove(node)
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    material, diffuse = _material(name, "ShaderNodeBsdfDiffuse")
     diffuse.inputs["Color"].default_value = colour
     if image is not None:
-        texture = tree.nodes.new("ShaderNodeTexImage")
+        texture = material.node_tree.nodes.new("ShaderNodeTexImage")
         texture.image = image
-        tree.links.new(texture.outputs["Color"], diffuse.inputs["Color"])
-    tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+        material.node_tree.links.new(texture.outputs["Color"], diffuse.inputs["Color"])
     return material
 
 
 def principled_material(name, colour=(1.0, 1.0, 1.0, 1.0), roughness=0.5, metallic=0.0):
-    """A material of one Principled BSDF (Blender's default node, other inputs at their
-    defaults)."""
-    material = bpy.data.materials.new(name)
-    use_nodes(material)
-    tree = material.node_tree
-    for node in list(tree.nodes):
-        if node.type != 'OUTPUT_MATERIAL':
-            tree.nodes.remove(node)
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    """A material of one Principled BSDF (its other inputs at their defaults)."""
+    material, bsdf = _material(name, "ShaderNodeBsdfPrincipled")
     bsdf.inputs["Base Color"].default_value = colour
     bsdf.inputs["Roughness"].default_value = roughness
     bsdf.inputs["Metallic"].default_value = metallic
-    tree.links.new(bsdf.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
     return material
 
 

@@ -580,6 +580,9 @@ class BakeJob:
                 result = task.bake(sd, progress_in(halfway, 1.0))
                 result.setdefault("seconds", time.perf_counter() - t0)
                 task.result = result
+                if "least_squares_skipped" in result:
+                    self.warnings.append("%s: least squares skipped, the vertices keep their baked "
+                                         "values (%s)" % (task.object_name, result["least_squares_skipped"]))
                 fallbacks = len(result["fallback_normals"])
                 if fallbacks:
                     self.warnings.append("%d %s of %s had no usable normal; their faces' normal "

@@ -120,3 +120,19 @@ def test_a_fit_follows_the_shadow_between_the_vertices(sdnative):
         interpolated = np.einsum("tsk,tk->ts", barycentric, values[triangles]).ravel()
         return np.sqrt(np.mean((interpolated - truth) ** 2))
     assert error(fitted["ambient_occlusion"]) < 0.8 * error(np.asarray(plain["ambient_occlusion"]))
+
+
+def test_a_singular_fit_keeps_the_baked_values():
+    class Singular:
+        @staticmethod
+        def fit_vertex_values(*args, **kwargs):
+            raise RuntimeError("singular")
+    points, triangles = grid(n=3)
+    baked = {"ambient_occlusion": np.linspace(0.0, 1.0, len(points) + len(triangles)),
+             "normals": np.zeros((len(points) + len(triangles), 3)),
+             "ray_origins": np.zeros((len(points) + len(triangles), 3)),
+             "fallback_normals": np.array([1, len(points) + 2])}
+    out = least_squares.fit(Singular, baked, points, triangles)
+    assert np.array_equal(out["ambient_occlusion"], baked["ambient_occlusion"][:len(points)])
+    assert out["least_squares_skipped"] == "singular" and out["fallback_normals"].tolist() == [1]
+    assert len(out["normals"]) == len(points)

@@ -77,8 +77,9 @@ def gradient_jumps(vertices, triangles):
     that exactly two triangles (a, b, c) and (b, a, d) share, the derivative of the interpolant
     across the edge into each triangle, (x_c - (1 - t) x_a - t x_b) / h with t and h the foot
     and height of the opposite vertex over the edge, summed over the two sides (zero when the
-    interpolant is one linear function across the edge), times the edge's length (so that the
-    square is of the values' scale)."""
+    interpolant is one linear function across the edge), times the smaller height (so that the
+    square is of the values' scale, and a sliver's steep gradient weighs no more than its
+    neighbours')."""
     vertices = np.asarray(vertices, np.float64)
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
     sides = np.concatenate([triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]], triangles[:, [2, 0, 1]]])
@@ -92,33 +93,39 @@ def gradient_jumps(vertices, triangles):
     opposite = pairs[:, :, 2]                             # c, d
     edge = vertices[b] - vertices[a]
     length2 = np.einsum("ij,ij->i", edge, edge)
-    coefficients = np.zeros((len(pairs), 4))
+    coefficients, heights = np.zeros((len(pairs), 4)), np.zeros((len(pairs), 2))
     usable = length2 > 0.0
     for side in range(2):
         offset = vertices[opposite[:, side]] - vertices[a]
         t = np.einsum("ij,ij->i", offset, edge) / np.where(usable, length2, 1.0)
         height = np.linalg.norm(offset - t[:, None] * edge, axis=1)
         usable &= height > 1e-9 * np.sqrt(length2)
+        heights[:, side] = height
         inverse_height = 1.0 / np.where(height > 0.0, height, 1.0)
         coefficients[:, 0] -= (1.0 - t) * inverse_height
         coefficients[:, 1] -= t * inverse_height
         coefficients[:, 2 + side] = inverse_height
     rows = np.stack([a, b, opposite[:, 0], opposite[:, 1]], axis=1)[usable]
-    return rows.astype(np.int32), (coefficients * np.sqrt(length2)[:, None])[usable]
+    return rows.astype(np.int32), (coefficients * heights.min(axis=1)[:, None])[usable]
 
 
 def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS):
     """The bake of centroid_split's mesh (bake_transfer's dict) as a bake of the V vertices: the
-    FITTED arrays least-squares fitted, every other per-point array cut to the vertices' rows."""
+    FITTED arrays least-squares fitted, every other per-point array cut to the vertices' rows.
+    Should the system be singular after all (sdnative's RuntimeError), the vertices keep their
+    baked values and "least_squares_skipped" says why."""
     n = len(vertices)
     sample_triangles, barycentric, weights = samples(vertices, triangles)
     penalties = gradient_jumps(vertices, triangles)
     out = dict(result)
-    for key in FITTED:
-        if key in result:
-            values = np.asarray(result[key], np.float64)
-            out[key] = sd.fit_vertex_values(n, sample_triangles, barycentric, weights, values,
-                                            *penalties, smoothness=smoothness)
+    keys = [key for key in FITTED if key in result]
+    try:
+        out.update({key: sd.fit_vertex_values(n, sample_triangles, barycentric, weights,
+                                               np.asarray(result[key], np.float64), *penalties,
+                                               smoothness=smoothness) for key in keys})
+    except RuntimeError as exc:
+        out.update({key: np.asarray(result[key])[:n] for key in keys})
+        out["least_squares_skipped"] = str(exc)
     if "ambient_occlusion" in out:
         out["ambient_occlusion"] = np.clip(out["ambient_occlusion"], 0.0, 1.0)
     for key in ("normals", "ray_origins"):

@@ -13,6 +13,8 @@
 namespace sd {
 namespace {
 
+constexpr double kSingular = 1e-12;   // a pivot below this share of its diagonal entry is zero
+
 void check_index(const char* what, std::int64_t index, std::size_t vertex_count) {
   if (index < 0 || static_cast<std::uint64_t>(index) >= vertex_count) {
     throw std::invalid_argument(std::string(what) + " index " + std::to_string(index) + " is outside [0, " +
@@ -117,10 +119,15 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
   normal.setFromTriplets(entries.begin(), entries.end());
 
   // A part of the mesh that only penalties reach stays singular (what they leave free is free):
-  // the factorization then has a zero pivot.
+  // the factorization then has a pivot that vanishes against its row's diagonal entry (each
+  // pivot of an LDL^T factorization is at most that entry, the rest being what the row shares).
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> cholesky(normal);
-  const Eigen::VectorXd& pivots = cholesky.vectorD();
-  if (cholesky.info() != Eigen::Success || (pivots.array() <= 1e-12 * pivots.maxCoeff()).any()) {
+  if (cholesky.info() != Eigen::Success) {
+    throw std::runtime_error("the least-squares system of " + std::to_string(vertex_count) +
+                             " vertices could not be factorized");
+  }
+  const Eigen::VectorXd diagonal_entries = cholesky.permutationP() * normal.diagonal();
+  if ((cholesky.vectorD().array() <= kSingular * diagonal_entries.array()).any()) {
     throw std::runtime_error("the least-squares system of " + std::to_string(vertex_count) +
                              " vertices is singular: a part of the mesh has no sample of positive weight");
   }

@@ -16,7 +16,9 @@ A second table compares every method per vertex at --methods-size vertices (100k
 synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs); the MSD
 methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the band-limited
 texture (the band-limited texture option). It ends with MSD (13) and (12), SH and texture,
-as ratios to PRT (8) and PRT (10).
+as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) with the lobes a
+material can ask for - Lambert, Phong (sigma 61, a roughness of 0.3) and both, weighted per pixel as
+from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone.
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
 """
@@ -98,15 +100,20 @@ def synthetic_result(package, method, normals, real_counts, s=4, sv=2, seed=0):
     return result
 
 
-def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility"):
-    """A mesh object carrying a (synthetic) bake of the method, as the bake operator stores it."""
+LAMBERT = {"lobe": "lambert", "exponent": 1.0}
+
+
+def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility",
+                 lobes=LAMBERT):
+    """A mesh object carrying a (synthetic) bake of the method with the lobes (sd_bake's lobe
+    keys), as the bake operator stores it."""
     mesh = package.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
                                        np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
     result = synthetic_result(package, method, normals, real_counts)
     floats = package.attributes.write(mesh, normals, result)
-    mesh["sd_bake"] = {"method": method, "lobe": "lambert", "exponent": 1.0, "light_order": 4,
-                       "visibility_order": 2, "rays": 0, "seed": 0, "floats_per_vertex": floats,
-                       "bake_id": "benchmark-%s-%d" % (method, len(positions))}
+    mesh["sd_bake"] = dict(lobes, method=method, light_order=4, visibility_order=2, rays=0, seed=0,
+                           floats_per_vertex=floats,
+                           bake_id="benchmark-%s-%d-%s" % (method, len(positions), sorted(lobes.items())))
     mesh.use_fake_user = True
     obj = bpy.data.objects.new("Benchmark", mesh)
     scene.collection.objects.link(obj)
@@ -257,6 +264,25 @@ def main():
                 if methods.get(method).band_limited_texture else "")
             print("%-44s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
                                                   t / times["prt_gaunt", False]), flush=True)
+
+        sigma = package.utils.lobes.exponent_from_roughness(0.3)
+        lobe_sets = (("Lambert", LAMBERT), ("Phong", {"lobe": "phong", "exponent": sigma}),
+                     ("Lambert + Phong", {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True,
+                                          "lobe_weights": True, "diffuse_share": 0.9}))
+        print("\nWhat the lobes cost, %d vertices, s = 4, s' = 2, per vertex (Phong sigma %.1f; "
+              "frame ms, and the ratio to Lambert):" % (len(positions), sigma))
+        print("%-28s" % "method" + "".join("%22s" % name for name, _ in lobe_sets))
+        for method in package.utils.methods.METHODS:
+            if method.lambert_only:
+                continue
+            cells = []
+            for _, lobes in lobe_sets:
+                obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id, lobes)
+                cells.append(time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
+                                         opts["frames"]))
+                remove_object(package, obj)
+            print("%-28s" % method.label + "".join("%14.2f (%4.2fx)" % (1e3 * t, t / cells[0]) for t in cells),
+                  flush=True)
     return 0
 
 

@@ -71,9 +71,13 @@ void sd_add_corner(float weight, float corner, vec3 normal, vec3 view, inout vec
 {
   if (weight > 0.0) {
     int p = int(corner + 0.5);
-    rgb += weight * sd_shade(p, normal, view);
 #  ifdef SD_DIFFUSE_LOBE
-    diffuse += weight * sd_shade_diffuse(p, normal);
+    vec3 b0, b1;
+    sd_shade_lobes(p, normal, view, b0, b1);
+    rgb += weight * b0;
+    diffuse += weight * b1;
+#  else
+    rgb += weight * sd_shade(p, normal, view);
 #  endif
   }
 }

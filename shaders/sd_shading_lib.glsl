@@ -22,7 +22,7 @@
  * and:
  *   SD_GLOSSY            Phong lobe around the mirrored view (otherwise Lambert around the normal)
  *   SD_DIFFUSE_LOBE      (with SD_GLOSSY) a Lambert lobe besides the Phong one: lobe 1, read with
- *                        the same per-vertex data (sd_shade_diffuse)
+ *                        the same per-vertex data (sd_shade_lobes)
  *   SD_LIGHT_COUNT       (s+1)^2 environment coefficients
  *   SD_VIS_COUNT         (s'+1)^2 visibility coefficients (methods with V~ or M)
  *   SD_VIS_ORDER         s' (truncated lobe of eq. 13)
@@ -333,10 +333,69 @@ vec3 sd_shade(int p, vec3 normal, vec3 view)
 }
 
 #ifdef SD_DIFFUSE_LOBE
-/* B of the Lambert lobe 1 for vertex p with surface normal `normal`. */
-vec3 sd_shade_diffuse(int p, vec3 normal)
+/* B of lobe 0 (axis a0) and of the Lambert lobe 1 (axis a1) for vertex p. Where a method's work
+ * per vertex does not depend on the lobe, it is done once: PRT (8)'s u_j = sum_i L_i M_ij, PRT
+ * (10)'s L_a V~_b G_abc per Gaunt coefficient, MSD (13)'s L~ at each node; the other methods
+ * evaluate each lobe on its own (their work is the lobe's: its axis' basis, its design). */
+void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
 {
-  return sd_shade_lobe(p, normalize(normal), 1);
+  b0 = vec3(0.0);
+  b1 = vec3(0.0);
+#  if defined(SD_METHOD_PRT_MATRIX)
+  vec3 u[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    u[j] = vec3(0.0);
+  }
+  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
+    vec3 light = sd.light[i].rgb;
+    for (int j = 0; j < SD_VIS_COUNT; j++) {
+      u[j] += light * sd_vertex_coefficient(p, 0, i * SD_VIS_COUNT + j);
+    }
+  }
+  float y0[SD_BASIS_COUNT];
+  float y1[SD_BASIS_COUNT];
+  sd_lobe_basis(a0, 0, y0);
+  sd_lobe_basis(a1, 1, y1);
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    b0 += u[j] * y0[j];
+    b1 += u[j] * y1[j];
+  }
+#  elif defined(SD_METHOD_PRT_GAUNT)
+  float y0[SD_BASIS_COUNT];
+  float y1[SD_BASIS_COUNT];
+  sd_lobe_basis(a0, 0, y0);
+  sd_lobe_basis(a1, 1, y1);
+  float v[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    v[j] = sd_vertex_coefficient(p, 0, j);
+  }
+  for (int e = 0; e < SD_GAUNT_COUNT; e++) {
+    vec4 entry = texelFetch(sd_gaunt, ivec2(e & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), e >> SD_TEXTURE_WIDTH_LOG2), 0);
+    vec3 lv = sd.light[int(entry.x)].rgb * (v[int(entry.y)] * entry.w);
+    int c = int(entry.z);
+    b0 += lv * y0[c];
+    b1 += lv * y1[c];
+  }
+#  elif defined(SD_METHOD_MSD_VISIBILITY)
+  for (int nu = 0; nu < SD_DATA_STRIDE; nu++) {
+    vec4 node = sd_vertex_texel(p, nu);
+    if (node.w <= 0.0) {
+      break;
+    }
+    vec3 light = node.w * sd_light_at(node.xyz);
+    b0 += sd_truncated_lobe(dot(node.xyz, a0), 0) * light;
+    b1 += sd_truncated_lobe(dot(node.xyz, a1), 1) * light;
+  }
+#  else
+  b0 = sd_shade_lobe(p, a0, 0);
+  b1 = sd_shade_lobe(p, a1, 1);
+#  endif
+}
+
+/* sd_shade's B of lobe 0 (b0) and the Lambert lobe's (b1). */
+void sd_shade_lobes(int p, vec3 normal, vec3 view, out vec3 b0, out vec3 b1)
+{
+  sd_shade_pair(p, sd_lobe_axis(normal, view), normalize(normal), b0, b1);
 }
 #endif
 

@@ -70,10 +70,9 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
   using Triplet = Eigen::Triplet<double>;
   const auto n = static_cast<Eigen::Index>(vertex_count);
 
-  // The normal equations of the samples: N = A^T W A, R = A^T W F (A: a sample's barycentric row).
+  // The normal matrix of the samples: N = A^T W A (A: a sample's barycentric row).
   std::vector<Triplet> entries;
   entries.reserve(9 * samples.triangles.size() + 16 * penalties.size());
-  Matrix rhs = Matrix::Zero(n, static_cast<Eigen::Index>(channels));
   std::vector<double> diagonal(vertex_count, 0.0);
   for (std::size_t s = 0; s < samples.triangles.size(); ++s) {
     const double w = samples.weights[s];
@@ -86,9 +85,6 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
         if (b[j] != 0.0) entries.emplace_back(t[i], t[j], w * b[i] * b[j]);
       }
       diagonal[t[i]] += w * b[i] * b[i];
-      for (std::size_t c = 0; c < channels; ++c) {
-        rhs(t[i], static_cast<Eigen::Index>(c)) += w * b[i] * values[s * channels + c];
-      }
     }
   }
   double mean_diagonal = 0.0;
@@ -131,22 +127,32 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
     throw std::runtime_error("the least-squares system of " + std::to_string(vertex_count) +
                              " vertices is singular: a part of the mesh has no sample of positive weight");
   }
-  // The channels are independent right-hand sides of one factorization: solved in blocks in parallel.
+  // The channels are independent right-hand sides R = A^T W F of one factorization: formed and
+  // solved a block of kBlock at a time (the memory beyond the output stays a few blocks' worth,
+  // however many channels), the blocks in parallel.
   constexpr std::size_t kBlock = 8;
-  Matrix solution(n, static_cast<Eigen::Index>(channels));
+  std::vector<double> out(vertex_count * channels);
   const std::size_t blocks = (channels + kBlock - 1) / kBlock;
   parallel_for(blocks, 1, [&](std::size_t begin, std::size_t end) {
     for (std::size_t block = begin; block < end; ++block) {
-      const auto first = static_cast<Eigen::Index>(block * kBlock);
-      const auto width = std::min<Eigen::Index>(kBlock, static_cast<Eigen::Index>(channels) - first);
-      solution.middleCols(first, width) = cholesky.solve(rhs.middleCols(first, width));
+      const std::size_t first = block * kBlock, width = std::min(kBlock, channels - first);
+      Matrix rhs = Matrix::Zero(n, static_cast<Eigen::Index>(width));
+      for (std::size_t s = 0; s < samples.triangles.size(); ++s) {
+        const double w = samples.weights[s];
+        const glm::dvec3& b = samples.barycentric[s];
+        for (int i = 0; i < 3; ++i) {
+          if (w == 0.0 || b[i] == 0.0) continue;
+          for (std::size_t c = 0; c < width; ++c) {
+            rhs(samples.triangles[s][i], static_cast<Eigen::Index>(c)) += w * b[i] * values[s * channels + first + c];
+          }
+        }
+      }
+      const Matrix solution = cholesky.solve(rhs);
+      for (std::size_t v = 0; v < vertex_count; ++v) {
+        for (std::size_t c = 0; c < width; ++c) out[v * channels + first + c] = solution(v, c);
+      }
     }
   }, ParallelOptions(threads));
-
-  std::vector<double> out(vertex_count * channels);
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    for (std::size_t c = 0; c < channels; ++c) out[v * channels + c] = solution(v, c);
-  }
   return out;
 }
 

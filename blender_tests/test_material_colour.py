@@ -195,6 +195,13 @@ def glossy(checks, package, scene, preview, out):
                      "relative RMS %.1f %% (limit %.0f %%, Cycles' noise %.2f %%), bias per channel "
                      "%s %% (limit %.0f %%)" % (100 * error, 100 * limit, 100 * noise,
                                                 np.round(100 * bias, 1), 100 * bias_limit))
+        if metallic == 1.0:   # one glossy lobe with weights; the material turned diffuse since
+            ball.data.materials[0] = sdtest.diffuse_material("Turned diffuse", colour)
+            turned = sdtest.block_averages(preview(name + "_turned_diffuse.exr"), mask, BLOCK)
+            checks.check(turned.mean() > 0.5 * b.mean(),
+                         "a material changed to a Diffuse BSDF after a metal's bake shows its lobe "
+                         "times the colour, not black", "mean %.3f (Cycles' metal %.3f)" % (
+                             turned.mean(), b.mean()))
         if metallic == 0.0:
             sdtest.bake_settings(scene, 'unshadowed', 'PHONG', 12,
                                  phong_exponent=package.utils.lobes.exponent_from_roughness(roughness),

@@ -56,6 +56,10 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
   vec3 rgb = lobe0 * (layer * (mix(vec3(f0), albedo, metal) * ab.x + vec3(ab.y)));
 #  ifdef SD_DIFFUSE_LOBE
   rgb += diffuse * ((1.0 - metal) * (1.0 - over * (f0 * ab.x + ab.y))) * albedo;
+#  else
+  /* A slot without a specular layer under the one glossy lobe (its material changed since the
+   * bake): that lobe times the albedo, as without weights. */
+  rgb += lobe0 * ((1.0 - layer) * albedo);
 #  endif
   return rgb;
 #elif defined(SD_DIFFUSE_LOBE)

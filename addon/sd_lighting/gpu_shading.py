@@ -356,8 +356,8 @@ class ObjectData:
 
     def _use_albedos(self, albedos):
         """The block's albedo and lobe weight rows for the materials' current albedos
-        (materials.object_albedos), switching to the variant they need: none when one lobe's
-        albedos are all white. Returns {field: rows}."""
+        (materials.object_albedos), switching to the variant they need: none for a lobe without
+        weights whose albedos are all white. Returns {field: rows}."""
         if self.variant.vertex_target:
             return {}
         rows = np.zeros((self.slot_count, 4))

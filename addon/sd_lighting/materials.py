@@ -6,11 +6,11 @@ Surface, else the first such node in its tree. Its albedo is the BSDF's base col
 or an Image Texture plugged straight into it (read through the UV map the node's Vector input
 names, or the mesh's active render UV map). A Principled BSDF's metallic, roughness and specular
 inputs split it between a Lambert and a Phong lobe (utils/lobes.py); an object's Phong exponent is
-that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the
-specular layer of a rough dielectric, GGX's shape, colour computed by other nodes, a second image
-texture on one object, another slot's roughness) is approximated, and `Albedo.note` says how. A material without such
-a BSDF uses its viewport colour; a face without a material has Blender's default surface, a 0.8
-grey diffuse (as Cycles renders it).
+that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the specular
+layer of a rough dielectric, GGX's shape, colour computed by other nodes, a second image texture
+on one object, another slot's roughness) is approximated, and `Albedo.note` says how. A material
+without such a BSDF uses its viewport colour; a face without a material has Blender's default
+surface, a 0.8 grey diffuse (as Cycles renders it).
 """
 
 import dataclasses
@@ -162,11 +162,11 @@ def albedo_summary(obj):
 def lobes_from_material(obj):
     """The object's Lobes from its materials, and a line saying why: Lambert when a slot needs a
     diffuse lobe, Phong with the first glossy slot's exponent when one needs a glossy lobe."""
-    albedos = [albedo(slot.material) for slot in getattr(obj, "material_slots", ())
-               if slot.material is not None]
-    if not albedos:
+    slots = list(getattr(obj, "material_slots", ()))
+    if not slots:
         return lobes.Lobes(), "no material -> Lambert"
-    names = [slot.material.name for slot in obj.material_slots if slot.material is not None]
+    albedos = [albedo(slot.material) for slot in slots]   # an empty slot: the diffuse default
+    names = [slot.material.name if slot.material is not None else "an empty slot" for slot in slots]
     glossy = [(a, name) for a, name in zip(albedos, names) if a.bsdf_lobes.lobe == "phong"]
     if not glossy:
         return lobes.Lobes(), "%s: %s" % (names[0], albedos[0].why)

@@ -265,7 +265,8 @@ class BakeTask:
     def choose(self, stop):
         """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
-                                 lobes.Lobes.of_bake(self.settings), stop)
+                                 lobes.Lobes.of_bake(self.settings), stop,
+                                 fitted=bool(self.settings.get("least_squares")))
         per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
             per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),

@@ -202,6 +202,21 @@ def test_an_override_is_kept_and_the_rest_still_chosen(sdnative, forest):
         automatic.choose(errors, 0.02, None, 266, 2, 60.0, fixed={"light_order": 9})
 
 
+def test_a_least_squares_bake_is_costed_at_the_points_it_traces(sdnative, forest):
+    errors = table(sdnative, forest, FLOOR, max_order=4)
+    gaunt = lambda s, sv: cost.gaunt_terms(sdnative, s, sv)  # noqa: E731
+    plain = automatic.choose(errors, 0.02, gaunt, 266, 2, 1e9, fixed={"method": "prt_diffuse"})
+    fitted = automatic.choose(errors, 0.02, gaunt, 266, 2, 1e9, fixed={"method": "prt_diffuse"},
+                              fitted_points=3 * 266)
+    assert fitted.setting == plain.setting
+    assert fitted.bake_seconds == pytest.approx(3.0 * plain.bake_seconds)
+    # MSD (13)'s designs are not fitted: its bake traces the vertices alone
+    designs = {"method": "msd_visibility", "light_order": 2, "visibility_order": 1}
+    assert automatic.choose(errors, 0.02, gaunt, 266, 2, 1e9, fixed=designs, fitted_points=3 * 266
+                            ).bake_seconds == automatic.choose(errors, 0.02, gaunt, 266, 2, 1e9,
+                                                               fixed=designs).bake_seconds
+
+
 def test_a_sparse_mesh_on_screen_is_evaluated_per_pixel():
     """Two triangles of a square seen face on by a camera whose clip space is the square itself
     (view_projection: identity with w = 1): each covers half the screen."""

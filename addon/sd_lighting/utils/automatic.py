@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import accuracy, cost, methods
+from . import accuracy, cost, least_squares, methods
 
 RAYS = (64, 128, 256, 512, 1024, 2048, 4096)
 # Per-vertex shading blends B linearly across a triangle; once a triangle covers more pixels than
@@ -56,11 +56,12 @@ class _Candidate:
         return (self.frame_terms, self.floats, self.bake_seconds)
 
 
-def _candidates(table, gaunt, vertices, threads, fixed):
+def _candidates(table, gaunt, vertices, threads, fixed, fitted_points):
     for method_id in table.methods:
         method = methods.get(method_id)
         if fixed.get("method", method_id) != method_id:
             continue
+        traced = fitted_points if fitted_points and least_squares.applies(method) else vertices
         for s in range(table.max_order + 1):
             visibility_orders = (range(accuracy.MAX_VISIBILITY_ORDER + 1)
                                  if method.uses_visibility_order else (0,))
@@ -74,17 +75,19 @@ def _candidates(table, gaunt, vertices, threads, fixed):
                     setting = accuracy.Setting(method_id, s, sv, rays)
                     yield _Candidate(setting, table.error(setting), method.frame_terms(s, sv, gaunt),
                                      cost.stored_floats(method, s, sv),
-                                     cost.bake_seconds(method, s, sv, rays, vertices, threads))
+                                     cost.bake_seconds(method, s, sv, rays, traced, threads))
 
 
-def choose(table, target_error, gaunt, vertices, threads, bake_budget, fixed=None):
+def choose(table, target_error, gaunt, vertices, threads, bake_budget, fixed=None, fitted_points=None):
     """The Choice for an object from its ErrorTable, among the methods it measured: target_error
     relative RMS; gaunt: s, s' -> Gaunt term count (cost.gaunt_terms); vertices: the object's baked
     vertex count; threads: the bake's cores; bake_budget: seconds a chosen bake may take; fixed:
-    the user's overrides, Setting fields to values (e.g. {"light_order": 6}). Raises ValueError
-    when no measured setting matches the overrides."""
+    the user's overrides, Setting fields to values (e.g. {"light_order": 6}); fitted_points: with
+    Least Squares, the points its bake traces for the methods it fits (utils/least_squares.py:
+    vertices and face centres). Raises ValueError when no measured setting matches the
+    overrides."""
     fixed = dict(fixed or {})
-    candidates = list(_candidates(table, gaunt, vertices, threads, fixed))
+    candidates = list(_candidates(table, gaunt, vertices, threads, fixed, fitted_points))
     if not candidates:
         raise ValueError("no measured setting matches the overrides %s" % fixed)
     affordable = [c for c in candidates if c.bake_seconds <= bake_budget] or candidates

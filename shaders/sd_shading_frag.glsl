@@ -74,15 +74,10 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 void sd_add_corner(float weight, float corner, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse)
 {
   if (weight > 0.0) {
-    int p = int(corner + 0.5);
-#  ifdef SD_DIFFUSE_LOBE
     vec3 b0, b1;
-    sd_shade_lobes(p, normal, view, b0, b1);
+    sd_shade_lobes(int(corner + 0.5), normal, view, b0, b1);
     rgb += weight * b0;
     diffuse += weight * b1;
-#  else
-    rgb += weight * sd_shade(p, normal, view);
-#  endif
   }
 }
 #endif

@@ -22,7 +22,7 @@
  * and:
  *   SD_GLOSSY            Phong lobe around the mirrored view (otherwise Lambert around the normal)
  *   SD_DIFFUSE_LOBE      (with SD_GLOSSY) a Lambert lobe besides the Phong one: lobe 1, read with
- *                        the same per-vertex data (sd_shade_lobes)
+ *                        the same per-vertex data in the same pass (sd_shade_pair)
  *   SD_LIGHT_COUNT       (s+1)^2 environment coefficients
  *   SD_VIS_COUNT         (s'+1)^2 visibility coefficients (methods with V~ or M)
  *   SD_VIS_ORDER         s' (truncated lobe of eq. 13)
@@ -222,13 +222,18 @@ float sd_truncated_lobe(float t, int lobe)
 }
 #endif
 
-/* B of lobe 0 or 1 with axis a (local frame) for vertex p. */
-vec3 sd_shade_lobe(int p, vec3 a, int lobe)
-{
-  vec3 rgb = vec3(0.0);
+/* SD_LOBE1(code): code that only the Lambert lobe 1 needs, compiled with SD_DIFFUSE_LOBE. */
+#ifdef SD_DIFFUSE_LOBE
+#  define SD_LOBE1(code) code
+#else
+#  define SD_LOBE1(code)
+#endif
 
 #if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
-  /* Funk-Hecke: sum_l w_l sum_m L_lm y_lm(a). */
+/* Funk-Hecke: sum_l w_l sum_m L_lm y_lm(a). */
+vec3 sd_unshadowed(vec3 a, int lobe)
+{
+  vec3 rgb = vec3(0.0);
   float y[SD_BASIS_COUNT];
   sd_sh_basis(a, y);
   for (int l = 0; l <= SD_BASIS_ORDER; l++) {
@@ -238,64 +243,25 @@ vec3 sd_shade_lobe(int p, vec3 a, int lobe)
     }
     rgb += sd_lobe_factor(lobe, l) * band;
   }
-#  ifdef SD_METHOD_AMBIENT_OCCLUSION
-  rgb *= sd_vertex_texel(p, 0).x;
-#  endif
+  return rgb;
+}
+#endif
 
-#elif defined(SD_METHOD_PRT_DIFFUSE)
-  /* Eq. (2): one dot product with the transfer vector. */
-  for (int t = 0; t < SD_DATA_STRIDE; t++) {
-    vec4 texel = sd_vertex_texel(p, t);
-    for (int c = 0; c < 4; c++) {
-      int i = 4 * t + c;
-      if (i < SD_LIGHT_COUNT) {
-        rgb += sd.light[i].rgb * texel[c];
-      }
-    }
-  }
-
-#elif defined(SD_METHOD_PRT_MATRIX)
-  /* Eqs. (8)-(9): T_i = sum_j M_ij w_j y_j(a), B = sum_i L_i T_i; M row-major in the texels. */
-  float y[SD_BASIS_COUNT];
-  sd_lobe_basis(a, lobe, y);
-  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
-    float t_i = 0.0;
-    for (int j = 0; j < SD_VIS_COUNT; j++) {
-      t_i += sd_vertex_coefficient(p, 0, i * SD_VIS_COUNT + j) * y[j];
-    }
-    rgb += sd.light[i].rgb * t_i;
-  }
-
-#elif defined(SD_METHOD_PRT_GAUNT)
-  /* Eq. (10): sum over G_abc != 0 of L_a V~_b G_abc w_c y_c(a). */
-  float y[SD_BASIS_COUNT];
-  sd_lobe_basis(a, lobe, y);
-  float v[SD_VIS_COUNT];
-  for (int j = 0; j < SD_VIS_COUNT; j++) {
-    v[j] = sd_vertex_coefficient(p, 0, j);
-  }
-  for (int e = 0; e < SD_GAUNT_COUNT; e++) {
-    vec4 entry = texelFetch(sd_gaunt, ivec2(e & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), e >> SD_TEXTURE_WIDTH_LOG2), 0); /* a, b, c, G */
-    float f = v[int(entry.y)] * entry.w * y[int(entry.z)];
-    rgb += sd.light[int(entry.x)].rgb * f;
-  }
-
-#elif defined(SD_METHOD_MSD_LOBE)
-  /* Eq. (12), Theorem 2.1: the lobe design turned onto the axis, L~ and V~ at its nodes. */
+#ifdef SD_METHOD_MSD_LOBE
+/* Eq. (12), Theorem 2.1: the lobe's design turned onto the axis a, L~ and V~ (coefficients v) at
+ * its nodes. */
+vec3 sd_lobe_design_sum(float v[SD_VIS_COUNT], vec3 a, int lobe)
+{
   vec3 t1, t2;
   sd_frame_around(a, t1, t2);
-  float v[SD_VIS_COUNT];
-  for (int j = 0; j < SD_VIS_COUNT; j++) {
-    v[j] = sd_vertex_coefficient(p, 0, j);
-  }
-  float y[SD_BASIS_COUNT];
-#  ifdef SD_DIFFUSE_LOBE
   int first = (lobe == 0) ? 0 : SD_LOBE_DESIGN_SIZE;
+#  ifdef SD_DIFFUSE_LOBE
   int end = (lobe == 0) ? SD_LOBE_DESIGN_SIZE : SD_LOBE_DESIGN_SIZE + SD_DIFFUSE_DESIGN_SIZE;
 #  else
-  int first = 0;
   int end = SD_LOBE_DESIGN_SIZE;
 #  endif
+  vec3 rgb = vec3(0.0);
+  float y[SD_BASIS_COUNT];
   for (int nu = first; nu < end; nu++) {
     vec4 node = sd.design[nu];
     vec3 x = node.x * t1 + node.y * t2 + node.z * a;
@@ -310,6 +276,82 @@ vec3 sd_shade_lobe(int p, vec3 a, int lobe)
     rgb += (node.w * v_tilde) * sd_light_sum(y);
 #  endif
   }
+  return rgb;
+}
+#endif
+
+/* B of lobe 0 (axis a0, local frame) and, with SD_DIFFUSE_LOBE, of the Lambert lobe 1 (axis a1)
+ * for vertex p; b1 stays zero without it. Where a method's work per vertex does not depend on the
+ * lobe it is done once for both: PRT (8)'s row of M, PRT (10)'s L_a V~_b G_abc, MSD (13)'s L~ at
+ * each node. */
+void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
+{
+  b0 = vec3(0.0);
+  b1 = vec3(0.0);
+
+#if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
+  b0 = sd_unshadowed(a0, 0);
+  SD_LOBE1(b1 = sd_unshadowed(a1, 1);)
+#  ifdef SD_METHOD_AMBIENT_OCCLUSION
+  float ao = sd_vertex_texel(p, 0).x;
+  b0 *= ao;
+  b1 *= ao;
+#  endif
+
+#elif defined(SD_METHOD_PRT_DIFFUSE)
+  /* Eq. (2): one dot product with the transfer vector (Lambert only). */
+  for (int t = 0; t < SD_DATA_STRIDE; t++) {
+    vec4 texel = sd_vertex_texel(p, t);
+    for (int c = 0; c < 4; c++) {
+      int i = 4 * t + c;
+      if (i < SD_LIGHT_COUNT) {
+        b0 += sd.light[i].rgb * texel[c];
+      }
+    }
+  }
+
+#elif defined(SD_METHOD_PRT_MATRIX)
+  /* Eqs. (8)-(9): T_i = sum_j M_ij w_j y_j(a), B = sum_i L_i T_i; M row-major in the texels. */
+  float y0[SD_BASIS_COUNT];
+  sd_lobe_basis(a0, 0, y0);
+  SD_LOBE1(float y1[SD_BASIS_COUNT]; sd_lobe_basis(a1, 1, y1);)
+  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
+    float t0 = 0.0;
+    SD_LOBE1(float t1 = 0.0;)
+    for (int j = 0; j < SD_VIS_COUNT; j++) {
+      float m = sd_vertex_coefficient(p, 0, i * SD_VIS_COUNT + j);
+      t0 += m * y0[j];
+      SD_LOBE1(t1 += m * y1[j];)
+    }
+    b0 += sd.light[i].rgb * t0;
+    SD_LOBE1(b1 += sd.light[i].rgb * t1;)
+  }
+
+#elif defined(SD_METHOD_PRT_GAUNT)
+  /* Eq. (10): sum over G_abc != 0 of L_a V~_b G_abc w_c y_c(a). */
+  float y0[SD_BASIS_COUNT];
+  sd_lobe_basis(a0, 0, y0);
+  SD_LOBE1(float y1[SD_BASIS_COUNT]; sd_lobe_basis(a1, 1, y1);)
+  float v[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    v[j] = sd_vertex_coefficient(p, 0, j);
+  }
+  for (int e = 0; e < SD_GAUNT_COUNT; e++) {
+    vec4 entry = texelFetch(sd_gaunt, ivec2(e & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), e >> SD_TEXTURE_WIDTH_LOG2), 0); /* a, b, c, G */
+    vec3 light = sd.light[int(entry.x)].rgb;
+    float vg = v[int(entry.y)] * entry.w;
+    int c = int(entry.z);
+    b0 += light * (vg * y0[c]);
+    SD_LOBE1(b1 += light * (vg * y1[c]);)
+  }
+
+#elif defined(SD_METHOD_MSD_LOBE)
+  float v[SD_VIS_COUNT];
+  for (int j = 0; j < SD_VIS_COUNT; j++) {
+    v[j] = sd_vertex_coefficient(p, 0, j);
+  }
+  b0 = sd_lobe_design_sum(v, a0, 0);
+  SD_LOBE1(b1 = sd_lobe_design_sum(v, a1, 1);)
 
 #elif defined(SD_METHOD_MSD_VISIBILITY)
   /* Eq. (13), Theorem 2.2: the vertex's design of V, L~ and the truncated lobe at its nodes. */
@@ -318,86 +360,20 @@ vec3 sd_shade_lobe(int p, vec3 a, int lobe)
     if (node.w <= 0.0) {
       break;
     }
-    rgb += (node.w * sd_truncated_lobe(dot(node.xyz, a), lobe)) * sd_light_at(node.xyz);
-  }
-#endif
-
-  return rgb;
-}
-
-/* B of lobe 0 for vertex p seen along `view` (unit, from the surface to the eye) with surface
- * normal `normal`, both in the object's local frame. */
-vec3 sd_shade(int p, vec3 normal, vec3 view)
-{
-  return sd_shade_lobe(p, sd_lobe_axis(normal, view), 0);
-}
-
-#ifdef SD_DIFFUSE_LOBE
-/* B of lobe 0 (axis a0) and of the Lambert lobe 1 (axis a1) for vertex p. Where a method's work
- * per vertex does not depend on the lobe, it is done once: PRT (8)'s u_j = sum_i L_i M_ij, PRT
- * (10)'s L_a V~_b G_abc per Gaunt coefficient, MSD (13)'s L~ at each node; the other methods
- * evaluate each lobe on its own (their work is the lobe's: its axis' basis, its design). */
-void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
-{
-  b0 = vec3(0.0);
-  b1 = vec3(0.0);
-#  if defined(SD_METHOD_PRT_MATRIX)
-  vec3 u[SD_VIS_COUNT];
-  for (int j = 0; j < SD_VIS_COUNT; j++) {
-    u[j] = vec3(0.0);
-  }
-  for (int i = 0; i < SD_LIGHT_COUNT; i++) {
-    vec3 light = sd.light[i].rgb;
-    for (int j = 0; j < SD_VIS_COUNT; j++) {
-      u[j] += light * sd_vertex_coefficient(p, 0, i * SD_VIS_COUNT + j);
-    }
-  }
-  float y0[SD_BASIS_COUNT];
-  float y1[SD_BASIS_COUNT];
-  sd_lobe_basis(a0, 0, y0);
-  sd_lobe_basis(a1, 1, y1);
-  for (int j = 0; j < SD_VIS_COUNT; j++) {
-    b0 += u[j] * y0[j];
-    b1 += u[j] * y1[j];
-  }
-#  elif defined(SD_METHOD_PRT_GAUNT)
-  float y0[SD_BASIS_COUNT];
-  float y1[SD_BASIS_COUNT];
-  sd_lobe_basis(a0, 0, y0);
-  sd_lobe_basis(a1, 1, y1);
-  float v[SD_VIS_COUNT];
-  for (int j = 0; j < SD_VIS_COUNT; j++) {
-    v[j] = sd_vertex_coefficient(p, 0, j);
-  }
-  for (int e = 0; e < SD_GAUNT_COUNT; e++) {
-    vec4 entry = texelFetch(sd_gaunt, ivec2(e & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), e >> SD_TEXTURE_WIDTH_LOG2), 0);
-    vec3 lv = sd.light[int(entry.x)].rgb * (v[int(entry.y)] * entry.w);
-    int c = int(entry.z);
-    b0 += lv * y0[c];
-    b1 += lv * y1[c];
-  }
-#  elif defined(SD_METHOD_MSD_VISIBILITY)
-  for (int nu = 0; nu < SD_DATA_STRIDE; nu++) {
-    vec4 node = sd_vertex_texel(p, nu);
-    if (node.w <= 0.0) {
-      break;
-    }
     vec3 light = node.w * sd_light_at(node.xyz);
     b0 += sd_truncated_lobe(dot(node.xyz, a0), 0) * light;
-    b1 += sd_truncated_lobe(dot(node.xyz, a1), 1) * light;
+    SD_LOBE1(b1 += sd_truncated_lobe(dot(node.xyz, a1), 1) * light;)
   }
-#  else
-  b0 = sd_shade_lobe(p, a0, 0);
-  b1 = sd_shade_lobe(p, a1, 1);
-#  endif
+#endif
 }
 
-/* sd_shade's B of lobe 0 (b0) and the Lambert lobe's (b1). */
+/* B of lobe 0 (b0) and, with SD_DIFFUSE_LOBE, of the Lambert lobe (b1; zero without it) for vertex
+ * p seen along `view` (unit, from the surface to the eye) with surface normal `normal`, both in
+ * the object's local frame. */
 void sd_shade_lobes(int p, vec3 normal, vec3 view, out vec3 b0, out vec3 b1)
 {
   sd_shade_pair(p, sd_lobe_axis(normal, view), normalize(normal), b0, b1);
 }
-#endif
 
 /* Unit direction to the eye, in the object's local frame, from the point `offset` away from the
  * object's origin (in world axes: mat3(sd.model) * pos). sd.camera holds the eye relative to that

@@ -52,13 +52,11 @@ void main()
 #else
   vec3 normal = normalize(nrm);
   vec3 view = sd_view_direction(mat3(sd.model) * pos);
-#  ifdef SD_DIFFUSE_LOBE
   vec3 b0, b1;
   sd_shade_lobes(gl_VertexID, normal, view, b0, b1);
   sd_color = sd.params.x * b0;
+#  ifdef SD_DIFFUSE_LOBE
   sd_diffuse_color = sd.params.x * b1;
-#  else
-  sd_color = sd.params.x * sd_shade(gl_VertexID, normal, view);
 #  endif
 #  ifdef SD_LOBE_WEIGHTS
   sd_n_dot_v = dot(normal, view);

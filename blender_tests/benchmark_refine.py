@@ -2,13 +2,21 @@
 test_cycles_parity.py, the preview against Cycles (relative RMS over 4 x 4 blocks) with Refine off
 and at each vertex budget, each with Least Squares off and on, beside the bake's time, vertices
 and memory - measured in one run, printed as a table with ratios to the plain bake (neither).
+With --without, also the last budget with Least Squares on (the defaults) without each of:
+- `origins`: the ray origins off the walls (sdnative.bake_transfer's offset_origins=False for
+  every bake: each vertex's rays start along its normal, as before the fix);
+- `corners`: corner data (corners.NORMAL_TOLERANCE_DEGREES at 180: one vertex per mesh vertex and
+  material slot, with its corners' mean normal, as on a welded mesh; a file whose vertices are
+  already split at hard edges, as glTF's are, keeps its split).
 
     blender -b --factory-startup --python blender_tests/benchmark_refine.py -- --zip Z --out DIR
         [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 100000,250000]
-        [--least-squares off,on]
+        [--least-squares off,on] [--without origins,corners]
 """
 
 import argparse
+import contextlib
+import functools
 import os
 import sys
 
@@ -26,14 +34,40 @@ def options():
     parser.add_argument("--hdris", default=",".join(parity.HDRIS))
     parser.add_argument("--budgets", default="100000,250000,500000")
     parser.add_argument("--least-squares", default="off,on")
+    parser.add_argument("--without", default="")
     return parser.parse_known_args(argv)[0]
+
+
+@contextlib.contextmanager
+def without(package, fix):
+    """The add-on's bakes without `fix` (the module's doc) while inside."""
+    if fix == "origins":
+        sdnative = package.native.get()
+        saved = sdnative.bake_transfer
+        sdnative.bake_transfer = functools.partial(saved, offset_origins=False)
+        try:
+            yield
+        finally:
+            sdnative.bake_transfer = saved
+    elif fix == "corners":
+        corners = package.utils.corners
+        saved = corners.NORMAL_TOLERANCE_DEGREES
+        corners.NORMAL_TOLERANCE_DEGREES = 180.0
+        try:
+            yield
+        finally:
+            corners.NORMAL_TOLERANCE_DEGREES = saved
+    else:
+        raise ValueError("--without takes origins and corners, not %r" % fix)
 
 
 def main():
     args, opts = sdtest.arguments(), options()
-    sdtest.install_addon(args.zip)
+    package = sdtest.install_addon(args.zip)
     budgets = [int(b) for b in opts.budgets.split(",") if b]
     fits = [{"off": False, "on": True}[x] for x in opts.least_squares.split(",")]
+    runs = [(budget, fit, "") for budget in [None] + budgets for fit in fits]
+    runs += [(budgets[-1] if budgets else None, True, fix) for fix in opts.without.split(",") if fix]
     rows = []
     for name in opts.assets.split(","):
         scene, obj, texture = parity.build(name)
@@ -41,24 +75,25 @@ def main():
             accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
             stem = os.path.join(args.out, "%s_%s" % (name, hdri[:-4]))
             theirs, noise, _ = parity.cycles(scene, stem)
-            for budget in [None] + budgets:
+            for budget, fit, fix in runs:
                 if budget is not None:
                     scene.sd_lighting.refine_max_vertices = budget
-                for fit in fits:
+                with without(package, fix) if fix else contextlib.nullcontext():
                     image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr", fit)
-                    rms = parity.compare(image, theirs)[0]
-                    seconds = info["seconds"] + info.get("refine_seconds", 0.0)
-                    rows.append((name, hdri[:-4], budget, fit, rms, info, seconds))
-                    print("%s %s budget %s, least squares %s: %.1f %% (Cycles noise %.2f %%), %d vertices, "
-                          "%.2f s, %s" % (name, hdri, budget, fit, 100 * rms, 100 * noise, info["vertices"],
-                                          seconds, info["method"]), flush=True)
-    print("\n| asset | HDRI | refine | least squares | error vs Cycles | vertices | bake | bake / plain | memory |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for name, hdri, budget, fit, rms, info, seconds in rows:
-        base = next(r[6] for r in rows if r[0] == name and r[1] == hdri and r[2] is None and r[3] == fits[0])
-        print("| %s | %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
+                rms = parity.compare(image, theirs)[0]
+                seconds = info["seconds"] + info.get("refine_seconds", 0.0)
+                rows.append((name, hdri[:-4], budget, fit, fix, rms, info, seconds))
+                print("%s %s budget %s, least squares %s%s: %.1f %% (Cycles noise %.2f %%), %d vertices, "
+                      "%.2f s, %s" % (name, hdri, budget, fit, ", without " + fix if fix else "", 100 * rms,
+                                      100 * noise, info["vertices"], seconds, info["method"]), flush=True)
+    print("\n| asset | HDRI | refine | least squares | without | error vs Cycles | vertices | bake "
+          "| bake / plain | memory |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, hdri, budget, fit, fix, rms, info, seconds in rows:
+        base = next(r[7] for r in rows if r[:4] == (name, hdri, None, fits[0]) and not r[4])
+        print("| %s | %s | %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
             name, hdri, "off" if budget is None else "max %d vertices" % budget, "on" if fit else "off",
-            100 * rms, info["vertices"], seconds, seconds / max(base, 1e-9),
+            fix or "-", 100 * rms, info["vertices"], seconds, seconds / max(base, 1e-9),
             info["vertices"] * info["bytes_per_vertex"] / 1e6))
     return 0
 

@@ -127,7 +127,8 @@ py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normal
                           int rays, std::uint64_t seed, int visibility_order, const IndexPair& product_orders,
                           int transfer_order, const IndexPair& design_orders,
                           const std::optional<DoubleArray>& occluder_vertices, const py::object& occluder_triangles,
-                          const py::object& progress, int threads, bool return_rays, bool common_rotation) {
+                          const py::object& progress, int threads, bool return_rays, bool common_rotation,
+                          bool offset_origins) {
   sd::TransferOptions options;
   options.rays = rays;
   options.seed = seed;
@@ -138,6 +139,7 @@ py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normal
   options.threads = threads;
   options.record_rays = return_rays;
   options.common_rotation = common_rotation;
+  options.offset_origins = offset_origins;
   return bake_dict(run_bake(vertices, normals, triangles, options, occluder_vertices, occluder_triangles, progress),
                    return_rays);
 }
@@ -230,7 +232,7 @@ void bind_visibility(py::module_& m) {
         py::arg("product_orders") = py::none(), py::arg("transfer_order") = -1,
         py::arg("design_orders") = py::none(), py::arg("occluder_vertices") = py::none(),
         py::arg("occluder_triangles") = py::none(), py::arg("progress") = py::none(), py::arg("threads") = 0,
-        py::arg("return_rays") = false, py::arg("common_rotation") = false,
+        py::arg("return_rays") = false, py::arg("common_rotation") = false, py::arg("offset_origins") = true,
         R"doc(Per-vertex visibility and transfer precompute with Embree (ray casting over the whole sphere).
 
 For vertex p with unit normal n, `rays` rays x_r start at an origin q next to p in free space (off
@@ -267,6 +269,9 @@ return_rays: test hook, adds "ray_visibility" (bool (N, rays), V_r in vertex_ray
 common_rotation: every vertex traces vertex 0's directions (common random numbers), so that
     differences between neighbouring vertices carry no ray noise where their visibility agrees
     (for comparing points, not for a bake to store).
+offset_origins: False starts every vertex's rays as a vertex without faces does, a fixed fraction of
+    the bounding-box diagonal along its normal, not off the walls (for measuring what the offset
+    gains, not for a bake to store).
 
 Returns a dict: "ambient_occlusion" (N,); "visibility" (N, (s'+1)**2); "product_matrices"
 (N, (s+1)**2, (s'+1)**2); "transfer" (N, (s+1)**2); "design_offsets" int64 (N+1,) (vertex i's nodes

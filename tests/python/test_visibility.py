@@ -82,6 +82,25 @@ def test_points_inside_a_closed_box_see_nothing(sd):
     assert np.all(free["ambient_occlusion"] > 0.3)
 
 
+def test_offset_origins_false_starts_rays_along_the_normal(sd):
+    # A cube standing on a floor: a bottom corner's averaged normal points into the floor, so
+    # without the offset into its faces (the benchmarks' baseline) its rays start below the floor
+    # and see the lower half-space (1/2) instead of the upper one less the cube's octant (3/8).
+    v, t = cube(1.0)
+    v[:, 2] += 1.0
+    t = t[:, ::-1]   # wound outwards (cube's faces face in)
+    n = v - v.mean(axis=0)
+    floor_v = np.array([[-50.0, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]])
+    floor_t = np.array([[0, 1, 2], [0, 2, 3]])
+    bottom = v[:, 2] == 0.0
+    for offset, expected in ((True, 0.375), (False, 0.5)):
+        out = sd.bake_transfer(v, n, t, 4096, occluder_vertices=floor_v, occluder_triangles=floor_t,
+                               offset_origins=offset)
+        np.testing.assert_allclose(out["ambient_occlusion"][bottom], expected, atol=1e-2)
+        along_normal = np.cross(out["ray_origins"] - v, n)[bottom]
+        assert np.all(np.abs(along_normal) < 1e-9) == (not offset)
+
+
 def test_outputs_equal_direct_sums_over_the_rays(sd):
     v, n, t = bumpy_sphere(1)
     rays = 300

@@ -69,6 +69,11 @@ struct TransferOptions {
   /// time. false is the benchmarks' baseline. Either way the result depends on the mesh, the
   /// options and the seed only, not on the thread count.
   bool warm_start_designs = true;
+  /// false: every vertex's rays start at p + ηn, η = kFacelessOffset × the bounding-box diagonal
+  /// (the rule of a vertex without faces, and how origins were chosen before they moved into the
+  /// faces: traced_scene.h). For measuring what that move gains (blender_tests/benchmark_refine.py);
+  /// a bake to store keeps true.
+  bool offset_origins = true;
   /// Called from the calling thread only (which then bakes no vertex itself), once before the
   /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
   /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws

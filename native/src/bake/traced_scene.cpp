@@ -90,7 +90,7 @@ std::vector<unsigned> coincident_representatives(const std::vector<glm::dvec3>& 
 
 TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
                          const std::vector<Triangle>& triangles, const OccluderMesh& occluders,
-                         const ParallelOptions& parallel)
+                         const ParallelOptions& parallel, bool offset_origins)
     : centre_(BoundingBox(vertices).centre()) {
   const std::vector<glm::dvec3> points = shifted(vertices, centre_);
   const OccluderMesh shifted_occluders{shifted(occluders.vertices, centre_), occluders.triangles};
@@ -125,7 +125,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       const unsigned r = representative[v];
       fan.assign(fans.triangles.begin() + fans.offsets[r], fans.triangles.begin() + fans.offsets[r + 1]);
       const double floor = kOriginFloat * largest_coordinate(p);
-      if (fan.empty()) {
+      if (fan.empty() || !offset_origins) {
         origins_[v] = p + std::max(faceless, floor) * n;
         continue;
       }

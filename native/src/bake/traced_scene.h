@@ -58,10 +58,11 @@ class TracedScene {
  public:
   /// vertices/unit_normals/triangles: the object (checked by the caller); occluders: other
   /// blocking triangles; parallel: how the origins are found (threads, progress over the vertices,
-  /// cancel). Throws BakeCancelled when cancelled.
+  /// cancel); offset_origins: false gives every vertex the faceless rule
+  /// (TransferOptions::offset_origins). Throws BakeCancelled when cancelled.
   TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
               const std::vector<Triangle>& triangles, const OccluderMesh& occluders,
-              const ParallelOptions& parallel);
+              const ParallelOptions& parallel, bool offset_origins = true);
 
   const EmbreeScene& scene() const { return scene_; }
   /// Vertex v's ray origin in the traced frame (the one scene() is built in).

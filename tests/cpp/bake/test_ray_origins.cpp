@@ -21,10 +21,25 @@ using test::Mesh;
 
 OccluderMesh occluder(const Mesh& m) { return OccluderMesh{m.vertices, m.triangles}; }
 
-std::vector<double> ambient_occlusion(const Mesh& m, const OccluderMesh& occluders = {}) {
+std::vector<double> ambient_occlusion(const Mesh& m, const OccluderMesh& occluders = {}, bool offset_origins = true) {
   TransferOptions options;
   options.rays = kRays;
+  options.offset_origins = offset_origins;
   return bake_transfer(m.vertices, m.normals, m.triangles, options, occluders).ambient_occlusion;
+}
+
+// A floor plate whose vertex 0 lies on the edge x = 0 where wall_at_x0 rises (split: it carries
+// the plate's normal).
+Mesh floor_plate() {
+  Mesh plate;
+  plate.vertices = {{0, 0, 0}, {0, -100, 0}, {100, -100, 0}, {100, 100, 0}, {0, 100, 0}};
+  plate.normals.assign(5, glm::dvec3(0, 0, 1));
+  plate.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}};
+  return plate;
+}
+
+OccluderMesh wall_at_x0() {
+  return {{{0, -100, 0}, {0, 100, 0}, {0, 100, 100}, {0, -100, 100}}, {{0, 1, 2}, {0, 2, 3}}};
 }
 
 TEST(RayOrigins, BoxStandingOnAFloorLeaksNoLightUnderIt) {
@@ -36,15 +51,18 @@ TEST(RayOrigins, BoxStandingOnAFloorLeaksNoLightUnderIt) {
 }
 
 TEST(RayOrigins, SplitVertexAtTheFootOfAWallSeesTheOpenQuarter) {
-  // A floor plate's vertex on the edge where a wall rises (split: it carries the plate's normal).
-  // The open quarter-space x > 0, z > 0 is a quarter of the sphere; p + εn lay in the wall's
-  // plane and read as fully blocked.
-  Mesh plate;
-  plate.vertices = {{0, 0, 0}, {0, -100, 0}, {100, -100, 0}, {100, 100, 0}, {0, 100, 0}};
-  plate.normals.assign(5, glm::dvec3(0, 0, 1));
-  plate.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}};
-  const OccluderMesh wall{{{0, -100, 0}, {0, 100, 0}, {0, 100, 100}, {0, -100, 100}}, {{0, 1, 2}, {0, 2, 3}}};
-  EXPECT_NEAR(ambient_occlusion(plate, wall)[0], 0.25, kFraction);
+  // floor_plate's vertex 0 at the wall's foot: the open quarter-space x > 0, z > 0 is a quarter of
+  // the sphere; p + εn lay in the wall's plane and read as fully blocked.
+  EXPECT_NEAR(ambient_occlusion(floor_plate(), wall_at_x0())[0], 0.25, kFraction);
+}
+
+TEST(RayOrigins, WithoutTheOffsetTheFailuresAboveReturn) {
+  // TransferOptions::offset_origins = false (what benchmark_refine measures the offset against):
+  // p + ηn for every vertex leaks under the box and blocks the open quarter at the wall's foot.
+  const std::vector<double> ao =
+      ambient_occlusion(test::solid_box({0, 0, 0}, {1, 1, 1}), test::ground_quad(1000.0, 0.0), false);
+  for (int corner = 0; corner < 4; ++corner) EXPECT_NEAR(ao[corner], 0.5, kFraction) << "bottom corner " << corner;
+  EXPECT_NEAR(ambient_occlusion(floor_plate(), wall_at_x0(), false)[0], 0.0, kFraction);
 }
 
 TEST(RayOrigins, CornerCopiesOfAFlatShadedBoxAreNeverBlack) {

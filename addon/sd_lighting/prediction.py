@@ -56,17 +56,16 @@ def sample_jobs(tasks):
         kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
         return kwargs
 
-    def baked(task):
-        """The mesh the bake traces: with Least Squares (unless an MSD (13) bake is asked for),
-        each triangle split at its centroid (utils/least_squares.py)."""
+    def traced(task):
+        """The mesh the bake traces (computed in the worker: the corner split, and with Least
+        Squares on a method it fits, each triangle split at its centroid: utils/least_squares.py)."""
         geometry = task.geometry
         mesh = (geometry.vertices, geometry.normals, geometry.triangles)
-        if task.settings.get("least_squares") and (task.automatic or least_squares.applies(
-                methods.get(task.settings["method"]))):
+        if task.settings.get("least_squares") and least_squares.applies(methods.get(task.settings["method"])):
             return least_squares.centroid_split(*mesh)
         return mesh
 
-    return [bake_time.SampleJob(*baked(task), lambda stop, task=task: arguments(task, stop), task)
+    return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task)
             for task in tasks]
 
 

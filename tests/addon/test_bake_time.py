@@ -83,7 +83,7 @@ class FakeNative:
 def test_predictor_recovers_setup_and_per_vertex_time():
     sd = FakeNative()
     vertices, normals, triangles = grid(50)
-    predictor = BakeTimePredictor(sd, [SampleJob(vertices, normals, triangles, {"rays": 64})], threads=1)
+    predictor = BakeTimePredictor(sd, [SampleJob((vertices, normals, triangles), {"rays": 64})], threads=1)
     predictor.start()
     assert predictor.join(30)
     predicted = predictor.prediction()
@@ -97,7 +97,7 @@ def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
     sd = FakeNative()
     sd.gate.clear()
     vertices, normals, triangles = grid(30)
-    jobs = [SampleJob(vertices, normals, triangles, {}), SampleJob(vertices, normals, triangles, {})]
+    jobs = [SampleJob((vertices, normals, triangles), {}), SampleJob((vertices, normals, triangles), {})]
     predictor = BakeTimePredictor(sd, jobs, threads=1)
     predictor.start()
     time.sleep(0.3)
@@ -115,7 +115,7 @@ def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
 def test_cancel_stops_sampling():
     sd = FakeNative()
     vertices, normals, triangles = grid(30)
-    predictor = BakeTimePredictor(sd, [SampleJob(vertices, normals, triangles, {})], threads=1)
+    predictor = BakeTimePredictor(sd, [SampleJob((vertices, normals, triangles), {})], threads=1)
     predictor.cancel()
     predictor.start()
     predictor.join(30)
@@ -127,7 +127,28 @@ def test_a_failing_sample_reports_why():
         def bake_transfer(self, *args, **kwargs):
             raise ValueError("rays must be in [1, 16777216], got 0")
     vertices, normals, triangles = grid(10)
-    predictor = BakeTimePredictor(Failing(), [SampleJob(vertices, normals, triangles, {})], threads=1)
+    predictor = BakeTimePredictor(Failing(), [SampleJob((vertices, normals, triangles), {})], threads=1)
     predictor.start()
     predictor.join(30)
     assert not predictor.finished and "rays must be" in predictor.error
+
+
+def test_the_mesh_is_made_in_the_worker_after_the_arguments():
+    # The corner and centroid splits of a large mesh take a while: not on Blender's main thread,
+    # and only once the (automatic) settings that decide them are chosen.
+    calls = []
+    vertices, normals, triangles = grid(10)
+
+    def arguments(stop):
+        calls.append(("arguments", threading.current_thread()))
+        return {}
+
+    def mesh():
+        calls.append(("mesh", threading.current_thread()))
+        return vertices, normals, triangles
+    predictor = BakeTimePredictor(FakeNative(), [SampleJob(mesh, arguments)], threads=1)
+    assert predictor.prediction() is None and not calls
+    predictor.start()
+    assert predictor.join(30)
+    assert [name for name, _ in calls] == ["arguments", "mesh"]
+    assert all(thread is not threading.main_thread() for _, thread in calls)

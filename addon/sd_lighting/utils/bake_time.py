@@ -86,17 +86,20 @@ class Prediction:
 
 @dataclass
 class SampleJob:
-    """One object's bake: its mesh, and bake_transfer's keywords (orders, rays, occluders: every
-    other object's triangles) - a dict, or a function of a stop query returning one, called in
-    the worker (the automatic mode chooses the settings there first); `task`: the caller's."""
-    vertices: np.ndarray
-    normals: np.ndarray
-    triangles: np.ndarray
+    """One object's bake: the mesh it traces, (vertices, normals, triangles) or a function
+    returning them; and bake_transfer's keywords (orders, rays, occluders: every other object's
+    triangles), a dict or a function of a stop query returning one. Both functions are called in
+    the worker, the keywords first (the automatic mode chooses the settings there, and they
+    decide the mesh: least squares' centroid split); `task`: the caller's."""
+    mesh: object
     bake_arguments: object
     task: object = None
 
     def arguments(self, stop):
         return self.bake_arguments(stop) if callable(self.bake_arguments) else self.bake_arguments
+
+    def traced_mesh(self):
+        return self.mesh() if callable(self.mesh) else self.mesh
 
 
 class BakeTimePredictor:
@@ -108,7 +111,7 @@ class BakeTimePredictor:
         self._threads = max(int(threads), 1)
         self._lock = threading.Lock()
         self._estimates = [None] * len(jobs)   # per job: seconds from its finished rounds
-        self._running = None                   # (job index, round start, done, round vertices)
+        self._running = None                   # (job index, vertices, round start, done, round vertices)
         self._cancelled = False
         self._thread = None
         self.finished = False
@@ -131,14 +134,11 @@ class BakeTimePredictor:
         with self._lock:
             estimates = list(self._estimates)
             running = self._running
-        total, bound = 0.0, False
-        for index, job in enumerate(self._jobs):
-            count = len(job.vertices)
-            if estimates[index] is not None:
-                total += estimates[index]
-            elif running is not None and running[0] == index:
-                total += lower_bound(time.perf_counter() - running[1], running[2], self._threads, count)
-                bound = True
+        total = sum(e for e in estimates if e is not None)
+        bound = running is not None and estimates[running[0]] is None
+        if bound:
+            _, count, start, done, _ = running
+            total += lower_bound(time.perf_counter() - start, done, self._threads, count)
         if total == 0.0 and not self.finished:
             return None
         return Prediction(total, self.finished, bound)
@@ -161,25 +161,26 @@ class BakeTimePredictor:
 
     def _sample(self, index, job):
         arguments = job.arguments(lambda: self._cancelled)
+        mesh = job.traced_mesh()
+        count = len(mesh[0])
         rounds = []
         for triangles in ROUNDS:
-            vertices, normals, sample_triangles = sample_mesh(job.vertices, job.normals, job.triangles,
-                                                              triangles, seed=index)
+            vertices, normals, sample_triangles = sample_mesh(*mesh, triangles, seed=index)
             if rounds and extrapolate(rounds, len(vertices)) > SAMPLE_BUDGET:
                 break
             start = time.perf_counter()
             with self._lock:
-                self._running = (index, start, 0, len(vertices))
+                self._running = (index, count, start, 0, len(vertices))
 
             def progress(done, total, start=start):
                 with self._lock:
-                    self._running = (index, start, done, total)
+                    self._running = (index, count, start, done, total)
                 return not self._cancelled
 
             self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
                                    **arguments)
             rounds.append((len(vertices), time.perf_counter() - start))
             with self._lock:
-                self._estimates[index] = extrapolate(rounds, len(job.vertices))
-            if len(vertices) == len(job.vertices):
+                self._estimates[index] = extrapolate(rounds, count)
+            if len(vertices) == count:
                 break

@@ -5,9 +5,10 @@ and memory - measured in one run, printed as a table with ratios to the plain ba
 With --without, also the last budget with Least Squares on (the defaults) without each of:
 - `origins`: the ray origins off the walls (sdnative.bake_transfer's offset_origins=False for
   every bake: each vertex's rays start along its normal, as before the fix);
-- `corners`: corner data (corners.NORMAL_TOLERANCE_DEGREES at 180: one vertex per mesh vertex and
-  material slot, with its corners' mean normal, as on a welded mesh; a file whose vertices are
-  already split at hard edges, as glTF's are, keeps its split).
+- `corners`: corner data (corners.NORMAL_TOLERANCE_DEGREES at 180: the corners of a mesh vertex
+  split only by material slot and albedo UV, each copy with its corners' mean normal, as on a
+  welded mesh; a file whose vertices are already split at hard edges, as glTF's are, keeps its
+  split).
 
     blender -b --factory-startup --python blender_tests/benchmark_refine.py -- --zip Z --out DIR
         [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 100000,250000]
@@ -81,7 +82,7 @@ def main():
                 with without(package, fix) if fix else contextlib.nullcontext():
                     image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr", fit)
                 rms = parity.compare(image, theirs)[0]
-                seconds = info["seconds"] + info.get("refine_seconds", 0.0)
+                seconds = info["seconds"]   # refinement and least squares included
                 rows.append((name, hdri[:-4], budget, fit, fix, rms, info, seconds))
                 print("%s %s budget %s, least squares %s%s: %.1f %% (Cycles noise %.2f %%), %d vertices, "
                       "%.2f s, %s" % (name, hdri, budget, fit, ", without " + fix if fix else "", 100 * rms,

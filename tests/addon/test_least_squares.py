@@ -84,6 +84,16 @@ def test_gradient_jumps_vanish_for_a_linear_signal_and_not_across_a_fold():
     assert len(parted_rows) == len(rows) - 3
 
 
+def test_an_obtuse_sliver_weighs_no_more_than_a_good_triangle():
+    # Edge (0, 1) shared by a right triangle and an obtuse sliver whose apex projects 100 edge
+    # lengths beyond it: the row's coefficients stay of order one.
+    points = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [100.0, -0.01, 0.0]])
+    rows, coefficients = least_squares.gradient_jumps(points, np.array([[0, 1, 2], [1, 0, 3]]))
+    assert len(rows) == 1 and np.abs(coefficients).max() == 1.0
+    linear = 0.4 * points[:, 0] + 2.0 * points[:, 1]
+    assert abs(np.sum(coefficients * linear[rows])) < 1e-12
+
+
 def test_only_the_linear_arrays_are_fitted():
     assert least_squares.applies(methods.get("prt_diffuse"))
     assert least_squares.applies(methods.get("prt_matrix"))
@@ -120,6 +130,29 @@ def test_a_fit_follows_the_shadow_between_the_vertices(sdnative):
         interpolated = np.einsum("tsk,tk->ts", barycentric, values[triangles]).ravel()
         return np.sqrt(np.mean((interpolated - truth) ** 2))
     assert error(fitted["ambient_occlusion"]) < 0.8 * error(np.asarray(plain["ambient_occlusion"]))
+
+
+def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative):
+    # Linear signals come back exactly, each in its own shape, from one factorization.
+    points, triangles = grid(n=4)
+    split_points = least_squares.centroid_split(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)),
+                                                triangles)[0]
+    linear = 0.3 * split_points[:, 0] - 0.2 * split_points[:, 1] + 0.5   # within [0, 1], as AO
+    baked = {"ambient_occlusion": linear, "product_matrices": np.einsum("s,ij->sij", linear, [[1.0, 2.0]] * 3),
+             "normals": split_points, "ray_origins": split_points, "fallback_normals": np.zeros(0, int)}
+    calls = []
+
+    class Counted:
+        @staticmethod
+        def fit_vertex_values(*args, **kwargs):
+            calls.append(args[4].shape)
+            return sdnative.fit_vertex_values(*args, **kwargs)
+    out = least_squares.fit(Counted, baked, points, triangles)
+    assert calls == [(len(split_points), 7)]
+    at_vertices = linear[:len(points)]
+    np.testing.assert_allclose(out["ambient_occlusion"], at_vertices, atol=1e-9)
+    assert out["product_matrices"].shape == (len(points), 3, 2)
+    np.testing.assert_allclose(out["product_matrices"][:, 2, 1], 2.0 * at_vertices, atol=1e-9)
 
 
 def test_a_singular_fit_keeps_the_baked_values():

@@ -16,7 +16,7 @@ import numpy as np
 # corner normals on a smooth face equal the vertex normal exactly; flat faces and sharp edges
 # differ by far more), their slots are equal and their UVs agree to float32 rounding. Read at each
 # split: blender_tests/benchmark_refine.py measures the bake without corner data at 180 degrees
-# (one copy per vertex and slot, with its corners' mean normal, as on a welded mesh).
+# (copies by slot and UV only, each with its corners' mean normal, as on a welded mesh).
 NORMAL_TOLERANCE_DEGREES = 0.6
 _UV_TOLERANCE = 1e-6
 
@@ -53,7 +53,7 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
     normals = np.asarray(corner_normals, dtype=np.float64).reshape(-1, 3)
     if len(normals) != len(loop_vertices):
         raise ValueError("%d corner normals for %d loops" % (len(normals), len(loop_vertices)))
-    cos_tolerance = np.cos(np.radians(NORMAL_TOLERANCE_DEGREES))
+    cos_tolerance = np.cos(np.radians(NORMAL_TOLERANCE_DEGREES)) - 1e-12   # 180: opposite normals too
     lengths = np.linalg.norm(normals, axis=1)
     units = normals / np.where(lengths > 0.0, lengths, 1.0)[:, None]
     slots = None if loop_materials is None else np.asarray(loop_materials, dtype=np.int64)

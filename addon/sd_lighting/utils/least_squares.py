@@ -79,7 +79,8 @@ def gradient_jumps(vertices, triangles):
     and height of the opposite vertex over the edge, summed over the two sides (zero when the
     interpolant is one linear function across the edge), times the smaller height (so that the
     square is of the values' scale, and a sliver's steep gradient weighs no more than its
-    neighbours')."""
+    neighbours'), and divided by its largest coefficient where that exceeds 1 (an obtuse sliver,
+    whose opposite vertex lies far beyond the edge: t >> 1)."""
     vertices = np.asarray(vertices, np.float64)
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
     sides = np.concatenate([triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]], triangles[:, [2, 0, 1]]])
@@ -106,26 +107,34 @@ def gradient_jumps(vertices, triangles):
         coefficients[:, 1] -= t * inverse_height
         coefficients[:, 2 + side] = inverse_height
     rows = np.stack([a, b, opposite[:, 0], opposite[:, 1]], axis=1)[usable]
-    return rows.astype(np.int32), (coefficients * heights.min(axis=1)[:, None])[usable]
+    coefficients *= heights.min(axis=1)[:, None]
+    coefficients /= np.maximum(1.0, np.abs(coefficients).max(axis=1))[:, None]
+    return rows.astype(np.int32), coefficients[usable]
 
 
 def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS):
     """The bake of centroid_split's mesh (bake_transfer's dict) as a bake of the V vertices: the
-    FITTED arrays least-squares fitted, every other per-point array cut to the vertices' rows.
-    Should the system be singular after all (sdnative's RuntimeError), the vertices keep their
-    baked values and "least_squares_skipped" says why."""
+    FITTED arrays least-squares fitted (as the channels of one system: one factorization), the
+    per-point normals, ray origins and fallback normals cut to the vertices. Should the system be
+    singular after all (sdnative's RuntimeError), the vertices keep their baked values and
+    "least_squares_skipped" says why."""
     n = len(vertices)
     sample_triangles, barycentric, weights = samples(vertices, triangles)
     penalties = gradient_jumps(vertices, triangles)
     out = dict(result)
     keys = [key for key in FITTED if key in result]
+    arrays = [np.asarray(result[key], np.float64) for key in keys]
+    columns = np.cumsum([0] + [a[0].size for a in arrays])
     try:
-        out.update({key: sd.fit_vertex_values(n, sample_triangles, barycentric, weights,
-                                               np.asarray(result[key], np.float64), *penalties,
-                                               smoothness=smoothness) for key in keys})
+        fitted = sd.fit_vertex_values(n, sample_triangles, barycentric, weights,
+                                      np.concatenate([a.reshape(len(a), -1) for a in arrays], axis=1),
+                                      *penalties, smoothness=smoothness)
+        parts = [fitted[:, start:end].reshape((n,) + a.shape[1:])
+                 for a, start, end in zip(arrays, columns[:-1], columns[1:])]
     except RuntimeError as exc:
-        out.update({key: np.asarray(result[key])[:n] for key in keys})
+        parts = [a[:n] for a in arrays]
         out["least_squares_skipped"] = str(exc)
+    out.update(zip(keys, parts))
     if "ambient_occlusion" in out:
         out["ambient_occlusion"] = np.clip(out["ambient_occlusion"], 0.0, 1.0)
     for key in ("normals", "ray_origins"):

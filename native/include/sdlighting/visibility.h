@@ -69,9 +69,9 @@ struct TransferOptions {
   /// time. false is the benchmarks' baseline. Either way the result depends on the mesh, the
   /// options and the seed only, not on the thread count.
   bool warm_start_designs = true;
-  /// false: every vertex's rays start at p + ηn, η = kFacelessOffset × the bounding-box diagonal
-  /// (the rule of a vertex without faces, and how origins were chosen before they moved into the
-  /// faces: traced_scene.h). For measuring what that move gains (blender_tests/benchmark_refine.py);
+  /// false: every vertex's rays start at p + ηn as a vertex without faces' do (traced_scene.h:
+  /// a fixed fraction of the bounding-box diagonal, above float rounding), which is how origins
+  /// were chosen before they moved into the faces. For measuring what that move gains (blender_tests/benchmark_refine.py);
   /// a bake to store keeps true.
   bool offset_origins = true;
   /// Called from the calling thread only (which then bakes no vertex itself), once before the

@@ -172,7 +172,27 @@ def main():
     facets.hide_set(True)
     facets.hide_render = True
     glossy(checks, package, scene, preview, args.out)
+    left_out(checks, package)
     return checks.summary()
+
+
+def left_out(checks, package):
+    """The panel's note names the Principled layers and node-driven inputs the lobes leave out,
+    by their names in this Blender version (3.x: Clearcoat, Transmission; 4.x: Coat Weight, ...)."""
+    material = sdtest.principled_material("Layered", roughness=0.3)
+    plain = package.materials.albedo(material).note
+    checks.check("left out" not in plain and "opaque" not in plain,
+                 "a default Principled BSDF leaves nothing out", repr(plain))
+    bsdf = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    for names, value in ((("Coat Weight", "Clearcoat"), 0.5), (("Transmission Weight", "Transmission"), 1.0),
+                         (("Alpha",), 0.5)):
+        bsdf.inputs[next(name for name in names if name in bsdf.inputs)].default_value = value
+    value = material.node_tree.nodes.new("ShaderNodeValue")
+    material.node_tree.links.new(value.outputs[0], bsdf.inputs["Roughness"])
+    note = package.materials.albedo(material).note
+    checks.check(all(part in note for part in ("coat left out", "transmission left out", "shown opaque",
+                                                "Roughness from node")),
+                 "coat, transmission, alpha and a node-driven roughness are noted", repr(note))
 
 
 def glossy(checks, package, scene, preview, out):

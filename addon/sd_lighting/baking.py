@@ -35,6 +35,14 @@ from .utils.bake_data import BAKE, BAKED_MESH, UV
 
 MESH_PREFIX = "SD "
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
+FIT_START = 0.8   # of a least-squares bake's progress: the rays before it, the fit after
+
+
+def _share(progress, start, end):
+    """progress(done, total) moving [start, end] of the caller's progress(done, total)."""
+    def shared(done, total):
+        return progress(start + (end - start) * (done / total if total else 1.0), 1.0)
+    return shared
 
 
 class BakeError(Exception):
@@ -295,12 +303,13 @@ class BakeTask:
         points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
         fitted = self.settings.get("least_squares") and least_squares.applies(
             methods.get(self.settings["method"]))
-        if fitted:
-            points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
-        result = dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
-        if fitted:
-            result = least_squares.fit(sd, result, geometry.vertices, geometry.triangles)
-        return result
+        if not fitted:
+            return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
+        points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
+        result = dict(sd.bake_transfer(points, normals, triangles, progress=_share(progress, 0.0, FIT_START),
+                                       **self.bake_arguments()))
+        return least_squares.fit(sd, result, geometry.vertices, geometry.triangles,
+                                 progress=_share(progress, FIT_START, 1.0))
 
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
@@ -558,13 +567,9 @@ class BakeJob:
                 if self.cancel_requested:
                     raise sd.BakeCancelled("cancelled")
 
-                def progress_in(start, end, index=index):
-                    """progress(done, total) moving this task's share of the bar from start to end."""
-                    def progress(done, total):
-                        part = done / total if total else 1.0
-                        self.fraction = (index + start + (end - start) * part) / count
-                        return not self.cancel_requested
-                    return progress
+                def task_progress(done, total, index=index):
+                    self.fraction = (index + (done / total if total else 1.0)) / count
+                    return not self.cancel_requested
 
                 if task.automatic:
                     self.choosing = True
@@ -574,11 +579,11 @@ class BakeJob:
                 halfway = 0.5 if task.settings.get("refine") else 0.0
                 t0 = time.perf_counter()
                 self.refining = True
-                task.refine(sd, progress_in(0.0, halfway))
+                task.refine(sd, _share(task_progress, 0.0, halfway))
                 self.refining = False
                 task.refine_seconds = time.perf_counter() - t0
                 t0 = time.perf_counter()
-                result = task.bake(sd, progress_in(halfway, 1.0))
+                result = task.bake(sd, _share(task_progress, halfway, 1.0))
                 result["seconds"] = time.perf_counter() - t0   # the least-squares fit included
                 task.result = result
                 if "least_squares_skipped" in result:

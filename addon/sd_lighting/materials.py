@@ -8,7 +8,8 @@ names, or the mesh's active render UV map). A Principled BSDF's metallic, roughn
 inputs split it between a Lambert and a Phong lobe (utils/lobes.py); an object's Phong exponent is
 that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the specular
 layer of a rough dielectric, GGX's shape, colour computed by other nodes, a second image texture
-on one object, another slot's roughness) is approximated, and `Albedo.note` says how. A material
+on one object, another slot's roughness) is approximated, and `Albedo.note` says how; so do the
+layers it leaves out (transmission, coat, sheen, subsurface, emission, alpha). A material
 without such a BSDF uses its viewport colour; a face without a material has Blender's default
 surface, a 0.8 grey diffuse (as Cycles renders it).
 """
@@ -86,6 +87,42 @@ def _dielectric_reflectance(node):
     return lobes.dielectric_reflectance(specular=_input_value(node, "Specular", 0.5))
 
 
+# The Principled BSDF's layers that Lambert + Phong leave out, by the input that turns each on
+# (Blender 4.x's name first, then 3.x's).
+_LEFT_OUT = (("transmission", ("Transmission Weight", "Transmission")),
+             ("coat", ("Coat Weight", "Clearcoat")),
+             ("sheen", ("Sheen Weight", "Sheen")),
+             ("subsurface", ("Subsurface Weight", "Subsurface")))
+
+
+def _first_input(node, names):
+    return next((node.inputs[name] for name in names if node.inputs.get(name) is not None), None)
+
+
+def _left_out(node):
+    """What of a Principled BSDF the lobes do not show: its other layers where they are on (or
+    driven by nodes), emission, alpha below 1, and lobe inputs driven by nodes (their default
+    values are used)."""
+    notes = []
+    for layer, names in _LEFT_OUT:
+        socket = _first_input(node, names)
+        if socket is not None and (socket.is_linked or socket.default_value > 0.0):
+            notes.append("%s left out" % layer)
+    strength = _first_input(node, ("Emission Strength",))
+    colour = _first_input(node, ("Emission Color", "Emission"))
+    if strength is not None and colour is not None and (colour.is_linked or strength.is_linked or (
+            strength.default_value > 0.0 and max(tuple(colour.default_value)[:3]) > 0.0)):
+        notes.append("emission left out")
+    alpha = node.inputs.get("Alpha")
+    if alpha is not None and (alpha.is_linked or alpha.default_value < 1.0):
+        notes.append("shown opaque")
+    for name in ("Metallic", "Roughness", "IOR", "Specular IOR Level", "Specular"):
+        socket = node.inputs.get(name)
+        if socket is not None and socket.is_linked:
+            notes.append("%s from node %s shown as the input's default" % (name, socket.links[0].from_node.name))
+    return notes
+
+
 def _principled(node):
     """(weights, Lobes, why, note) of a Principled BSDF."""
     roughness, metallic = _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0)
@@ -97,7 +134,7 @@ def _principled(node):
         notes.append("specular layer folded into Lambert")
     elif found.lobe == "phong":
         notes.append("GGX shown as Phong")
-    return weights, found, why, notes
+    return weights, found, why, notes + _left_out(node)
 
 
 def albedo(material):

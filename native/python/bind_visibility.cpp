@@ -191,8 +191,9 @@ std::vector<sd::PenaltyRow> read_penalties(const py::object& vertices, const Dou
 py::array py_fit_vertex_values(std::int64_t vertex_count, const py::object& sample_triangles,
                                const DoubleArray& barycentric, const DoubleArray& weights, const DoubleArray& values,
                                const py::object& penalty_vertices, const DoubleArray& penalty_coefficients,
-                               double smoothness, int threads) {
+                               double smoothness, int threads, const py::object& progress) {
   if (vertex_count < 0) value_error("vertex_count must be >= 0, got " + std::to_string(vertex_count));
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) value_error("progress must be callable or None");
   sd::MeshSamples samples;
   samples.triangles = read_triangles("sample_triangles", sample_triangles);
   samples.barycentric = read_points("sample_barycentric", barycentric);
@@ -213,7 +214,7 @@ py::array py_fit_vertex_values(std::int64_t vertex_count, const py::object& samp
   {
     py::gil_scoped_release release;
     fitted = sd::fit_vertex_values(static_cast<size_t>(vertex_count), samples, flat, channels, penalties,
-                                   smoothness, threads);
+                                   smoothness, threads, progress_function(&progress));
   }
   shape[0] = static_cast<py::ssize_t>(vertex_count);
   return adopt(std::move(fitted), std::move(shape));
@@ -295,7 +296,7 @@ column 0 is the ambient occlusion. Arguments as for bake_transfer. Releases the 
   m.def("fit_vertex_values", &py_fit_vertex_values, py::arg("vertex_count"), py::arg("sample_triangles"),
         py::arg("sample_barycentric"), py::arg("sample_weights"), py::arg("values"),
         py::arg("penalty_vertices"), py::arg("penalty_coefficients"), py::arg("smoothness") = 0.0,
-        py::arg("threads") = 0,
+        py::arg("threads") = 0, py::arg("progress") = py::none(),
         R"doc(Least-squares vertex values (Kavan, Bargteil and Sloan, "Least Squares Vertex Baking", 2011):
 the per-vertex X whose linear interpolation best matches samples spread over the triangles,
     minimize  sum_s w_s |sum_k b_sk X[t_sk] - F_s|^2 + smoothness * d * sum_r |sum_k c_rk X[v_rk]|^2
@@ -310,6 +311,9 @@ values: (S, ...) finite: every trailing entry is a channel, fitted independently
 penalty_vertices: (R, 4) integer vertex indices, penalty_coefficients: (R, 4) finite (0: slot
 unused).  smoothness: >= 0.
 threads: for the channels' solves, 0 = every hardware thread.
+progress: None or a callable progress(done, total) over the blocks of channels solved, as
+    bake_transfer's (once with none done before the factorization, which runs uninterrupted);
+    returning False raises BakeCancelled.
 Returns (V, ...) float64. Raises ValueError on bad input, RuntimeError when a vertex (or a part of
 the mesh) has no sample of positive weight to fix its value. Releases the GIL.)doc");
 

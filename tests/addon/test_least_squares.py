@@ -155,6 +155,14 @@ def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative):
     np.testing.assert_allclose(out["product_matrices"][:, 2, 1], 2.0 * at_vertices, atol=1e-9)
 
 
+def test_a_cancel_during_the_fit_is_not_taken_for_a_singular_system(sdnative):
+    points, triangles = grid(n=3)
+    split = least_squares.centroid_split(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), triangles)
+    baked = dict(sdnative.bake_transfer(*split, rays=16))
+    with pytest.raises(sdnative.BakeCancelled):
+        least_squares.fit(sdnative, baked, points, triangles, progress=lambda done, total: False)
+
+
 def test_a_singular_fit_keeps_the_baked_values():
     class Singular:
         @staticmethod

@@ -270,3 +270,13 @@ def test_fit_vertex_values(sd, change, error, match):
     with pytest.raises(error, match=match):
         sd.fit_vertex_values(**dict(FIT, **change))
     assert sd.fit_vertex_values(**FIT).shape == (3, 1)
+
+
+def test_fit_vertex_values_progress_and_cancel(sd):
+    calls = []
+    sd.fit_vertex_values(**FIT, progress=lambda done, total: calls.append((done, total)))
+    assert calls[0] == (0, 1) and calls[-1] == (1, 1)
+    with pytest.raises(sd.BakeCancelled):
+        sd.fit_vertex_values(**FIT, progress=lambda done, total: False)
+    with pytest.raises(ValueError, match="progress"):
+        sd.fit_vertex_values(**FIT, progress=3)

@@ -112,12 +112,12 @@ def gradient_jumps(vertices, triangles):
     return rows.astype(np.int32), coefficients[usable]
 
 
-def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS):
+def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS, progress=None):
     """The bake of centroid_split's mesh (bake_transfer's dict) as a bake of the V vertices: the
     FITTED arrays least-squares fitted (as the channels of one system: one factorization), the
     per-point normals, ray origins and fallback normals cut to the vertices. Should the system be
     singular after all (sdnative's RuntimeError), the vertices keep their baked values and
-    "least_squares_skipped" says why."""
+    "least_squares_skipped" says why. progress: fit_vertex_values' (a cancel raises BakeCancelled)."""
     n = len(vertices)
     sample_triangles, barycentric, weights = samples(vertices, triangles)
     penalties = gradient_jumps(vertices, triangles)
@@ -128,10 +128,12 @@ def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS):
     try:
         fitted = sd.fit_vertex_values(n, sample_triangles, barycentric, weights,
                                       np.concatenate([a.reshape(len(a), -1) for a in arrays], axis=1),
-                                      *penalties, smoothness=smoothness)
+                                      *penalties, smoothness=smoothness, progress=progress)
         parts = [fitted[:, start:end].reshape((n,) + a.shape[1:])
                  for a, start, end in zip(arrays, columns[:-1], columns[1:])]
     except RuntimeError as exc:
+        if isinstance(exc, getattr(sd, "BakeCancelled", ())):   # a RuntimeError too
+            raise
         parts = [a[:n] for a in arrays]
         out["least_squares_skipped"] = str(exc)
     out.update(zip(keys, parts))

@@ -6,12 +6,14 @@
 #pragma once
 
 #include "sdlighting/mesh.h"
+#include "sdlighting/visibility.h"
 
 #include <glm/vec3.hpp>
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace sd {
@@ -39,10 +41,13 @@ struct PenaltyRow {
 /// channels on `threads` threads (0: every hardware thread). Throws std::invalid_argument for
 /// malformed input (indices out of range, non-finite numbers, negative weights or smoothness) and
 /// std::runtime_error when a vertex is reached by no sample of positive weight and no penalty, or
-/// the system is singular.
+/// the system is singular. `progress`, as TransferOptions::progress, counts the blocks of channels
+/// solved (once with none done before the factorization, which cannot be interrupted); returning
+/// false throws BakeCancelled.
 std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples,
                                       const std::vector<double>& values, std::size_t channels,
                                       const std::vector<PenaltyRow>& penalties, double smoothness,
-                                      int threads = 0);
+                                      int threads = 0,
+                                      const std::function<bool(std::size_t done, std::size_t total)>& progress = {});
 
 }  // namespace sd

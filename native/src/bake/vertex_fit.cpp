@@ -63,9 +63,13 @@ void check_input(std::size_t vertex_count, const MeshSamples& samples, const std
 
 std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples,
                                       const std::vector<double>& values, std::size_t channels,
-                                      const std::vector<PenaltyRow>& penalties, double smoothness, int threads) {
+                                      const std::vector<PenaltyRow>& penalties, double smoothness, int threads,
+                                      const std::function<bool(std::size_t, std::size_t)>& progress) {
   check_input(vertex_count, samples, values, channels, penalties, smoothness);
   if (vertex_count == 0 || channels == 0) return std::vector<double>(vertex_count * channels, 0.0);
+  constexpr std::size_t kBlock = 8;  // channels per right-hand side block (see the solve below)
+  const std::size_t blocks = (channels + kBlock - 1) / kBlock;
+  if (progress && !progress(0, blocks)) throw BakeCancelled("the least-squares fit was cancelled");
   using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor>;
   using Triplet = Eigen::Triplet<double>;
   const auto n = static_cast<Eigen::Index>(vertex_count);
@@ -130,10 +134,10 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
   // The channels are independent right-hand sides R = A^T W F of one factorization: formed and
   // solved a block of kBlock at a time (the memory beyond the output stays a few blocks' worth,
   // however many channels), the blocks in parallel.
-  constexpr std::size_t kBlock = 8;
   std::vector<double> out(vertex_count * channels);
-  const std::size_t blocks = (channels + kBlock - 1) / kBlock;
-  parallel_for(blocks, 1, [&](std::size_t begin, std::size_t end) {
+  ParallelOptions parallel(threads);
+  parallel.progress = progress;
+  const ParallelOutcome outcome = parallel_for(blocks, 1, [&](std::size_t begin, std::size_t end) {
     for (std::size_t block = begin; block < end; ++block) {
       const std::size_t first = block * kBlock, width = std::min(kBlock, channels - first);
       Matrix rhs = Matrix::Zero(n, static_cast<Eigen::Index>(width));
@@ -152,7 +156,11 @@ std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSample
         for (std::size_t c = 0; c < width; ++c) out[v * channels + first + c] = solution(v, c);
       }
     }
-  }, ParallelOptions(threads));
+  }, parallel);
+  if (!outcome.completed) {
+    throw BakeCancelled("the least-squares fit was cancelled after " + std::to_string(outcome.done) + " of " +
+                        std::to_string(blocks) + " blocks of channels");
+  }
   return out;
 }
 

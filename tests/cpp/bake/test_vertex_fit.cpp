@@ -132,6 +132,34 @@ TEST(VertexFit, ThreadsChangeNothing) {
             fit_vertex_values(g.points.size(), s, wide, 20, row_differences(g), 0.1, 2));
 }
 
+TEST(VertexFit, ProgressCountsTheBlocksAndCancels) {
+  const Grid g = grid();
+  std::vector<double> values;
+  const MeshSamples s = sample(g, bump, values);
+  std::vector<double> wide;   // 20 channels: 3 blocks
+  for (std::size_t k = 0; k < s.triangles.size(); ++k) {
+    for (int c = 0; c < 20; ++c) wide.push_back(values[2 * k] * (c + 1));
+  }
+  std::vector<std::size_t> seen;
+  const std::vector<double> x = fit_vertex_values(g.points.size(), s, wide, 20, {}, 0.0, 2,
+                                                  [&](std::size_t done, std::size_t total) {
+                                                    EXPECT_EQ(total, 3u);
+                                                    seen.push_back(done);
+                                                    return true;
+                                                  });
+  ASSERT_GE(seen.size(), 2u);
+  EXPECT_EQ(seen.front(), 0u);
+  EXPECT_EQ(seen.back(), 3u);
+  EXPECT_EQ(x, fit_vertex_values(g.points.size(), s, wide, 20, {}, 0.0, 2));
+  // Cancelled before the factorization, and while the blocks are solved.
+  EXPECT_THROW(fit_vertex_values(g.points.size(), s, wide, 20, {}, 0.0, 2, [](std::size_t, std::size_t) { return false; }),
+               BakeCancelled);
+  int calls = 0;
+  EXPECT_THROW(fit_vertex_values(g.points.size(), s, wide, 20, {}, 0.0, 2,
+                                 [&](std::size_t, std::size_t) { return ++calls < 2; }),
+               BakeCancelled);
+}
+
 TEST(VertexFit, BadInputIsRejected) {
   const Grid g = grid();
   std::vector<double> values;

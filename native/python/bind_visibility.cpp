@@ -208,13 +208,12 @@ py::array py_fit_vertex_values(std::int64_t vertex_count, const py::object& samp
   std::vector<py::ssize_t> shape(values.shape(), values.shape() + values.ndim());
   size_t channels = 1;
   for (size_t k = 1; k < shape.size(); ++k) channels *= static_cast<size_t>(shape[k]);
-  const std::vector<double> flat(values.data(), values.data() + count * channels);
   const std::vector<sd::PenaltyRow> penalties = read_penalties(penalty_vertices, penalty_coefficients);
   std::vector<double> fitted;
   {
-    py::gil_scoped_release release;
-    fitted = sd::fit_vertex_values(static_cast<size_t>(vertex_count), samples, flat, channels, penalties,
-                                   smoothness, threads, progress_function(&progress));
+    py::gil_scoped_release release;   // `values` (a C-contiguous float64 array held by the caller) is read in place
+    fitted = sd::fit_vertex_values(static_cast<size_t>(vertex_count), samples, values.data(), count * channels,
+                                   channels, penalties, smoothness, threads, progress_function(&progress));
   }
   shape[0] = static_cast<py::ssize_t>(vertex_count);
   return adopt(std::move(fitted), std::move(shape));

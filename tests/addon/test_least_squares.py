@@ -132,13 +132,15 @@ def test_a_fit_follows_the_shadow_between_the_vertices(sdnative):
     assert error(fitted["ambient_occlusion"]) < 0.8 * error(np.asarray(plain["ambient_occlusion"]))
 
 
-def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative):
-    # Linear signals come back exactly, each in its own shape, from one factorization.
+@pytest.mark.parametrize("key,channels", [("transfer", 1 + 6), ("product_matrices", 6)])
+def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative, key, channels):
+    # Linear signals come back exactly, each in its own shape, from one factorization; with M,
+    # AO is M_00,00 (its first channel), not a channel of its own.
     points, triangles = grid(n=4)
     split_points = least_squares.centroid_split(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)),
                                                 triangles)[0]
     linear = 0.3 * split_points[:, 0] - 0.2 * split_points[:, 1] + 0.5   # within [0, 1], as AO
-    baked = {"ambient_occlusion": linear, "product_matrices": np.einsum("s,ij->sij", linear, [[1.0, 2.0]] * 3),
+    baked = {"ambient_occlusion": linear, key: np.einsum("s,ij->sij", linear, [[1.0, 2.0]] * 3),
              "normals": split_points, "ray_origins": split_points, "fallback_normals": np.zeros(0, int)}
     calls = []
 
@@ -148,11 +150,11 @@ def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative):
             calls.append(args[4].shape)
             return sdnative.fit_vertex_values(*args, **kwargs)
     out = least_squares.fit(Counted, baked, points, triangles)
-    assert calls == [(len(split_points), 7)]
+    assert calls == [(len(split_points), channels)]
     at_vertices = linear[:len(points)]
     np.testing.assert_allclose(out["ambient_occlusion"], at_vertices, atol=1e-9)
-    assert out["product_matrices"].shape == (len(points), 3, 2)
-    np.testing.assert_allclose(out["product_matrices"][:, 2, 1], 2.0 * at_vertices, atol=1e-9)
+    assert out[key].shape == (len(points), 3, 2)
+    np.testing.assert_allclose(out[key][:, 2, 1], 2.0 * at_vertices, atol=1e-9)
 
 
 def test_a_cancel_during_the_fit_is_not_taken_for_a_singular_system(sdnative):

@@ -123,11 +123,17 @@ def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS, progress=None):
     penalties = gradient_jumps(vertices, triangles)
     out = dict(result)
     keys = [key for key in FITTED if key in result]
+    # AO = V~_00 = M_00,00 (y_00 = 1): where one of those is fitted, AO is its first channel
+    # rather than a channel of its own (PRT (8)'s M alone is then fitted, without a copy).
+    holder = next((key for key in ("visibility", "product_matrices") if key in keys), None)
+    if holder is not None:
+        keys.remove("ambient_occlusion")
     arrays = [np.asarray(result[key], np.float64) for key in keys]
     columns = np.cumsum([0] + [a[0].size for a in arrays])
+    flat = [a.reshape(len(a), -1) for a in arrays]
     try:
         fitted = sd.fit_vertex_values(n, sample_triangles, barycentric, weights,
-                                      np.concatenate([a.reshape(len(a), -1) for a in arrays], axis=1),
+                                      flat[0] if len(flat) == 1 else np.concatenate(flat, axis=1),
                                       *penalties, smoothness=smoothness, progress=progress)
         parts = [fitted[:, start:end].reshape((n,) + a.shape[1:])
                  for a, start, end in zip(arrays, columns[:-1], columns[1:])]
@@ -137,8 +143,9 @@ def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS, progress=None):
         parts = [a[:n] for a in arrays]
         out["least_squares_skipped"] = str(exc)
     out.update(zip(keys, parts))
-    if "ambient_occlusion" in out:
-        out["ambient_occlusion"] = np.clip(out["ambient_occlusion"], 0.0, 1.0)
+    if holder is not None:
+        out["ambient_occlusion"] = out[holder].reshape(n, -1)[:, 0].copy()
+    out["ambient_occlusion"] = np.clip(out["ambient_occlusion"], 0.0, 1.0)
     for key in ("normals", "ray_origins"):
         out[key] = np.asarray(result[key])[:n]
     fallbacks = np.asarray(result["fallback_normals"])

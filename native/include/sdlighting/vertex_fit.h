@@ -44,10 +44,21 @@ struct PenaltyRow {
 /// the system is singular. `progress`, as TransferOptions::progress, counts the blocks of channels
 /// solved (once with none done before the factorization, which cannot be interrupted); returning
 /// false throws BakeCancelled.
-std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples,
-                                      const std::vector<double>& values, std::size_t channels,
+/// F is read in place: `values` points at `value_count` numbers (a caller's array, not copied).
+std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples, const double* values,
+                                      std::size_t value_count, std::size_t channels,
                                       const std::vector<PenaltyRow>& penalties, double smoothness,
                                       int threads = 0,
                                       const std::function<bool(std::size_t done, std::size_t total)>& progress = {});
+
+/// fit_vertex_values of the values in a vector.
+inline std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples,
+                                             const std::vector<double>& values, std::size_t channels,
+                                             const std::vector<PenaltyRow>& penalties, double smoothness,
+                                             int threads = 0,
+                                             const std::function<bool(std::size_t, std::size_t)>& progress = {}) {
+  return fit_vertex_values(vertex_count, samples, values.data(), values.size(), channels, penalties, smoothness,
+                           threads, progress);
+}
 
 }  // namespace sd

@@ -22,7 +22,7 @@ void check_index(const char* what, std::int64_t index, std::size_t vertex_count)
   }
 }
 
-void check_input(std::size_t vertex_count, const MeshSamples& samples, const std::vector<double>& values,
+void check_input(std::size_t vertex_count, const MeshSamples& samples, const double* values, std::size_t value_count,
                  std::size_t channels, const std::vector<PenaltyRow>& penalties, double smoothness) {
   const std::size_t count = samples.triangles.size();
   if (samples.barycentric.size() != count || samples.weights.size() != count) {
@@ -30,8 +30,8 @@ void check_input(std::size_t vertex_count, const MeshSamples& samples, const std
                                 std::to_string(samples.barycentric.size()) + " barycentric coordinates and " +
                                 std::to_string(samples.weights.size()) + " weights");
   }
-  if (values.size() != count * channels) {
-    throw std::invalid_argument("values: " + std::to_string(values.size()) + " numbers for " + std::to_string(count) +
+  if (value_count != count * channels) {
+    throw std::invalid_argument("values: " + std::to_string(value_count) + " numbers for " + std::to_string(count) +
                                 " samples of " + std::to_string(channels) + " channels");
   }
   for (std::size_t s = 0; s < count; ++s) {
@@ -45,7 +45,7 @@ void check_input(std::size_t vertex_count, const MeshSamples& samples, const std
                                   " (finite and >= 0 needed)");
     }
   }
-  if (!std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); })) {
+  if (!std::all_of(values, values + value_count, [](double v) { return std::isfinite(v); })) {
     throw std::invalid_argument("values must be finite");
   }
   for (const PenaltyRow& row : penalties) {
@@ -61,11 +61,11 @@ void check_input(std::size_t vertex_count, const MeshSamples& samples, const std
 
 }  // namespace
 
-std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples,
-                                      const std::vector<double>& values, std::size_t channels,
+std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples, const double* values,
+                                      std::size_t value_count, std::size_t channels,
                                       const std::vector<PenaltyRow>& penalties, double smoothness, int threads,
                                       const std::function<bool(std::size_t, std::size_t)>& progress) {
-  check_input(vertex_count, samples, values, channels, penalties, smoothness);
+  check_input(vertex_count, samples, values, value_count, channels, penalties, smoothness);
   if (vertex_count == 0 || channels == 0) return std::vector<double>(vertex_count * channels, 0.0);
   constexpr std::size_t kBlock = 8;  // channels per right-hand side block (see the solve below)
   const std::size_t blocks = (channels + kBlock - 1) / kBlock;

@@ -110,13 +110,15 @@ def _left_out(node):
             notes.append("%s left out" % layer)
     strength = _first_input(node, ("Emission Strength",))
     colour = _first_input(node, ("Emission Color", "Emission"))
-    if strength is not None and colour is not None and (colour.is_linked or strength.is_linked or (
-            strength.default_value > 0.0 and max(tuple(colour.default_value)[:3]) > 0.0)):
+    if strength is not None and colour is not None and (
+            (strength.is_linked or strength.default_value > 0.0)
+            and (colour.is_linked or max(tuple(colour.default_value)[:3]) > 0.0)):
         notes.append("emission left out")
     alpha = node.inputs.get("Alpha")
     if alpha is not None and (alpha.is_linked or alpha.default_value < 1.0):
         notes.append("shown opaque")
-    for name in ("Metallic", "Roughness", "IOR", "Specular IOR Level", "Specular"):
+    # Before 4.0, IOR reaches only the transmission (noted above); F0 came from Specular.
+    for name in ("Metallic", "Roughness") + (("IOR", "Specular IOR Level") if _layered(node) else ("Specular",)):
         socket = node.inputs.get(name)
         if socket is not None and socket.is_linked:
             notes.append("%s from node %s shown as the input's default" % (name, socket.links[0].from_node.name))

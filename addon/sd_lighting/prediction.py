@@ -56,16 +56,23 @@ def sample_jobs(tasks):
         kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
         return kwargs
 
+    def fitted(task):
+        return task.settings.get("least_squares") and least_squares.applies(methods.get(task.settings["method"]))
+
     def traced(task):
         """The mesh the bake traces (computed in the worker: the corner split, and with Least
         Squares on a method it fits, each triangle split at its centroid: utils/least_squares.py)."""
         geometry = task.geometry
         mesh = (geometry.vertices, geometry.normals, geometry.triangles)
-        if task.settings.get("least_squares") and least_squares.applies(methods.get(task.settings["method"])):
-            return least_squares.centroid_split(*mesh)
-        return mesh
+        return least_squares.centroid_split(*mesh) if fitted(task) else mesh
 
-    return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task)
+    def fit_seconds(task, sd, result):
+        if not fitted(task):
+            return 0.0
+        return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
+
+    return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
+                                lambda sd, result, task=task: fit_seconds(task, sd, result))
             for task in tasks]
 
 

@@ -311,7 +311,8 @@ penalty_vertices: (R, 4) integer vertex indices, penalty_coefficients: (R, 4) fi
 unused).  smoothness: >= 0.
 threads: for the channels' solves, 0 = every hardware thread.
 progress: None or a callable progress(done, total) over the blocks of channels solved, as
-    bake_transfer's (once with none done before the factorization, which runs uninterrupted);
+    bake_transfer's (with none done before the factorization, which runs uninterrupted, and as the
+    solves start);
     returning False raises BakeCancelled.
 Returns (V, ...) float64. Raises ValueError on bad input, RuntimeError when a vertex (or a part of
 the mesh) has no sample of positive weight to fix its value. Releases the GIL.)doc");

@@ -152,3 +152,20 @@ def test_the_mesh_is_made_in_the_worker_after_the_arguments():
     assert predictor.join(30)
     assert [name for name, _ in calls] == ["arguments", "mesh"]
     assert all(thread is not threading.main_thread() for _, thread in calls)
+
+
+def test_what_follows_the_rays_is_added_once_from_a_sample_result():
+    vertices, normals, triangles = grid(30)
+    seen = []
+
+    def after_rays(sd, result):
+        seen.append(result)
+        return 100.0
+    plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
+    fitted = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {}, None, after_rays)],
+                               threads=1)
+    for predictor in (plain, fitted):
+        predictor.start()
+        assert predictor.join(30)
+    assert seen == [{}]   # FakeNative's bake result
+    assert fitted.prediction().seconds == pytest.approx(plain.prediction().seconds + 100.0, rel=0.2)

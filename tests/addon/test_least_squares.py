@@ -157,6 +157,15 @@ def test_every_array_is_fitted_in_one_system_and_keeps_its_shape(sdnative, key, 
     np.testing.assert_allclose(out[key][:, 2, 1], 2.0 * at_vertices, atol=1e-9)
 
 
+def test_the_predicted_fit_time_counts_the_channels_fit_solves(sdnative):
+    s = 5
+    assert least_squares.channels({"ambient_occlusion": np.zeros(s), "transfer": np.zeros((s, 25))}) == 26
+    assert least_squares.channels({"ambient_occlusion": np.zeros(s), "product_matrices": np.zeros((s, 25, 9))}) == 225
+    assert least_squares.channels({"ambient_occlusion": np.zeros(s)}) == 1
+    small = least_squares.predicted_seconds(sdnative, 10000, 26)
+    assert 0.0 < small < least_squares.predicted_seconds(sdnative, 1000000, 26)
+
+
 def test_a_cancel_during_the_fit_is_not_taken_for_a_singular_system(sdnative):
     points, triangles = grid(n=3)
     split = least_squares.centroid_split(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), triangles)

@@ -90,10 +90,13 @@ class SampleJob:
     returning them; and bake_transfer's keywords (orders, rays, occluders: every other object's
     triangles), a dict or a function of a stop query returning one. Both functions are called in
     the worker, the keywords first (the automatic mode chooses the settings there, and they
-    decide the mesh: least squares' centroid split); `task`: the caller's."""
+    decide the mesh: least squares' centroid split); `task`: the caller's; `after_rays`: None, or
+    a function of (sdnative, a sample bake's result) returning the seconds the bake spends after
+    its rays (the least-squares fit), called in the worker."""
     mesh: object
     bake_arguments: object
     task: object = None
+    after_rays: object = None
 
     def arguments(self, stop):
         return self.bake_arguments(stop) if callable(self.bake_arguments) else self.bake_arguments
@@ -177,10 +180,14 @@ class BakeTimePredictor:
                     self._running = (index, count, start, done, total)
                 return not self._cancelled
 
-            self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
-                                   **arguments)
+            result = self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
+                                            **arguments)
             rounds.append((len(vertices), time.perf_counter() - start))
             with self._lock:
                 self._estimates[index] = extrapolate(rounds, count)
             if len(vertices) == count:
                 break
+        if job.after_rays is not None:
+            after = job.after_rays(self._sd, result)
+            with self._lock:
+                self._estimates[index] += after

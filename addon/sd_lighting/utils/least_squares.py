@@ -22,6 +22,8 @@ clamps B at 0).
 Nothing here needs Blender.
 """
 
+import time
+
 import numpy as np
 
 SMOOTHNESS = 0.01
@@ -29,6 +31,9 @@ FITTED = ("ambient_occlusion", "visibility", "transfer", "product_matrices")
 CENTROID_WEIGHT = 0.75      # of a triangle's area, at its centroid (the rule above)
 CORNER_WEIGHT = 1.0 / 12.0  # at each of its corners
 ANCHOR = 1e-3               # the least weight of a vertex's own sample, of the mean one
+TIMED_GRID_SIDE = 40        # predicted_seconds times the fit of this many squared vertices ...
+TIME_EXPONENT = 1.25        # ... and scales its time as the vertex count to this power (measured
+                            # on grids of 1.6k and 42k vertices, 1 to 225 channels: 1.24-1.31)
 
 
 def applies(method):
@@ -112,6 +117,43 @@ def gradient_jumps(vertices, triangles):
     return rows.astype(np.int32), coefficients[usable]
 
 
+def _fitted_keys(result):
+    """The arrays fit() solves for, and the one whose first channel is AO (None: AO is solved for).
+    AO = V~_00 = M_00,00 (y_00 = 1): where one of those is fitted, AO is its first channel rather
+    than a channel of its own (PRT (8)'s M alone is then fitted, without a copy)."""
+    keys = [key for key in FITTED if key in result]
+    holder = next((key for key in ("visibility", "product_matrices") if key in keys), None)
+    if holder is not None:
+        keys.remove("ambient_occlusion")
+    return keys, holder
+
+
+def channels(result):
+    """How many channels fit() solves for a bake_transfer result of these arrays."""
+    return sum(int(np.asarray(result[key])[0].size) for key in _fitted_keys(result)[0])
+
+
+def predicted_seconds(sd, vertex_count, channel_count):
+    """The fit's time for a mesh of vertex_count vertices and channel_count channels: the fit of a
+    flat grid of TIMED_GRID_SIDE² vertices timed here (the faster of two, about 20 ms each), scaled
+    by TIME_EXPONENT (a surface mesh's sparse factorization fills in a little faster than its
+    vertices grow)."""
+    n = TIMED_GRID_SIDE
+    x, y = np.meshgrid(np.arange(n, dtype=np.float64), np.arange(n, dtype=np.float64))
+    points = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
+    corner = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel()
+    triangles = np.concatenate([np.stack([corner, corner + 1, corner + n + 1], axis=1),
+                                np.stack([corner, corner + n + 1, corner + n], axis=1)])
+    values = np.random.default_rng(0).random((len(points) + len(triangles), max(int(channel_count), 1)))
+    seconds = []
+    for _ in range(2):
+        start = time.perf_counter()
+        sd.fit_vertex_values(len(points), *samples(points, triangles), values, *gradient_jumps(points, triangles),
+                             smoothness=SMOOTHNESS)
+        seconds.append(time.perf_counter() - start)
+    return min(seconds) * (vertex_count / len(points)) ** TIME_EXPONENT
+
+
 def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS, progress=None):
     """The bake of centroid_split's mesh (bake_transfer's dict) as a bake of the V vertices: the
     FITTED arrays least-squares fitted (as the channels of one system: one factorization), the
@@ -122,12 +164,7 @@ def fit(sd, result, vertices, triangles, smoothness=SMOOTHNESS, progress=None):
     sample_triangles, barycentric, weights = samples(vertices, triangles)
     penalties = gradient_jumps(vertices, triangles)
     out = dict(result)
-    keys = [key for key in FITTED if key in result]
-    # AO = V~_00 = M_00,00 (y_00 = 1): where one of those is fitted, AO is its first channel
-    # rather than a channel of its own (PRT (8)'s M alone is then fitted, without a copy).
-    holder = next((key for key in ("visibility", "product_matrices") if key in keys), None)
-    if holder is not None:
-        keys.remove("ambient_occlusion")
+    keys, holder = _fitted_keys(result)
     arrays = [np.asarray(result[key], np.float64) for key in keys]
     columns = np.cumsum([0] + [a[0].size for a in arrays])
     flat = [a.reshape(len(a), -1) for a in arrays]

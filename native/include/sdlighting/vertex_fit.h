@@ -42,8 +42,8 @@ struct PenaltyRow {
 /// malformed input (indices out of range, non-finite numbers, negative weights or smoothness) and
 /// std::runtime_error when a vertex is reached by no sample of positive weight and no penalty, or
 /// the system is singular. `progress`, as TransferOptions::progress, counts the blocks of channels
-/// solved (once with none done before the factorization, which cannot be interrupted); returning
-/// false throws BakeCancelled.
+/// solved (with none done before the factorization, which cannot be interrupted, and again as the
+/// solves start); returning false throws BakeCancelled.
 /// F is read in place: `values` points at `value_count` numbers (a caller's array, not copied).
 std::vector<double> fit_vertex_values(std::size_t vertex_count, const MeshSamples& samples, const double* values,
                                       std::size_t value_count, std::size_t channels,

@@ -19,6 +19,7 @@ Run (headless, GPU through a Workbench render):
 
 import os
 import sys
+import threading
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -71,10 +72,20 @@ def main():
     # A cancel while the settings are chosen: within a second, nothing changed.
     sdtest.select_only([resting])
     tasks, _ = package.baking.prepare(bpy.context, [resting])
+    # The choice is held at its start until the test has looked (a fast machine chose within the
+    # half second the test used to wait), then released and cancelled while it runs.
+    entered, release, choose = threading.Event(), threading.Event(), tasks[0].choose
+
+    def held_choose(stop):
+        entered.set()
+        release.wait(10.0)
+        return choose(stop)
+    tasks[0].choose = held_choose
     job = package.baking.BakeJob(tasks)
     job.start()
-    time.sleep(0.5)
+    entered.wait(10.0)
     checks.check(job.choosing, "the bake starts by choosing the settings", job.status_text())
+    release.set()
     start = time.perf_counter()
     job.cancel()
     job.join(10.0)

@@ -20,6 +20,7 @@ import contextlib
 import functools
 import os
 import sys
+from unittest import mock
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
@@ -39,27 +40,15 @@ def options():
     return parser.parse_known_args(argv)[0]
 
 
-@contextlib.contextmanager
 def without(package, fix):
-    """The add-on's bakes without `fix` (the module's doc) while inside."""
+    """A context in which the add-on's bakes run without `fix` (the module's doc)."""
     if fix == "origins":
         sdnative = package.native.get()
-        saved = sdnative.bake_transfer
-        sdnative.bake_transfer = functools.partial(saved, offset_origins=False)
-        try:
-            yield
-        finally:
-            sdnative.bake_transfer = saved
-    elif fix == "corners":
-        corners = package.utils.corners
-        saved = corners.NORMAL_TOLERANCE_DEGREES
-        corners.NORMAL_TOLERANCE_DEGREES = 180.0
-        try:
-            yield
-        finally:
-            corners.NORMAL_TOLERANCE_DEGREES = saved
-    else:
-        raise ValueError("--without takes origins and corners, not %r" % fix)
+        return mock.patch.object(sdnative, "bake_transfer",
+                                 functools.partial(sdnative.bake_transfer, offset_origins=False))
+    if fix == "corners":
+        return mock.patch.object(package.utils.corners, "NORMAL_TOLERANCE_DEGREES", 180.0)
+    raise ValueError("--without takes origins and corners, not %r" % fix)
 
 
 def main():

@@ -295,15 +295,19 @@ class BakeTask:
         self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
                                                 self.settings, stop)
 
+    @property
+    def fits_least_squares(self):
+        """Whether the bake fits its data by least squares: Least Squares on, and a method it fits
+        (once an automatic task has chosen one)."""
+        return bool(self.settings.get("least_squares")) and least_squares.applies(methods.get(self.settings["method"]))
+
     def bake(self, sd, progress):
         """sdnative.bake_transfer of the baked copy (any thread), least-squares fitted when the
         settings ask for it and the method's data can be (utils/least_squares.py). Returns the
         result dict."""
         geometry = self.baked
         points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
-        fitted = self.settings.get("least_squares") and least_squares.applies(
-            methods.get(self.settings["method"]))
-        if not fitted:
+        if not self.fits_least_squares:
             return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
         points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
         result = dict(sd.bake_transfer(points, normals, triangles, progress=_share(progress, 0.0, FIT_START),

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from . import baking, native
-from .utils import bake_time, least_squares, methods
+from .utils import bake_time, least_squares
 
 _predictors = {}          # settings key -> BakeTimePredictor (the latest few)
 _KEPT = 8
@@ -56,18 +56,15 @@ def sample_jobs(tasks):
         kwargs["occluder_triangles"] = np.concatenate(triangles).astype(np.int32)
         return kwargs
 
-    def fitted(task):
-        return task.settings.get("least_squares") and least_squares.applies(methods.get(task.settings["method"]))
-
     def traced(task):
         """The mesh the bake traces (computed in the worker: the corner split, and with Least
         Squares on a method it fits, each triangle split at its centroid: utils/least_squares.py)."""
         geometry = task.geometry
         mesh = (geometry.vertices, geometry.normals, geometry.triangles)
-        return least_squares.centroid_split(*mesh) if fitted(task) else mesh
+        return least_squares.centroid_split(*mesh) if task.fits_least_squares else mesh
 
     def fit_seconds(task, sd, result):
-        if not fitted(task):
+        if not task.fits_least_squares:
             return 0.0
         return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
 

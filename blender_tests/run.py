@@ -62,6 +62,7 @@ TESTS = [
     ("test_scale", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_ringing", GPU, 300, [], [], (3, 4, 0)),
     ("test_automatic", BACKGROUND, 300, [], [], (3, 4, 0)),
+    ("test_texture_space", BACKGROUND, 300, [], [], (3, 4, 0)),
     # GPU: the binary runs under Xvfb, with a window, so it has an undo stack to test
     ("test_robustness", GPU, 300, [], [], (3, 4, 0)),
     # GPU: the shading is checked per vertex; under Xvfb the binary also has an undo stack

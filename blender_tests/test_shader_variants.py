@@ -3,7 +3,8 @@ ends.
 
 Variants: every method x lobes (Lambert, Phong, Lambert + Phong; PRT (2) Lambert only) x orders
 (s, s') in ORDERS (0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn /
-vertex-target, and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each
+vertex-target, the texture-space variants of the methods whose data texels hold (drawn, per
+pixel), and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each
 drawn variant with material albedos (slots and an image texture; Lambert + Phong with the slots'
 Principled weights, and Phong alone with them as a metal has): N_VARIANTS programs, each built by
 gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
@@ -46,7 +47,8 @@ import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 366        # the programs variants() enumerates
+N_VARIANTS = 418        # the programs variants() enumerates
+LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
 
@@ -81,6 +83,13 @@ def variants(package):
                 textures = [()]
                 if method.band_limited_texture:
                     textures.append(shader_variant.band_limited_texture_size(s))
+                if _module(package, "utils.lightmap").applies(method):   # texture-space data
+                    yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
+                                                 lightmap=LIGHTMAP, **lobes)
+                    if (s, sv) == ALBEDO_ORDERS:
+                        yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
+                                                     material_count=3, material_slots=True,
+                                                     albedo_texture=True, lightmap=LIGHTMAP, **lobes)
                 for per_pixel in (False, True):
                     for vertex_target in (False, True):
                         for texture in textures:
@@ -104,7 +113,7 @@ def name(variant):
         " +lambert" if variant.diffuse_lobe else "", variant.light_order,
         variant.visibility_order, " per-pixel" if variant.per_pixel else "",
         " vertex-target" if variant.vertex_target else "",
-        " texture" if variant.band_limited_texture else "")
+        " texture" if variant.band_limited_texture else "") + (" lightmap" if variant.lightmap else "")
 
 
 # ----------------------------------------------------------------------------------------------

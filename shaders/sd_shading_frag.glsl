@@ -70,15 +70,26 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 }
 
 #ifdef SD_PER_PIXEL
-/* Adds a triangle corner's B (vertex index `corner`) with its barycentric weight. */
-void sd_add_corner(float weight, float corner, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse)
+/* Adds the B of data entry `entry` (a triangle corner's vertex, or a lightmap texel) with its
+ * interpolation weight. */
+void sd_add_entry(float weight, int entry, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse)
 {
   if (weight > 0.0) {
     vec3 b0, b1;
-    sd_shade_lobes(int(corner + 0.5), normal, view, b0, b1);
+    sd_shade_lobes(entry, normal, view, b0, b1);
     rgb += weight * b0;
     diffuse += weight * b1;
   }
+}
+#endif
+
+#ifdef SD_LIGHTMAP
+/* Adds the B of lightmap texel (x, y), clamped to the map (as a GPU's clamp-to-edge lookup does):
+ * entry y W + x of the texture-space data (utils/lightmap.py). */
+void sd_add_texel(float weight, vec2 texel, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse)
+{
+  ivec2 xy = clamp(ivec2(texel), ivec2(0), ivec2(SD_LIGHTMAP_WIDTH - 1, SD_LIGHTMAP_HEIGHT - 1));
+  sd_add_entry(weight, xy.y * SD_LIGHTMAP_WIDTH + xy.x, normal, view, rgb, diffuse);
 }
 #endif
 
@@ -89,9 +100,21 @@ void main()
   vec3 normal = normalize(sd_normal);
   vec3 view = sd_view_direction(sd_origin_offset);
   vec3 rgb = vec3(0.0);
-  sd_add_corner(sd_bary.x, sd_corners.x, normal, view, rgb, diffuse);
-  sd_add_corner(sd_bary.y, sd_corners.y, normal, view, rgb, diffuse);
-  sd_add_corner(sd_bary.z, sd_corners.z, normal, view, rgb, diffuse);
+#  ifdef SD_LIGHTMAP
+  /* Bilinear between the four texel centres around the pixel's lightmap UV: B is linear in the
+   * data, so blending the four B is blending the data. */
+  vec2 t = sd_lightmap_uv * vec2(float(SD_LIGHTMAP_WIDTH), float(SD_LIGHTMAP_HEIGHT)) - vec2(0.5);
+  vec2 base = floor(t);
+  vec2 f = t - base;
+  sd_add_texel((1.0 - f.x) * (1.0 - f.y), base, normal, view, rgb, diffuse);
+  sd_add_texel(f.x * (1.0 - f.y), base + vec2(1.0, 0.0), normal, view, rgb, diffuse);
+  sd_add_texel((1.0 - f.x) * f.y, base + vec2(0.0, 1.0), normal, view, rgb, diffuse);
+  sd_add_texel(f.x * f.y, base + vec2(1.0, 1.0), normal, view, rgb, diffuse);
+#  else
+  sd_add_entry(sd_bary.x, int(sd_corners.x + 0.5), normal, view, rgb, diffuse);
+  sd_add_entry(sd_bary.y, int(sd_corners.y + 0.5), normal, view, rgb, diffuse);
+  sd_add_entry(sd_bary.z, int(sd_corners.z + 0.5), normal, view, rgb, diffuse);
+#  endif
   fragColor = vec4(sd_surface(sd.params.x * rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
 #else
 #  ifdef SD_DIFFUSE_LOBE

@@ -5,6 +5,8 @@
  * SD_PER_PIXEL: the vertex only passes its frame on; the fragment shader evaluates B with the
  * pixel's normal and view for each of the triangle's three vertices' data (non-indexed batch with
  * the triangle's vertex indices in `corners` and the barycentric corner in `bary`).
+ * SD_LIGHTMAP (with SD_PER_PIXEL): instead of `corners` and `bary`, the corner's `lightmap_uv`, at
+ * which the fragment shader reads the texture-space data.
  * SD_VERTEX_TARGET (tests): vertex p is drawn as a point at pixel (p % width, p / width) of a
  * float target, so the readback holds exactly what the shader computed for every vertex.
  * SD_ALBEDO: the vertex's material slot picks its albedo from sd.albedo (SD_MATERIAL_SLOTS: the
@@ -47,8 +49,12 @@ void main()
 #ifdef SD_PER_PIXEL
   sd_origin_offset = mat3(sd.model) * pos;
   sd_normal = nrm;
+#  ifdef SD_LIGHTMAP
+  sd_lightmap_uv = lightmap_uv;
+#  else
   sd_bary = bary;
   sd_corners = corners;
+#  endif
 #else
   vec3 normal = normalize(nrm);
   vec3 view = sd_view_direction(mat3(sd.model) * pos);

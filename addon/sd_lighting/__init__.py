@@ -26,7 +26,8 @@ bl_info = {
 # those already imported, in this order.
 _SUBMODULES = ("utils.bake_data", "utils.cost", "utils.methods", "utils.lobes", "utils.transforms",
                "utils.limits", "utils.shader_variant", "utils.background", "utils.lobe_designs",
-               "utils.bake_time", "utils.corners", "utils.refine", "utils.least_squares", "utils.ringing",
+               "utils.bake_time", "utils.corners", "utils.refine", "utils.least_squares", "utils.lightmap",
+               "utils.ringing",
                "utils.accuracy", "utils.automatic", "utils.rebake_schedule", "compat", "native", "materials", "environment",
                "attributes", "view", "analysis", "baking", "prediction", "gpu_context", "gpu_shading", "drawing", "preview",
                "live_rebake",

@@ -160,11 +160,12 @@ def read_surface(mesh):
     return slots, uvs
 
 
-def read(mesh):
+def read(mesh, bake=None):
     """Everything baked, in sdnative.shade's keywords and shapes (float64 from the stored float32):
-    normals and the keys of every stored array (utils/bake_data.py)."""
+    normals and the keys of every stored array (utils/bake_data.py). bake: the `sd_bake` settings
+    the arrays were baked with (default: the mesh's own; a texels' mesh has none)."""
     out = {"normals": read_normals(mesh).astype(np.float64)}
-    bake = dict(mesh.get(BAKE, {}))
+    bake = dict(mesh.get(BAKE, {}) if bake is None else bake)
     orders = int(bake.get("light_order", 0)), int(bake.get("visibility_order", 0))
     for array in bake_data.ARRAYS:
         if is_stored(mesh, array):

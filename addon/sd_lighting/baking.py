@@ -18,6 +18,12 @@ A bake runs in three steps:
    live", lists its keys). A previous baked mesh is removed only then, and only when no other
    object (a Shift+D or Alt+D copy) still links it. The object's own mesh is never modified: a
    cancelled or failed bake leaves the file as it was.
+
+Texture-space data (the `lightmap` setting, utils/lightmap.py): step 1 also unwraps the baked
+copy (`lightmap_uvs`: Smart UV Project of a temporary copy in a temporary scene, so that nothing
+of the user's changes), step 2 bakes the texels after the vertices, step 3 gives the baked mesh
+the UV map "SD Lightmap" and links the texels' mesh "SD Lightmap <object>" (one point per texel,
+the same attributes) in its `sd_lightmap` property.
 """
 
 import functools
@@ -30,12 +36,14 @@ import numpy as np
 
 from . import analysis, attributes, compat, environment, materials, native
 from .view import View
-from .utils import automatic, corners, least_squares, lobes, methods, refine, transforms
-from .utils.bake_data import BAKE, BAKED_MESH, UV
+from .utils import automatic, corners, least_squares, lightmap, lobes, methods, refine, transforms
+from .utils.bake_data import BAKE, BAKED_MESH, LIGHTMAP, LIGHTMAP_UV, UV
 
 MESH_PREFIX = "SD "
+LIGHTMAP_PREFIX = "SD Lightmap "
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
 FIT_START = 0.8   # of a least-squares bake's progress: the rays before it, the fit after
+TEXELS_START = 0.1   # of a texture-space bake's progress: the vertices before it, the texels after
 
 
 def _share(progress, start, end):
@@ -96,6 +104,7 @@ class Geometry:
         self._scaled_positions = attributes.read_positions(mesh).astype(np.float64)
         self._triangle_loops = attributes.read_triangle_loops(mesh)
         self.triangle_count = len(self._triangle_loops)
+        self.lightmap_uvs = None   # each loop's lightmap UV [L, 2], for texture-space data (lightmap_uvs)
 
     def inputs(self):
         """What was read from the mesh: everything the other arrays are computed from."""
@@ -112,6 +121,11 @@ class Geometry:
     def _wound_triangle_loops(self):
         loops = self._triangle_loops
         return loops[:, ::-1] if self._mirrored else loops
+
+    @property
+    def lightmap_corner_uvs(self):
+        """Each triangle corner's lightmap UV [T, 3, 2], as `triangles`."""
+        return self.lightmap_uvs[self._wound_triangle_loops]
 
     @property
     def mesh_triangles(self):
@@ -152,10 +166,14 @@ class Geometry:
     def uvs(self):
         return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
 
-    def build_mesh(self, name):
-        """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
-        return attributes.new_mesh(name, self.positions, self.loop_vertices, self.loop_starts,
-                                   self.loop_totals)
+    def build_mesh(self, name, bake_frame=False):
+        """A new mesh datablock with this geometry in the local frame (or the bake frame), vertices
+        in the same order, with the lightmap UVs when there are some."""
+        mesh = attributes.new_mesh(name, self.vertices if bake_frame else self.positions, self.loop_vertices,
+                                   self.loop_starts, self.loop_totals)
+        if self.lightmap_uvs is not None:
+            mesh.uv_layers.new(name=LIGHTMAP_UV).data.foreach_set("uv", self.lightmap_uvs.ravel())
+        return mesh
 
     def surface(self):
         """The baked vertices and triangles as a refine.Surface. Vertices at one point weld: the
@@ -196,6 +214,47 @@ def _evaluated_arrays(obj, depsgraph, shape):
         return Geometry(mesh, shape, materials.albedo_uv_map(obj))
     finally:
         evaluated.to_mesh_clear()
+
+
+def lightmap_uvs(context, geometry, size):
+    """Each loop's lightmap UV of the geometry (float32 [L, 2]): Blender's Smart UV Project of a
+    copy in the bake frame (texel density follows the scaled surface), its charts
+    lightmap.MARGIN_TEXELS texels of a size x size map apart. The copy lives in a temporary scene,
+    so that Edit Mode reaches it alone; nothing else changes. Raises BakeError outside Object Mode
+    (another object would share that Edit Mode)."""
+    import bpy
+    if context.mode != 'OBJECT':
+        raise BakeError("texture-space data are unwrapped in Object Mode: leave %s Mode to bake "
+                        "them" % context.mode.split("_")[0].title())
+    mesh = geometry.build_mesh("sd_lightmap unwrap", bake_frame=True)
+    scene = obj = None
+    try:
+        scene = bpy.data.scenes.new("sd_lightmap unwrap")
+        obj = bpy.data.objects.new(mesh.name, mesh)
+        scene.collection.objects.link(obj)
+        layer = scene.view_layers[0]
+        layer.objects.active = obj
+        obj.select_set(True, view_layer=layer)
+        with context.temp_override(scene=scene, view_layer=layer, active_object=obj, object=obj,
+                                   selected_objects=[obj], selected_editable_objects=[obj]):
+            bpy.ops.object.mode_set(mode='EDIT')
+            try:
+                with context.temp_override(edit_object=obj):
+                    bpy.ops.mesh.select_all(action='SELECT')
+                    bpy.ops.uv.smart_project(angle_limit=np.radians(lightmap.ANGLE_LIMIT_DEGREES),
+                                             island_margin=lightmap.MARGIN_TEXELS / size)
+            finally:
+                bpy.ops.object.mode_set(mode='OBJECT')
+        layer_uv = mesh.uv_layers.active
+        if layer_uv is None:
+            raise BakeError("Smart UV Project made no UV map for %s" % mesh.name)
+        return attributes.read_loop_uvs(mesh, layer_uv.name)
+    finally:
+        if obj is not None:
+            bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+        if scene is not None:
+            bpy.data.scenes.remove(scene)
 
 
 def world_triangles(obj, depsgraph, view_layer):
@@ -250,7 +309,7 @@ class BakeTask:
             # bool as an int): a bake and its recorded settings give one digest.
             refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
                           int(self.settings.get("refine_max_vertices", 0)))
-            arguments = dict(self.bake_arguments(), refine=refinement)
+            arguments = dict(self.bake_arguments(), refine=refinement, lightmap=int(self.settings.get("lightmap", 0)))
             for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
                 digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
@@ -296,17 +355,31 @@ class BakeTask:
                                                 self.settings, stop)
 
     @property
+    def bakes_lightmap(self):
+        """Whether the bake adds texture-space data: asked for (the copy unwrapped), and a method
+        whose data the texels can hold (once an automatic task has chosen one)."""
+        return (int(self.settings.get("lightmap", 0)) > 0 and self.geometry.lightmap_uvs is not None
+                and lightmap.applies(methods.get(self.settings["method"])))
+
+    @property
     def fits_least_squares(self):
         """Whether the bake fits its data by least squares: Least Squares on, and a method it fits
-        (once an automatic task has chosen one)."""
-        return bool(self.settings.get("least_squares")) and least_squares.applies(methods.get(self.settings["method"]))
+        (once an automatic task has chosen one); not with texture-space data, which the shading
+        reads instead of the vertices'."""
+        return (bool(self.settings.get("least_squares")) and not self.bakes_lightmap
+                and least_squares.applies(methods.get(self.settings["method"])))
 
     def bake(self, sd, progress):
         """sdnative.bake_transfer of the baked copy (any thread), least-squares fitted when the
-        settings ask for it and the method's data can be (utils/least_squares.py). Returns the
-        result dict."""
+        settings ask for it and the method's data can be (utils/least_squares.py), and its texels
+        under "lightmap" (bake_lightmap) when it bakes texture-space data. Returns the result dict."""
         geometry = self.baked
         points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
+        if self.bakes_lightmap:
+            result = dict(sd.bake_transfer(points, normals, triangles, progress=_share(progress, 0.0, TEXELS_START),
+                                           **self.bake_arguments()))
+            result["lightmap"] = self.bake_lightmap(sd, _share(progress, TEXELS_START, 1.0))
+            return result
         if not self.fits_least_squares:
             return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
         points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
@@ -315,13 +388,37 @@ class BakeTask:
         return least_squares.fit(sd, result, geometry.vertices, geometry.triangles,
                                  progress=_share(progress, FIT_START, 1.0))
 
+    def bake_lightmap(self, sd, progress):
+        """The texels of the copy's lightmap (utils/lightmap.py), baked as points without faces
+        against the copy's triangles and the occluders: {"size", "entries", "sources" (dilation),
+        "positions" (in the local frame), "result" (bake_transfer's dict of the baked texels, in
+        `entries` order)}."""
+        size = int(self.settings["lightmap"])
+        geometry = self.baked
+        entries, triangle, barycentric = lightmap.texels(geometry.lightmap_corner_uvs, size, size)
+        points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
+                                                 triangle, barycentric)
+        # the same points in the local frame (what the baked mesh's positions are in)
+        positions = lightmap.sample_points(geometry.positions, geometry.normals, geometry.triangles,
+                                           triangle, barycentric)[0]
+        arguments = self.bake_arguments()
+        vertices, triangles = geometry.vertices, np.asarray(geometry.triangles, np.int32)
+        if "occluder_vertices" in arguments:
+            triangles = np.concatenate([triangles, arguments["occluder_triangles"] + len(vertices)])
+            vertices = np.concatenate([vertices, arguments["occluder_vertices"]])
+        arguments.update(occluder_vertices=vertices, occluder_triangles=triangles.astype(np.int32))
+        result = dict(sd.bake_transfer(points, normals, np.zeros((0, 3), np.int32), progress=progress,
+                                       **arguments))
+        return {"size": size, "entries": entries, "sources": lightmap.dilation_sources(entries, size, size),
+                "positions": positions, "result": result}
+
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
         (utils/refine.py, recorded in `refinement`) tested against this task's light and
         occluders with common rays. progress(done, total) as bake_transfer's, over all levels."""
         s = self.settings
         self.baked = self.geometry
-        if not s.get("refine"):
+        if not s.get("refine") or self.bakes_lightmap:
             return
         occluders = self.occluders()
         kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
@@ -376,7 +473,8 @@ def bake_settings(scene, obj, env_source):
               "environment": env_source.description, "refine": bool(settings.refine),
               "refine_target": float(settings.target_error),
               "refine_max_vertices": int(settings.refine_max_vertices),
-              "least_squares": bool(settings.least_squares)}
+              "least_squares": bool(settings.least_squares),
+              "lightmap": int(settings.lightmap_size) if settings.texture_space else 0}
     if method_id == analysis.AUTOMATIC:
         return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
                     rays=int(fixed.get("rays", settings.rays)))
@@ -457,6 +555,11 @@ def _occluders(others, to_frame):
     return np.concatenate(verts), np.concatenate(tris).astype(np.int32)
 
 
+def _may_bake_lightmap(method_id):
+    """Whether a bake of this method (or the automatic mode's choice) may hold texels."""
+    return method_id == analysis.AUTOMATIC or lightmap.applies(methods.get(method_id))
+
+
 def prepare(context, objects, settings_of=bake_settings):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
@@ -504,6 +607,8 @@ def prepare(context, objects, settings_of=bake_settings):
         occluders = _occluders(occluders_of(obj), to_frame)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
+        if int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
+            geometry.lightmap_uvs = lightmap_uvs(context, geometry, int(settings["lightmap"]))
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
@@ -631,11 +736,14 @@ class BakeJob:
                 attributes.write_surface(mesh, task.baked.material_slots, task.baked.uvs)
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))
+                if "lightmap" in task.result:
+                    mesh[LIGHTMAP] = _build_lightmap_mesh(LIGHTMAP_PREFIX + task.object_name, task.result["lightmap"])
+                    settings.update(_lightmap_summary(task.result["lightmap"]))
                 mesh[BAKE] = settings
                 mesh.use_fake_user = True
         except Exception:
             for _, mesh, _ in built:
-                bpy.data.meshes.remove(mesh)
+                _remove_baked_mesh(mesh)
             raise
         released = {}
         for obj, mesh, task in built:
@@ -658,7 +766,34 @@ class BakeJob:
 SUMMARY_KEYS = ("seconds", "vertices", "floats_per_vertex", "bytes_per_vertex", "bake_id", "inputs",
                 "design_nodes_max", "design_nodes_mean", "unrefined_vertices", "refine_levels",
                 "refine_seconds", "refine_worst_left", "refine_estimated_left",
-                "refine_budget_reached")
+                "refine_budget_reached", "lightmap_texels", "lightmap_seconds")
+
+
+def _build_lightmap_mesh(name, texels):
+    """The texels' mesh of a bake's "lightmap" (BakeTask.bake_lightmap): one point per texel of
+    the map, entry order, at its sample's point in the local frame, with the bake's attributes -
+    a texel near a chart holding its dilation source's, one far from every chart zeros."""
+    import bpy
+    entries, sources, result = texels["entries"], texels["sources"], texels["result"]
+    spread = {key: lightmap.spread(result[key], entries, sources)
+              for key in least_squares.FITTED if result.get(key) is not None}
+    mesh = bpy.data.meshes.new(name)
+    try:
+        mesh.vertices.add(len(sources))
+        mesh.vertices.foreach_set("co", lightmap.spread(texels["positions"], entries, sources).astype(np.float32).ravel())
+        normals = lightmap.spread(result["normals"], entries, sources)
+        normals[sources < 0] = (0.0, 0.0, 1.0)   # unread, but a unit normal like every texel's
+        attributes.write(mesh, normals, spread)
+        mesh.use_fake_user = True
+    except Exception:
+        bpy.data.meshes.remove(mesh)
+        raise
+    return mesh
+
+
+def _lightmap_summary(texels):
+    return {"lightmap_texels": int(len(texels["entries"])),
+            "lightmap_seconds": float(texels["result"].get("seconds", 0.0))}
 
 
 def _result_summary(task, floats):
@@ -726,12 +861,28 @@ def albedo_texture_unbaked(obj):
             and UV not in mesh.attributes)
 
 
+def lightmap_mesh(mesh):
+    """The texels' mesh of a baked mesh with texture-space data, or None."""
+    import bpy
+    texels = mesh.get(LIGHTMAP) if mesh is not None else None
+    return texels if isinstance(texels, bpy.types.Mesh) else None
+
+
+def _remove_baked_mesh(mesh):
+    """Removes a baked mesh and its texels' mesh."""
+    import bpy
+    texels = lightmap_mesh(mesh)
+    bpy.data.meshes.remove(mesh)
+    if texels is not None and texels.library is None:
+        bpy.data.meshes.remove(texels)
+
+
 def _release(mesh):
     """Removes a baked mesh that no object links any more. Shift+D and Alt+D copies of a baked
     object link the same baked mesh: it stays while one of them does."""
     import bpy
     if mesh.library is None and not any(o.get(BAKED_MESH) == mesh for o in bpy.data.objects):
-        bpy.data.meshes.remove(mesh)
+        _remove_baked_mesh(mesh)
 
 
 def clear(obj):

@@ -221,16 +221,20 @@ def _draw_handler():
 # --------------------------------------------------------------------------------------------
 # Checks against the CPU evaluator (for the tests)
 
-def cpu_reference(scene, obj, view):
+def cpu_reference(scene, obj, view, texels=False):
     """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
     environment (windowed against ringing: waits for the window's choice) and rotation the live
     shading uses, clamped at 0 per channel as the shader shows it (displayed radiance is never
     negative; sdnative.shade itself is the raw formula); with a Lambert lobe besides the Phong one,
-    the sum of the two, as the shader's vertex target shows it; exposure not applied. [N, 3]."""
+    the sum of the two, as the shader's vertex target shows it; exposure not applied. [N, 3].
+    texels: at every texel of its texture-space data instead (each with its own normal and view),
+    by entry. [W H, 3]."""
     mesh = baking.baked_mesh(obj)
     bake = dict(mesh[BAKE])
     method = methods.get(bake["method"])
-    data = attributes.read(mesh)
+    if texels:
+        mesh = baking.lightmap_mesh(mesh)
+    data = attributes.read(mesh, bake)
     data["visibility_order"] = int(bake["visibility_order"])
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     world = transforms.transform_points(matrix, attributes.read_positions(mesh))

@@ -9,6 +9,9 @@ What a draw reads:
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
   gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);
+- texture-space data (a bake with a lightmap, utils/lightmap.py): the same texels, one entry per
+  lightmap texel (the texels' mesh's attributes), read per pixel at the vertex attribute
+  `lightmap_uv` (the baked mesh's UV map "SD Lightmap") instead of `corners` and `bary`;
 - the uniform block `sd` (Variant.frame_fields), rebuilt every frame; for MSD (12) it holds the
   lobes' designs (utils/lobe_designs.py: the Gauss product rule until the small design, built in a
   worker thread, is there; then the variant is swapped);
@@ -32,7 +35,7 @@ import numpy as np
 from . import attributes, environment, materials, native
 from .utils import lobe_designs as lobe_design_cache
 from .utils import lobes, methods, transforms
-from .utils.bake_data import BAKE
+from .utils.bake_data import BAKE, LIGHTMAP, LIGHTMAP_UV
 from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER,
                                    DATA_SAMPLER, GAUNT_SAMPLER, TEXTURE_WIDTH, Variant,
                                    band_limited_texture_size)
@@ -291,9 +294,15 @@ class ObjectData:
         self.vertex_count = len(mesh.vertices)
         s, sv = self.light_order, self.visibility_order
 
+        # Texture-space data, where the bake has them (the vertex target reads the vertices')
+        texels_mesh = None if vertex_target else mesh.get(LIGHTMAP)
+        if texels_mesh is None or LIGHTMAP_UV not in mesh.uv_layers or self.method.data is None:
+            texels_mesh = None
+        self.lightmap = (int(bake["lightmap"]),) * 2 if texels_mesh is not None else ()
+        per_pixel = per_pixel or bool(self.lightmap)
         self.data_texture, stride = None, 0
         if self.method.data is not None:
-            texels = attributes.read_texels(mesh, self.method.data)
+            texels = attributes.read_texels(mesh if texels_mesh is None else texels_mesh, self.method.data)
             stride = texels.shape[1]
             self.data_texture = float_texture(texels.reshape(-1, 4))
         self.gaunt_texture, gaunt_count = (None, 0)
@@ -306,7 +315,7 @@ class ObjectData:
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
                                lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
-                               diffuse_design_size=design_sizes[1])
+                               diffuse_design_size=design_sizes[1], lightmap=self.lightmap)
         self.shader = shader_program(self.variant)
         per_lobe = 4 * self.variant.lobe_vec4s
         self.lobe_factors = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
@@ -337,9 +346,13 @@ class ObjectData:
             triangles = attributes.read_triangles(mesh)
             if per_pixel:
                 corners = triangles.reshape(-1)
-                content = {"pos": positions[corners], "nrm": normals[corners],
-                           "corners": np.repeat(triangles.astype(np.float32), 3, axis=0),
-                           "bary": np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1))}
+                content = {"pos": positions[corners], "nrm": normals[corners]}
+                if self.lightmap:
+                    loops = attributes.read_triangle_loops(mesh).reshape(-1)
+                    content["lightmap_uv"] = attributes.read_loop_uvs(mesh, LIGHTMAP_UV)[loops]
+                else:
+                    content.update(corners=np.repeat(triangles.astype(np.float32), 3, axis=0),
+                                   bary=np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1)))
                 content.update({name: values[corners] for name, values in surface.items()})
                 self.batch = make_batch('TRIS', content)
             else:

@@ -66,6 +66,11 @@ class SD_PT_lighting(bpy.types.Panel):
         row.prop(settings, "rays")
         row.prop(settings, "seed")
         row = box.row(align=True)
+        row.prop(settings, "texture_space")
+        sub = row.row(align=True)
+        sub.enabled = settings.texture_space
+        sub.prop(settings, "lightmap_size", text="")
+        row = box.row(align=True)
         row.prop(settings, "refine")
         sub = row.row(align=True)
         sub.enabled = settings.refine
@@ -168,6 +173,11 @@ class SD_PT_lighting(bpy.types.Panel):
                       "Least squares: not for %s's designs (kept as baked)" % method.label)
         if "unrefined_vertices" in info:
             _draw_refinement(col, info)
+        if "lightmap_texels" in info:
+            col.label(text="Texture space: %d x %d lightmap, %d texels baked in %.2f s" % (
+                info["lightmap"], info["lightmap"], info["lightmap_texels"], info.get("lightmap_seconds", 0.0)))
+        elif info.get("lightmap") and method is not None:
+            col.label(text="Texture space: not for %s (baked per vertex)" % method.label, icon='INFO')
         if "automatic" in info:
             _draw_choice(box, "Automatic choice", info)
         if settings.live_rebake and method is not None and method.designs_per_vertex:

@@ -10,7 +10,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        IntProperty, PointerProperty, StringProperty)
 
 from . import analysis, environment, live_rebake, native
-from .utils import limits, methods, refine, ringing
+from .utils import lightmap, limits, methods, refine, ringing
 
 log = logging.getLogger(__name__)
 
@@ -149,6 +149,17 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Max Vertices", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
         description="Most vertices a refined copy may have (its bake time and memory grow with "
                     "them); a copy that has as many already is not refined")
+
+    texture_space: BoolProperty(
+        name="Texture Space", default=False,
+        description="Also bake the light into a lightmap over the baked copy (Blender's Smart UV "
+                    "Project), read per pixel by the live shading: shadows finer than the vertices "
+                    "without more vertices. AO and PRT (MSD (13) bakes per vertex); where it applies, the vertices "
+                    "are baked without refinement and least squares")
+    lightmap_size: EnumProperty(
+        name="Lightmap", items=[(str(size), "%d x %d" % (size, size), "A lightmap of %d x %d texels: its "
+                                 "bake time and memory grow with them" % (size, size)) for size in lightmap.SIZES],
+        default=str(lightmap.DEFAULT_SIZE))
 
     live_rebake: BoolProperty(
         name="Live Re-bake", default=False, update=_sync_live_rebake,

@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from sd_lighting.utils import methods, shader_variant
+from sd_lighting.utils import lightmap, methods, shader_variant
 from sd_lighting.utils.shader_variant import BlockField, Variant
 
 
@@ -21,14 +21,16 @@ def all_variants():
             both = lobes == "both"
             if lobes != "lambert" and method.lambert_only:
                 continue
-            yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
-                          18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
-                          per_pixel, target,
-                          shader_variant.band_limited_texture_size(4) if texture else (),
-                          material_count=2 if albedo else 0, material_slots=albedo,
-                          albedo_texture=albedo, lobe_weights=lobes in ("metal", "both"),
-                          diffuse_lobe=both,
-                          diffuse_design_size=12 if both and method.lobe_design else 0)
+            for texels in ((False, True) if per_pixel and lightmap.applies(method) else (False,)):
+                yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
+                              18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
+                              per_pixel, target,
+                              shader_variant.band_limited_texture_size(4) if texture else (),
+                              material_count=2 if albedo else 0, material_slots=albedo,
+                              albedo_texture=albedo, lobe_weights=lobes in ("metal", "both"),
+                              diffuse_lobe=both,
+                              diffuse_design_size=12 if both and method.lobe_design else 0,
+                              lightmap=(64, 32) if texels else ())
 
 
 def test_defines_of_a_known_variant(sdnative):
@@ -46,6 +48,18 @@ def test_defines_of_a_known_variant(sdnative):
         "SD_TEXTURE_WIDTH_LOG2": "12", "SD_BASIS_ORDER": "6", "SD_BASIS_COUNT": "49",
         "SD_SH_TABLE_SIZE": "28", "SD_GLOSSY": "1", "SD_GAUNT_COUNT": "77", "SD_PER_PIXEL": "1"}
     assert variant.samplers() == [(0, "sd_data"), (1, "sd_gaunt")]
+
+
+def test_texture_space_variant_reads_the_lightmap_uv_per_pixel(sdnative):
+    variant = Variant(methods.get("prt_diffuse"), False, 2, 0, data_stride=3, per_pixel=True,
+                      lightmap=(512, 256))
+    defines = variant.defines(sdnative.sh_recurrence_constants)
+    assert (defines["SD_LIGHTMAP"], defines["SD_LIGHTMAP_WIDTH"], defines["SD_LIGHTMAP_HEIGHT"]) == ("1", "512", "256")
+    assert variant.vertex_inputs() == [("vec3", "pos"), ("vec3", "nrm"), ("vec2", "lightmap_uv")]
+    assert ("smooth", "vec2", "sd_lightmap_uv") in variant.interface()
+    assert not any(name in ("sd_bary", "sd_corners") for _, _, name in variant.interface())
+    with pytest.raises(ValueError, match="per pixel"):
+        Variant(methods.get("prt_diffuse"), False, 2, 0, data_stride=3, lightmap=(512, 256))
 
 
 def test_band_limited_texture_variant(sdnative):

@@ -20,6 +20,8 @@ MATERIAL_SLOT = PREFIX + "material_slot"  # FLOAT: the vertex's material slot (o
 UV = PREFIX + "uv"                  # FLOAT2: the vertex's UV for the albedo texture (when one is read)
 BAKE = PREFIX + "bake"              # custom property: the bake's settings and summary
 BAKED_MESH = PREFIX + "baked_mesh"  # custom property of an object: its baked mesh
+LIGHTMAP = PREFIX + "lightmap"      # custom property of a baked mesh: its texels' mesh (texture space)
+LIGHTMAP_UV = "SD Lightmap"         # the baked mesh's UV map of those texels
 
 
 def vec4_groups(values):

@@ -94,10 +94,13 @@ class Variant:
     lobe_weights: bool = False    # the slots' Principled weights colour the Phong lobe 0 (glossy)
     diffuse_lobe: bool = False    # a Lambert lobe 1 besides it (lobe_weights)
     diffuse_design_size: int = 0  # nodes of lobe 1's design (methods with lobe_design)
+    lightmap: tuple = ()          # (width, height) of texture-space data (per pixel), or ()
 
     def __post_init__(self):
         if (self.lobe_weights and not self.glossy) or (self.diffuse_lobe and not self.lobe_weights):
             raise ValueError("lobe weights go with a Phong lobe 0, a Lambert lobe 1 with weights")
+        if self.lightmap and not self.per_pixel:
+            raise ValueError("texture-space data are read per pixel")
 
     @property
     def weighted(self):
@@ -153,6 +156,10 @@ class Variant:
             d["SD_GAUNT_COUNT"] = str(self.gaunt_count)
         if self.per_pixel:
             d["SD_PER_PIXEL"] = "1"
+        if self.lightmap:
+            d["SD_LIGHTMAP"] = "1"
+            d["SD_LIGHTMAP_WIDTH"] = str(self.lightmap[0])
+            d["SD_LIGHTMAP_HEIGHT"] = str(self.lightmap[1])
         if self.vertex_target:
             d["SD_VERTEX_TARGET"] = "1"
         if self.band_limited_texture:
@@ -171,7 +178,9 @@ class Variant:
     def vertex_inputs(self):
         """The vertex attributes, in location order: (GLSL type, name)."""
         inputs = [("vec3", "pos"), ("vec3", "nrm")]
-        if self.per_pixel:
+        if self.lightmap:
+            inputs.append(("vec2", "lightmap_uv"))
+        elif self.per_pixel:
             inputs += [("vec3", "corners"), ("vec3", "bary")]
         if self.material_count and self.material_slots:
             inputs.append(("float", "material_slot"))
@@ -181,7 +190,10 @@ class Variant:
 
     def interface(self):
         """What the vertex stage passes on, in location order: (qualifier, GLSL type, name)."""
-        if self.per_pixel:
+        if self.lightmap:
+            out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
+                   ("smooth", "vec2", "sd_lightmap_uv")]
+        elif self.per_pixel:
             out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
         else:

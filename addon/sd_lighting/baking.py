@@ -105,6 +105,7 @@ class Geometry:
         self._triangle_loops = attributes.read_triangle_loops(mesh)
         self.triangle_count = len(self._triangle_loops)
         self.lightmap_uvs = None   # each loop's lightmap UV [L, 2], for texture-space data (lightmap_uvs)
+        self.unwrap_seconds = 0.0  # what finding them took
 
     def inputs(self):
         """What was read from the mesh: everything the other arrays are computed from."""
@@ -608,7 +609,9 @@ def prepare(context, objects, settings_of=bake_settings):
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
         if int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
+            start = time.perf_counter()
             geometry.lightmap_uvs = lightmap_uvs(context, geometry, int(settings["lightmap"]))
+            geometry.unwrap_seconds = time.perf_counter() - start
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
     if not tasks:
@@ -738,7 +741,6 @@ class BakeJob:
                 settings.update(_result_summary(task, floats))
                 if "lightmap" in task.result:
                     mesh[LIGHTMAP] = _build_lightmap_mesh(LIGHTMAP_PREFIX + task.object_name, task.result["lightmap"])
-                    settings.update(_lightmap_summary(task.result["lightmap"]))
                 mesh[BAKE] = settings
                 mesh.use_fake_user = True
         except Exception:
@@ -791,9 +793,6 @@ def _build_lightmap_mesh(name, texels):
     return mesh
 
 
-def _lightmap_summary(texels):
-    return {"lightmap_texels": int(len(texels["entries"])),
-            "lightmap_seconds": float(texels["result"].get("seconds", 0.0))}
 
 
 def _result_summary(task, floats):
@@ -801,7 +800,7 @@ def _result_summary(task, floats):
     result = task.result
     n = len(task.baked.vertices)
     summary = {
-        "seconds": float(result.get("seconds", 0.0)) + task.refine_seconds,
+        "seconds": float(result.get("seconds", 0.0)) + task.refine_seconds + task.geometry.unwrap_seconds,
         "vertices": int(n),
         "floats_per_vertex": int(floats),
         "bytes_per_vertex": int(4 * floats),
@@ -815,6 +814,10 @@ def _result_summary(task, floats):
                        refine_worst_left=float(refinement.worst_left),
                        refine_estimated_left=float(refinement.estimated_left),
                        refine_budget_reached=bool(refinement.budget_reached))
+    texels = result.get("lightmap")
+    if texels is not None:   # the unwrap (step 1) and the texels' bake
+        summary.update(lightmap_texels=int(len(texels["entries"])),
+                       lightmap_seconds=float(texels["result"]["seconds"]) + task.geometry.unwrap_seconds)
     offsets = result.get("design_offsets")
     if offsets is not None:
         counts = np.diff(np.asarray(offsets))

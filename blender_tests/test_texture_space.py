@@ -83,6 +83,33 @@ def bilinear_texels(values, uv):
     return out
 
 
+def chart_gap(package, mesh):
+    """The least distance (in texels, Chebyshev) between texel centres of different charts of the
+    baked mesh's lightmap: each chart (a UV island of "SD Lightmap") rasterized as the bake does."""
+    import bmesh
+    from bpy_extras.bmesh_utils import bmesh_linked_uv_islands
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    layer = bm.loops.layers.uv["SD Lightmap"]
+    label = np.full(SIZE * SIZE, -1)
+    for chart, faces in enumerate(bmesh_linked_uv_islands(bm, layer)):
+        corners = []
+        for face in faces:
+            uvs = [tuple(loop[layer].uv) for loop in face.loops]
+            corners += [(uvs[0], uvs[k], uvs[k + 1]) for k in range(1, len(uvs) - 1)]
+        label[package.utils.lightmap.texels(np.array(corners), SIZE, SIZE)[0]] = chart
+    bm.free()
+    grid = label.reshape(SIZE, SIZE)
+    for distance in range(1, package.utils.lightmap.MARGIN_TEXELS + 1):
+        for dy in range(-distance, distance + 1):
+            for dx in range(-distance, distance + 1):
+                a = grid[max(dy, 0):SIZE + min(dy, 0), max(dx, 0):SIZE + min(dx, 0)]
+                b = grid[max(-dy, 0):SIZE + min(-dy, 0), max(-dx, 0):SIZE + min(-dx, 0)]
+                if np.any((a >= 0) & (b >= 0) & (a != b)):
+                    return distance
+    return package.utils.lightmap.MARGIN_TEXELS + 1
+
+
 def main():
     checks = sdtest.Checks("test_texture_space")
     args = sdtest.arguments()
@@ -118,6 +145,11 @@ def main():
                      {"sd_transfer_000", "sd_ambient_occlusion", "sd_normal"} <= set(texels.attributes.keys()),
                      "%s: a texels' mesh of %d x %d points with the method's attributes" % (obj.name, SIZE, SIZE),
                      "%d texels baked" % info.get("lightmap_texels", 0))
+        if obj == ball:
+            gap = chart_gap(package, mesh)
+            checks.check(gap >= package.utils.lightmap.MARGIN_TEXELS,
+                         "Ball: its charts' texels at least %d texels apart" % package.utils.lightmap.MARGIN_TEXELS,
+                         "nearest texels of two charts %d apart" % gap)
         data = package.attributes.read(texels, info)
         checks.check(np.all((data["ambient_occlusion"] >= 0) & (data["ambient_occlusion"] <= 1)) and
                      np.isfinite(data["transfer"]).all(), "%s: texel AO in [0, 1], transfer finite" % obj.name)
@@ -174,6 +206,17 @@ def main():
                  "in Edit Mode the bake refuses with a message and changes nothing",
                  "%s, %s; changed: %s" % (result, text.strip().splitlines()[-1][-100:] if text.strip() else "",
                                           [k for k in set(before) | set(after) if before.get(k) != after.get(k)]))
+
+    # A lightmap whose data would not fit one GPU texture: refused before anything is baked.
+    scene.sd_lighting.method = 'prt_matrix'
+    scene.sd_lighting.light_order = scene.sd_lighting.visibility_order = 2
+    scene.sd_lighting.lightmap_size = '2048'
+    before = sdtest.snapshot()
+    result, text = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
+    checks.check(result == {'CANCELLED'} and "smaller lightmap" in text and sdtest.snapshot() == before,
+                 "a lightmap too large for the GPU is refused, nothing changes",
+                 text.strip().splitlines()[-1][-120:] if text.strip() else "")
+    scene.sd_lighting.lightmap_size = str(SIZE)
 
     # MSD (13): per-vertex designs only, no texels.
     scene.sd_lighting.method = 'msd_visibility'

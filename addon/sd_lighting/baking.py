@@ -134,7 +134,8 @@ class Geometry:
         return self._loop_vertices[self._wound_triangle_loops]
 
     # The split and what follows from it are computed when first read - for a bake from the UI in
-    # its worker thread (BakeJob.run), not on the main thread - and kept.
+    # its worker thread (BakeJob.run), not on the main thread, except for a texture-space bake's
+    # unwrap (lightmap_uvs) - and kept.
     @functools.cached_property
     def _split(self):
         return corners.split(self._loop_vertices, self._corner_normals, self._loop_slots, self._loop_uvs)
@@ -169,12 +170,9 @@ class Geometry:
 
     def build_mesh(self, name, bake_frame=False):
         """A new mesh datablock with this geometry in the local frame (or the bake frame), vertices
-        in the same order, with the lightmap UVs when there are some."""
-        mesh = attributes.new_mesh(name, self.vertices if bake_frame else self.positions, self.loop_vertices,
+        in the same order."""
+        return attributes.new_mesh(name, self.vertices if bake_frame else self.positions, self.loop_vertices,
                                    self.loop_starts, self.loop_totals)
-        if self.lightmap_uvs is not None:
-            mesh.uv_layers.new(name=LIGHTMAP_UV).data.foreach_set("uv", self.lightmap_uvs.ravel())
-        return mesh
 
     def surface(self):
         """The baked vertices and triangles as a refine.Surface. Vertices at one point weld: the
@@ -220,13 +218,16 @@ def _evaluated_arrays(obj, depsgraph, shape):
 def lightmap_uvs(context, geometry, size):
     """Each loop's lightmap UV of the geometry (float32 [L, 2]): Blender's Smart UV Project of a
     copy in the bake frame (texel density follows the scaled surface), its charts
-    lightmap.MARGIN_TEXELS texels of a size x size map apart. The copy lives in a temporary scene,
-    so that Edit Mode reaches it alone; nothing else changes. Raises BakeError outside Object Mode
-    (another object would share that Edit Mode)."""
+    lightmap.MARGIN_TEXELS texels of a size x size map apart (the margin as a fraction of the map:
+    the default 'SCALED' margin shrinks with few charts, to about a texel on a cube). The copy
+    is of the split vertices, so its charts also end at sharp edges, material borders and albedo
+    UV seams. It lives in a temporary scene, so that Edit Mode reaches it alone; nothing else
+    changes. Raises BakeError outside Object Mode (another object would share that Edit Mode) or
+    when the unwrap fails."""
     import bpy
     if context.mode != 'OBJECT':
-        raise BakeError("texture-space data are unwrapped in Object Mode: leave %s Mode to bake "
-                        "them" % context.mode.split("_")[0].title())
+        raise BakeError("texture-space data are unwrapped in Object Mode (the mode is %s): switch "
+                        "to Object Mode to bake them" % context.mode)
     mesh = geometry.build_mesh("sd_lightmap unwrap", bake_frame=True)
     scene = obj = None
     try:
@@ -236,19 +237,24 @@ def lightmap_uvs(context, geometry, size):
         layer = scene.view_layers[0]
         layer.objects.active = obj
         obj.select_set(True, view_layer=layer)
-        with context.temp_override(scene=scene, view_layer=layer, active_object=obj, object=obj,
-                                   selected_objects=[obj], selected_editable_objects=[obj]):
-            bpy.ops.object.mode_set(mode='EDIT')
-            try:
-                with context.temp_override(edit_object=obj):
-                    bpy.ops.mesh.select_all(action='SELECT')
-                    bpy.ops.uv.smart_project(angle_limit=np.radians(lightmap.ANGLE_LIMIT_DEGREES),
-                                             island_margin=lightmap.MARGIN_TEXELS / size)
-            finally:
-                bpy.ops.object.mode_set(mode='OBJECT')
+        loops = len(mesh.loops)
+        try:
+            with context.temp_override(scene=scene, view_layer=layer, active_object=obj, object=obj,
+                                       selected_objects=[obj], selected_editable_objects=[obj]):
+                bpy.ops.object.mode_set(mode='EDIT')
+                try:
+                    with context.temp_override(edit_object=obj):
+                        bpy.ops.mesh.select_all(action='SELECT')
+                        bpy.ops.uv.smart_project(angle_limit=np.radians(lightmap.ANGLE_LIMIT_DEGREES),
+                                                 margin_method='FRACTION',
+                                                 island_margin=lightmap.MARGIN_TEXELS / size)
+                finally:
+                    bpy.ops.object.mode_set(mode='OBJECT')
+        except RuntimeError as exc:   # an operator's poll or report, e.g. from a timer's context
+            raise BakeError("Smart UV Project failed: %s" % exc) from exc
         layer_uv = mesh.uv_layers.active
-        if layer_uv is None:
-            raise BakeError("Smart UV Project made no UV map for %s" % mesh.name)
+        if layer_uv is None or len(mesh.loops) != loops:
+            raise BakeError("Smart UV Project gave no UV map of the baked copy's %d face corners" % loops)
         return attributes.read_loop_uvs(mesh, layer_uv.name)
     finally:
         if obj is not None:
@@ -334,7 +340,8 @@ class BakeTask:
         """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
                                  lobes.Lobes.of_bake(self.settings), stop,
-                                 fitted=bool(self.settings.get("least_squares")))
+                                 fitted=bool(self.settings.get("least_squares")),
+                                 texels=lightmap.expected_texels(int(self.settings.get("lightmap", 0))))
         per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
             per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
@@ -356,18 +363,23 @@ class BakeTask:
                                                 self.settings, stop)
 
     @property
+    def lightmap_size(self):
+        """The side of the texture-space data the bake adds: asked for, and a method whose data
+        texels can hold (once an automatic task has chosen one); 0 for none."""
+        size = int(self.settings.get("lightmap", 0))
+        return size if size > 0 and lightmap.applies(methods.get(self.settings["method"])) else 0
+
+    @property
     def bakes_lightmap(self):
-        """Whether the bake adds texture-space data: asked for (the copy unwrapped), and a method
-        whose data the texels can hold (once an automatic task has chosen one)."""
-        return (int(self.settings.get("lightmap", 0)) > 0 and self.geometry.lightmap_uvs is not None
-                and lightmap.applies(methods.get(self.settings["method"])))
+        """Whether the bake adds texture-space data (lightmap_size, the copy unwrapped by prepare)."""
+        return self.lightmap_size > 0 and self.geometry.lightmap_uvs is not None
 
     @property
     def fits_least_squares(self):
         """Whether the bake fits its data by least squares: Least Squares on, and a method it fits
         (once an automatic task has chosen one); not with texture-space data, which the shading
         reads instead of the vertices'."""
-        return (bool(self.settings.get("least_squares")) and not self.bakes_lightmap
+        return (bool(self.settings.get("least_squares")) and not self.lightmap_size
                 and least_squares.applies(methods.get(self.settings["method"])))
 
     def bake(self, sd, progress):
@@ -377,6 +389,13 @@ class BakeTask:
         geometry = self.baked
         points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
         if self.bakes_lightmap:
+            size, method = self.lightmap_size, methods.get(self.settings["method"])
+            count = lightmap.data_entries(method, int(self.settings["light_order"]),
+                                          int(self.settings["visibility_order"]), size)
+            if count > lightmap.MAX_DATA_TEXELS:
+                raise BakeError("a %d x %d lightmap of %s needs %d data texels, more than a GPU texture "
+                                "holds (%d): choose a smaller lightmap" % (size, size, method.label, count,
+                                                                           lightmap.MAX_DATA_TEXELS))
             result = dict(sd.bake_transfer(points, normals, triangles, progress=_share(progress, 0.0, TEXELS_START),
                                            **self.bake_arguments()))
             result["lightmap"] = self.bake_lightmap(sd, _share(progress, TEXELS_START, 1.0))
@@ -394,7 +413,8 @@ class BakeTask:
         against the copy's triangles and the occluders: {"size", "entries", "sources" (dilation),
         "positions" (in the local frame), "result" (bake_transfer's dict of the baked texels, in
         `entries` order)}."""
-        size = int(self.settings["lightmap"])
+        start = time.perf_counter()
+        size = self.lightmap_size
         geometry = self.baked
         entries, triangle, barycentric = lightmap.texels(geometry.lightmap_corner_uvs, size, size)
         points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
@@ -410,8 +430,9 @@ class BakeTask:
         arguments.update(occluder_vertices=vertices, occluder_triangles=triangles.astype(np.int32))
         result = dict(sd.bake_transfer(points, normals, np.zeros((0, 3), np.int32), progress=progress,
                                        **arguments))
-        return {"size": size, "entries": entries, "sources": lightmap.dilation_sources(entries, size, size),
-                "positions": positions, "result": result}
+        sources = lightmap.dilation_sources(entries, size, size)
+        return {"size": size, "entries": entries, "sources": sources, "positions": positions, "result": result,
+                "seconds": time.perf_counter() - start}
 
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
@@ -419,7 +440,7 @@ class BakeTask:
         occluders with common rays. progress(done, total) as bake_transfer's, over all levels."""
         s = self.settings
         self.baked = self.geometry
-        if not s.get("refine") or self.bakes_lightmap:
+        if not s.get("refine") or self.lightmap_size:
             return
         occluders = self.occluders()
         kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
@@ -561,12 +582,13 @@ def _may_bake_lightmap(method_id):
     return method_id == analysis.AUTOMATIC or lightmap.applies(methods.get(method_id))
 
 
-def prepare(context, objects, settings_of=bake_settings):
+def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
     BakeError when none is left or the bake cannot start (no sdnative, no environment).
     settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
-    panel's; recorded_settings: those of its last bake)."""
+    panel's; recorded_settings: those of its last bake). unwrap: False leaves texture-space
+    bakes without their UVs (the bake-time prediction, which estimates the texels instead)."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
@@ -608,7 +630,7 @@ def prepare(context, objects, settings_of=bake_settings):
         occluders = _occluders(occluders_of(obj), to_frame)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        if int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
+        if unwrap and int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
             start = time.perf_counter()
             geometry.lightmap_uvs = lightmap_uvs(context, geometry, int(settings["lightmap"]))
             geometry.unwrap_seconds = time.perf_counter() - start
@@ -688,7 +710,7 @@ class BakeJob:
                     task.choose(lambda: self.cancel_requested)
                     self.choosing = False
                 # Refinement takes the first half of the task's bar, when it runs.
-                halfway = 0.5 if task.settings.get("refine") else 0.0
+                halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else 0.0
                 t0 = time.perf_counter()
                 self.refining = True
                 task.refine(sd, _share(task_progress, 0.0, halfway))
@@ -740,6 +762,7 @@ class BakeJob:
                 settings = dict(task.settings)
                 settings.update(_result_summary(task, floats))
                 if "lightmap" in task.result:
+                    mesh.uv_layers.new(name=LIGHTMAP_UV).data.foreach_set("uv", task.baked.lightmap_uvs.ravel())
                     mesh[LIGHTMAP] = _build_lightmap_mesh(LIGHTMAP_PREFIX + task.object_name, task.result["lightmap"])
                 mesh[BAKE] = settings
                 mesh.use_fake_user = True
@@ -817,7 +840,7 @@ def _result_summary(task, floats):
     texels = result.get("lightmap")
     if texels is not None:   # the unwrap (step 1) and the texels' bake
         summary.update(lightmap_texels=int(len(texels["entries"])),
-                       lightmap_seconds=float(texels["result"]["seconds"]) + task.geometry.unwrap_seconds)
+                       lightmap_seconds=float(texels["seconds"]) + task.geometry.unwrap_seconds)
     offsets = result.get("design_offsets")
     if offsets is not None:
         counts = np.diff(np.asarray(offsets))

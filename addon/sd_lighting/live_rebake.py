@@ -11,7 +11,9 @@ nothing) on the main thread. An object whose inputs hash as its bake's recorded 
 the bake depends on changed, e.g. after an undo that brought bake and geometry back together) is
 not baked again. A re-bake's result replaces only the bake it started from: one replaced
 meanwhile (a bake from the panel, an undo, Clear Bake) is kept. A cancelled or failed re-bake
-changes nothing and says so in the status bar.
+changes nothing and says so in the status bar - as does every re-bake in Edit Mode of an object
+baked with texture-space data, whose unwrap needs Object Mode (baking.lightmap_uvs): it is baked
+again by its next change in Object Mode.
 
 Undo: memfile undo (object mode) restores each baked mesh together with the objects, as of the
 undo step - which may predate a re-bake; edit-mode undo restores the edited mesh only. So after

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from . import baking, native
-from .utils import bake_time, least_squares
+from .utils import bake_time, least_squares, lightmap
 
 _predictors = {}          # settings key -> BakeTimePredictor (the latest few)
 _KEPT = 8
@@ -31,7 +31,7 @@ def settings_key(context):
         return None
     names = ("method", "material_source", "phong_exponent", "automatic_orders", "target_error",
              "max_automatic_order", "light_order", "visibility_order", "rays", "environment_source",
-             "environment_path", "least_squares")
+             "environment_path", "least_squares", "texture_space", "lightmap_size")
     world = scene.world.name if scene.world is not None else ""
     return tuple(getattr(settings, name) for name in names) + (world, meshes)
 
@@ -40,7 +40,8 @@ def sample_jobs(tasks):
     """The sampling jobs of baking.prepare's tasks: each object's own mesh joins its occluders,
     so that a sampled triangle's vertices see the rest of the object. First, in the predictor's
     worker, an automatic task chooses its settings (its reasons are then in task.settings) and
-    a chosen method's are measured: either way task.predicted_error, for the panel."""
+    a chosen method's are measured: either way task.predicted_error, for the panel. Texels are
+    baked like vertices: a texture-space bake counts its expected texels as vertices."""
     def arguments(task, stop):
         if task.automatic:
             task.choose(stop)
@@ -69,7 +70,8 @@ def sample_jobs(tasks):
         return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
 
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
-                                lambda sd, result, task=task: fit_seconds(task, sd, result))
+                                lambda sd, result, task=task: fit_seconds(task, sd, result),
+                                lambda task=task: lightmap.expected_texels(task.lightmap_size))
             for task in tasks]
 
 
@@ -83,7 +85,8 @@ def start(context):
     if predictor is not None:
         return predictor
     try:
-        tasks, _ = baking.prepare(context, context.selected_objects)  # skipped objects: the bake warns
+        # skipped objects: the bake warns; texels: estimated, not unwrapped in a timer
+        tasks, _ = baking.prepare(context, context.selected_objects, unwrap=False)
     except baking.BakeError:
         return None
     predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1)

@@ -154,8 +154,9 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Texture Space", default=False,
         description="Also bake the light into a lightmap over the baked copy (Blender's Smart UV "
                     "Project), read per pixel by the live shading: shadows finer than the vertices "
-                    "without more vertices. AO and PRT (MSD (13) bakes per vertex); where it applies, the vertices "
-                    "are baked without refinement and least squares")
+                    "without more vertices. AO, PRT and MSD (12) (MSD (13) bakes per vertex); where it "
+                    "applies, the vertices are baked without refinement and least squares. Baked in "
+                    "Object Mode (a Live Re-bake waits for it)")
     lightmap_size: EnumProperty(
         name="Lightmap", items=[(str(size), "%d x %d" % (size, size), "A lightmap of %d x %d texels: its "
                                  "bake time and memory grow with them" % (size, size)) for size in lightmap.SIZES],

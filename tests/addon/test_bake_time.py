@@ -169,3 +169,14 @@ def test_what_follows_the_rays_is_added_once_from_a_sample_result():
         assert predictor.join(30)
     assert seen == [{}]   # FakeNative's bake result
     assert fitted.prediction().seconds == pytest.approx(plain.prediction().seconds + 100.0, rel=0.2)
+
+
+def test_extra_points_are_predicted_at_the_vertices_cost():
+    vertices, normals, triangles = grid(30)
+    plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
+    texels = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {},
+                                                        extra_points=lambda: 2 * len(vertices))], threads=1)
+    for predictor in (plain, texels):
+        predictor.start()
+        assert predictor.join(30)
+    assert texels.prediction().seconds == pytest.approx(3.0 * plain.prediction().seconds, rel=0.2)

@@ -4,7 +4,7 @@ surface, and the dilation around the charts."""
 import numpy as np
 import pytest
 
-from sd_lighting.utils import lightmap
+from sd_lighting.utils import lightmap, methods
 
 SQUARE = np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]])
 
@@ -83,6 +83,24 @@ def test_spread_lays_values_out_by_source():
     sources = np.array([1, 1, -1, 5, 5, 5])
     out = lightmap.spread(np.array([[1.0, 2.0], [3.0, 4.0]]), entries, sources)
     np.testing.assert_array_equal(out, [[1, 2], [1, 2], [0, 0], [3, 4], [3, 4], [3, 4]])
+
+
+def test_a_triangle_larger_than_a_chunk_is_rasterized_in_pieces(monkeypatch):
+    whole = lightmap.texels(SQUARE, 32, 32)
+    monkeypatch.setattr(lightmap, "_CHUNK", 50)
+    for a, b in zip(whole, lightmap.texels(SQUARE, 32, 32)):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_which_methods_texels_hold_and_what_their_data_take():
+    held = {m.id for m in methods.METHODS if lightmap.applies(m)}
+    assert held == {"ambient_occlusion", "prt_diffuse", "prt_matrix", "prt_gaunt", "msd_lobe"}
+    assert lightmap.data_entries(methods.get("ambient_occlusion"), 4, 2, 1024) == 1024 ** 2
+    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 1024) == 3 * 1024 ** 2       # 9 floats
+    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 2048) == 21 * 2048 ** 2      # 81 floats
+    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 2048) > lightmap.MAX_DATA_TEXELS
+    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 4096) <= lightmap.MAX_DATA_TEXELS
+    assert lightmap.expected_texels(1000) == int(lightmap.COVERAGE * 1e6)
 
 
 @pytest.mark.parametrize("size", lightmap.SIZES)

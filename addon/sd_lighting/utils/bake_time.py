@@ -92,11 +92,17 @@ class SampleJob:
     the worker, the keywords first (the automatic mode chooses the settings there, and they
     decide the mesh: least squares' centroid split); `task`: the caller's; `after_rays`: None, or
     a function of (sdnative, a sample bake's result) returning the seconds the bake spends after
-    its rays (the least-squares fit), called in the worker."""
+    its rays (the least-squares fit), called in the worker; `extra_points`: points baked beside
+    the mesh's vertices at the same cost per point (texels), a count or a function returning one,
+    called in the worker after the keywords."""
     mesh: object
     bake_arguments: object
     task: object = None
     after_rays: object = None
+    extra_points: object = 0
+
+    def points(self):
+        return int(self.extra_points() if callable(self.extra_points) else self.extra_points)
 
     def arguments(self, stop):
         return self.bake_arguments(stop) if callable(self.bake_arguments) else self.bake_arguments
@@ -165,7 +171,7 @@ class BakeTimePredictor:
     def _sample(self, index, job):
         arguments = job.arguments(lambda: self._cancelled)
         mesh = job.traced_mesh()
-        count = len(mesh[0])
+        count = len(mesh[0]) + job.points()
         rounds = []
         for triangles in ROUNDS:
             vertices, normals, sample_triangles = sample_mesh(*mesh, triangles, seed=index)
@@ -185,7 +191,7 @@ class BakeTimePredictor:
             rounds.append((len(vertices), time.perf_counter() - start))
             with self._lock:
                 self._estimates[index] = extrapolate(rounds, count)
-            if len(vertices) == count:
+            if len(vertices) == len(mesh[0]):   # the whole mesh sampled
                 break
         if job.after_rays is not None:
             after = job.after_rays(self._sd, result)

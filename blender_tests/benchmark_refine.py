@@ -72,12 +72,8 @@ def main():
             for budget, fit, fix, size in runs:
                 if budget is not None:
                     scene.sd_lighting.refine_max_vertices = budget
-                scene.sd_lighting.texture_space = bool(size)
-                if size:
-                    scene.sd_lighting.lightmap_size = str(size)
                 with without(package, fix) if fix else contextlib.nullcontext():
-                    image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr", fit)
-                scene.sd_lighting.texture_space = False
+                    image, info = parity.preview(scene, obj, budget is not None, stem + "_bench.exr", fit, size)
                 rms = parity.compare(image, theirs)[0]
                 seconds = info["seconds"]   # refinement, least squares and the texels included
                 rows.append((name, hdri[:-4], budget, fit, fix, size, rms, info, seconds))

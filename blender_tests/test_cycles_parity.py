@@ -13,14 +13,16 @@ front, lit by forest.exr and sunrise.exr (a low sun: hard shadows).
 For each asset and HDRI: Cycles as a user compares (direct light only, pixel filter off, the
 mean of two seeds, samples raised until the noise of its 4 x 4 pixel blocks is under 1.5 %) and
 the add-on's preview at the panel's defaults (Automatic, Refine and Least Squares on), with Refine
-off, and on the CAD models with neither (the plain per-vertex bake). Over the 4 x 4 blocks both
+off, and on the CAD models with neither (the plain per-vertex bake) and with texture-space data
+(a LIGHTMAP x LIGHTMAP lightmap instead of Refine and Least Squares). Over the 4 x 4 blocks both
 cover: relative RMS (over blocks and channels), the bias (mean over the mean of Cycles, per
 channel) and the share of blocks that are black where Cycles is lit. Error images (Cycles, then
 each preview and its |difference| x 4) go to --out.
 
 Checks: Cycles' noise is under 1.5 %; on the CAD models the least-squares fit lowers the plain
 bake's error and refinement lowers it further; no block is black where Cycles is lit; with the
-defaults each asset is within issue 8's goal (5 % on the CAD models, 3 % on the smooth one); the
+defaults each asset is within issue 8's goal (5 % on the CAD models, 3 % on the smooth one), and
+so are the CAD models with texture-space data; the
 coloured asset's mean colour follows Cycles' channel by channel; the panel tells what the
 refinement did.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_cycles_parity.py -- --zip Z --out DIR
@@ -44,6 +46,7 @@ BLOCK = 4
 SAMPLES = 256
 MAX_NOISE = 0.015
 HDRIS = ("forest.exr", "sunrise.exr")
+LIGHTMAP = 1024      # the texture-space bake's lightmap side, on the CAD models
 ORANGE = (0.8, 0.35, 0.1, 1.0)
 
 # asset: (file, colour, the largest relative RMS against Cycles at the defaults, over the HDRIs)
@@ -102,12 +105,16 @@ def cycles(scene, stem):
         samples *= 4
 
 
-def preview(scene, obj, refine, path, least_squares=True):
-    """Bakes the object at the panel's settings with Refine and Least Squares on or off and
-    renders the preview: (the image, the bake's `sd_bake`)."""
+def preview(scene, obj, refine, path, least_squares=True, lightmap=0):
+    """Bakes the object at the panel's settings with Refine and Least Squares on or off, and
+    with texture-space data of a lightmap of that side (0: none), and renders the preview: (the
+    image, the bake's `sd_bake`)."""
     settings = scene.sd_lighting
     settings.refine = refine
     settings.least_squares = least_squares
+    settings.texture_space = bool(lightmap)
+    if lightmap:
+        settings.lightmap_size = str(lightmap)
     sdtest.select_only([obj])
     if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
         raise RuntimeError("the bake of %s failed" % obj.name)
@@ -160,6 +167,19 @@ def main():
             theirs, noise, samples = cycles(scene, stem)
             checks.check(noise < MAX_NOISE, "%s: Cycles' noise under 1.5 %%" % tag,
                          "%.2f %% at %d samples" % (100 * noise, samples))
+            textured = []
+            if name in CAD:   # texture-space data instead of more vertices
+                image, info = preview(scene, obj, False, stem + "_texture_space.exr", False, LIGHTMAP)
+                rms, bias, black = compare(image, theirs)
+                textured.append(image)
+                print("%s: texture space %d: %.1f %% RMS, bias %s %%, black %.2f %%; %s s = %d; %d texels, "
+                      "bake %.2f s" % (tag, LIGHTMAP, 100 * rms, "/".join("%+.1f" % (100 * x) for x in bias),
+                                       100 * black, info["method"], info["light_order"],
+                                       info.get("lightmap_texels", 0), info["seconds"]), flush=True)
+                checks.check(info.get("lightmap_texels", 0) > 0 and rms <= ASSETS[name][2] and black == 0.0,
+                             "%s: with a %d x %d lightmap within %.0f %% of Cycles, no block black"
+                             % (tag, LIGHTMAP, LIGHTMAP, 100 * ASSETS[name][2]),
+                             "%.1f %%, %d texels" % (100 * rms, info.get("lightmap_texels", 0)))
             results = {}
             # (refine, least squares); the defaults last: the panel tells of their refinement below
             configurations = ([(False, False)] if name in CAD else []) + [(False, True), (True, True)]
@@ -175,7 +195,7 @@ def main():
                          info["light_order"], info["rays"], info["vertices"],
                          info.get("unrefined_vertices", "-"), info.get("refine_levels", "-"),
                          info["seconds"], info["bytes_per_vertex"]), flush=True)
-            error_image(stem + "_error.png", theirs, [results[c][0] for c in reversed(configurations)])
+            error_image(stem + "_error.png", theirs, [results[c][0] for c in reversed(configurations)] + textured)
             panel = sdtest.LayoutStub()
             bpy.types.SD_PT_lighting.draw(panel, bpy.context)
             info = dict(obj["sd_bake"])

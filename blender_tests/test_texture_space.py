@@ -69,18 +69,24 @@ def lightmap_uv(mesh, package, local_points):
     return out
 
 
-def bilinear_texels(values, uv):
-    """values [SIZE * SIZE, 3] (by entry) blended as the shader does at lightmap UVs."""
+def bilinear_texels(values, entries, uv):
+    """The stored texels' values [K, 3] (texels `entries`) blended as the shader does at lightmap
+    UVs: bilinear over the four around, those stored, divided by their weight."""
+    row = np.full(SIZE * SIZE, -1)
+    row[entries] = np.arange(len(entries))
     t = uv * SIZE - 0.5
     base = np.floor(t).astype(int)
     f = t - base
-    out = np.zeros((len(uv), 3))
+    out, total = np.zeros((len(uv), 3)), np.zeros(len(uv))
     for dx, dy in ((0, 0), (1, 0), (0, 1), (1, 1)):
         weight = (f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
         x = np.clip(base[:, 0] + dx, 0, SIZE - 1)
         y = np.clip(base[:, 1] + dy, 0, SIZE - 1)
-        out += weight[:, None] * values[y * SIZE + x]
-    return out
+        tap = row[y * SIZE + x]
+        weight = np.where(tap >= 0, weight, 0.0)
+        out += weight[:, None] * values[np.maximum(tap, 0)]
+        total += weight
+    return out / np.where(total > 0, total, 1.0)[:, None]
 
 
 def chart_gap(package, mesh):
@@ -140,11 +146,14 @@ def main():
         uv = package.attributes.read_loop_uvs(mesh, "SD Lightmap") if "SD Lightmap" in mesh.uv_layers else None
         checks.check(uv is not None and uv.min() >= 0.0 and uv.max() <= 1.0,
                      "%s: the baked copy has the lightmap UV map, inside [0, 1]" % obj.name)
-        checks.check(texels is not None and len(texels.vertices) == SIZE * SIZE and
-                     0 < info.get("lightmap_texels", 0) <= SIZE * SIZE and
+        entries = package.attributes.read_texels_entries(texels) if texels is not None else np.zeros(0)
+        checks.check(texels is not None and
+                     0 < info.get("lightmap_texels", 0) <= len(texels.vertices) == info.get("lightmap_stored") and
+                     np.all(np.diff(entries) > 0) and 0 <= entries.min() and entries.max() < SIZE * SIZE and
                      {"sd_transfer_000", "sd_ambient_occlusion", "sd_normal"} <= set(texels.attributes.keys()),
-                     "%s: a texels' mesh of %d x %d points with the method's attributes" % (obj.name, SIZE, SIZE),
-                     "%d texels baked" % info.get("lightmap_texels", 0))
+                     "%s: a texels' mesh of the texels stored, each with its entry and the method's "
+                     "attributes" % obj.name, "%d texels baked, %d stored of %d" % (
+                         info.get("lightmap_texels", 0), len(entries), SIZE * SIZE))
         if obj == ball:
             gap = chart_gap(package, mesh)
             checks.check(gap >= package.utils.lightmap.MARGIN_TEXELS,
@@ -172,9 +181,10 @@ def main():
     # The shader's texels: the CPU's B at each texel, blended bilinearly at the pixel's UV.
     mesh = baking.baked_mesh(ground)
     cpu = package.drawing.cpu_reference(scene, ground, view, texels=True)
+    entries = package.attributes.read_texels_entries(package.baking.lightmap_mesh(mesh))
     uv = lightmap_uv(mesh, package, points)
     inside = np.isfinite(uv).all(axis=1) & (lit[rows, columns, 3] > 0.5)
-    expected = bilinear_texels(cpu, uv[inside])
+    expected = bilinear_texels(cpu, entries, uv[inside])
     gpu = lit[rows[inside], columns[inside], :3]
     relative = np.abs(gpu - expected).max(axis=1) / np.maximum(expected.max(axis=1), 1e-3)
     checks.check(inside.sum() > 1000 and np.percentile(relative, 99) < 0.01,
@@ -208,15 +218,17 @@ def main():
                                           [k for k in set(before) | set(after) if before.get(k) != after.get(k)]))
 
     # A lightmap whose data would not fit one GPU texture: refused before anything is baked.
-    scene.sd_lighting.method = 'prt_matrix'
-    scene.sd_lighting.light_order = scene.sd_lighting.visibility_order = 2
-    scene.sd_lighting.lightmap_size = '2048'
+    scene.sd_lighting.method = 'prt_matrix'      # 49 x 16 floats per texel
+    scene.sd_lighting.light_order, scene.sd_lighting.visibility_order = 6, 3
+    scene.sd_lighting.lightmap_size = '1024'
     before = sdtest.snapshot()
     result, text = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
     checks.check(result == {'CANCELLED'} and "smaller lightmap" in text and sdtest.snapshot() == before,
                  "a lightmap too large for the GPU is refused, nothing changes",
                  text.strip().splitlines()[-1][-120:] if text.strip() else "")
     scene.sd_lighting.lightmap_size = str(SIZE)
+
+    scene.sd_lighting.light_order = scene.sd_lighting.visibility_order = 2
 
     # MSD (13): per-vertex designs only, no texels.
     scene.sd_lighting.method = 'msd_visibility'

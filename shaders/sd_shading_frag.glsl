@@ -84,12 +84,18 @@ void sd_add_entry(float weight, int entry, vec3 normal, vec3 view, inout vec3 rg
 #endif
 
 #ifdef SD_LIGHTMAP
-/* Adds the B of lightmap texel (x, y), clamped to the map (as a GPU's clamp-to-edge lookup does):
- * entry y W + x of the texture-space data (utils/lightmap.py). */
-void sd_add_texel(float weight, vec2 texel, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse)
+/* Adds the B of lightmap texel (x, y), clamped to the map (as a GPU's clamp-to-edge lookup does),
+ * when the texture-space data store it (utils/lightmap.py: sd_lightmap_index holds its row, or
+ * -1), and its weight to `total`. */
+void sd_add_texel(float weight, vec2 texel, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse,
+                  inout float total)
 {
   ivec2 xy = clamp(ivec2(texel), ivec2(0), ivec2(SD_LIGHTMAP_WIDTH - 1, SD_LIGHTMAP_HEIGHT - 1));
-  sd_add_entry(weight, xy.y * SD_LIGHTMAP_WIDTH + xy.x, normal, view, rgb, diffuse);
+  float row = texelFetch(sd_lightmap_index, xy, 0).r;
+  if (row >= 0.0) {
+    sd_add_entry(weight, int(row + 0.5), normal, view, rgb, diffuse);
+    total += weight;
+  }
 }
 #endif
 
@@ -101,15 +107,21 @@ void main()
   vec3 view = sd_view_direction(sd_origin_offset);
   vec3 rgb = vec3(0.0);
 #  ifdef SD_LIGHTMAP
-  /* Bilinear between the four texel centres around the pixel's lightmap UV: B is linear in the
-   * data, so blending the four B is blending the data. */
+  /* Bilinear between the four texel centres around the pixel's lightmap UV (B is linear in the
+   * data, so blending the four B is blending the data), over those stored: all four wherever a
+   * chart is (the dilation's ring). */
   vec2 t = sd_lightmap_uv * vec2(float(SD_LIGHTMAP_WIDTH), float(SD_LIGHTMAP_HEIGHT)) - vec2(0.5);
   vec2 base = floor(t);
   vec2 f = t - base;
-  sd_add_texel((1.0 - f.x) * (1.0 - f.y), base, normal, view, rgb, diffuse);
-  sd_add_texel(f.x * (1.0 - f.y), base + vec2(1.0, 0.0), normal, view, rgb, diffuse);
-  sd_add_texel((1.0 - f.x) * f.y, base + vec2(0.0, 1.0), normal, view, rgb, diffuse);
-  sd_add_texel(f.x * f.y, base + vec2(1.0, 1.0), normal, view, rgb, diffuse);
+  float total = 0.0;
+  sd_add_texel((1.0 - f.x) * (1.0 - f.y), base, normal, view, rgb, diffuse, total);
+  sd_add_texel(f.x * (1.0 - f.y), base + vec2(1.0, 0.0), normal, view, rgb, diffuse, total);
+  sd_add_texel((1.0 - f.x) * f.y, base + vec2(0.0, 1.0), normal, view, rgb, diffuse, total);
+  sd_add_texel(f.x * f.y, base + vec2(1.0, 1.0), normal, view, rgb, diffuse, total);
+  if (total > 0.0) {
+    rgb /= total;
+    diffuse /= total;
+  }
 #  else
   sd_add_entry(sd_bary.x, int(sd_corners.x + 0.5), normal, view, rgb, diffuse);
   sd_add_entry(sd_bary.y, int(sd_corners.y + 0.5), normal, view, rgb, diffuse);

@@ -35,9 +35,10 @@
  *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none); for eq. (13) the nodes
  *                        of the vertex's design of V
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
- *   SD_LIGHTMAP          (with SD_PER_PIXEL) the data are texture-space: entry y W + x is texel
- *                        (x, y) of a SD_LIGHTMAP_WIDTH x SD_LIGHTMAP_HEIGHT lightmap, read at the
- *                        pixel's lightmap UV (utils/lightmap.py) instead of at its triangle's vertices
+ *   SD_LIGHTMAP          (with SD_PER_PIXEL) the data are texture-space: one entry per stored texel
+ *                        of a SD_LIGHTMAP_WIDTH x SD_LIGHTMAP_HEIGHT lightmap (its row in the R32F
+ *                        map sd_lightmap_index, -1 where none is stored), read at the pixel's
+ *                        lightmap UV (utils/lightmap.py) instead of at its triangle's vertices
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
  *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
  *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it

@@ -74,6 +74,16 @@ def read_texels(mesh, array):
     return out
 
 
+def write_texels(mesh, entries):
+    """Stores each point's lightmap texel (entry y W + x) on a texels' mesh."""
+    _new(mesh, bake_data.TEXEL, 'FLOAT', 'value', entries)
+
+
+def read_texels_entries(mesh):
+    """Each point's lightmap texel of a texels' mesh, int64 [K]."""
+    return np.rint(_read(mesh, bake_data.TEXEL, 'value', 1)).astype(np.int64)
+
+
 def read_normals(mesh):
     """The baked normals, float32 [N, 3]."""
     return _read(mesh, NORMAL, 'vector', 3)

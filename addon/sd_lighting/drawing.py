@@ -227,8 +227,8 @@ def cpu_reference(scene, obj, view, texels=False):
     shading uses, clamped at 0 per channel as the shader shows it (displayed radiance is never
     negative; sdnative.shade itself is the raw formula); with a Lambert lobe besides the Phong one,
     the sum of the two, as the shader's vertex target shows it; exposure not applied. [N, 3].
-    texels: at every texel of its texture-space data instead (each with its own normal and view),
-    by entry. [W H, 3]."""
+    texels: at every texel its texture-space data store instead (each with its own normal and
+    view), in the order of attributes.read_texels_entries. [K, 3]."""
     mesh = baking.baked_mesh(obj)
     bake = dict(mesh[BAKE])
     method = methods.get(bake["method"])

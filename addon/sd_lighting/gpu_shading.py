@@ -10,8 +10,9 @@ What a draw reads:
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
   gl_VertexID (the index of an indexed batch) - the method's stored array (utils/bake_data.py);
 - texture-space data (a bake with a lightmap, utils/lightmap.py): the same texels, one entry per
-  lightmap texel (the texels' mesh's attributes), read per pixel at the vertex attribute
-  `lightmap_uv` (the baked mesh's UV map "SD Lightmap") instead of `corners` and `bary`;
+  stored lightmap texel (the texels' mesh's attributes), found through the R32F index map
+  `sd_lightmap_index` and read per pixel at the vertex attribute `lightmap_uv` (the baked mesh's
+  UV map "SD Lightmap") instead of `corners` and `bary`;
 - the uniform block `sd` (Variant.frame_fields), rebuilt every frame; for MSD (12) it holds the
   lobes' designs (utils/lobe_designs.py: the Gauss product rule until the small design, built in a
   worker thread, is there; then the variant is swapped);
@@ -36,9 +37,10 @@ from . import attributes, environment, materials, native
 from .utils import lobe_designs as lobe_design_cache
 from .utils import lobes, methods, transforms
 from .utils.bake_data import BAKE, LIGHTMAP, LIGHTMAP_UV
+from .utils import lightmap as texture_space
 from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER,
-                                   DATA_SAMPLER, GAUNT_SAMPLER, TEXTURE_WIDTH, Variant,
-                                   band_limited_texture_size)
+                                   DATA_SAMPLER, GAUNT_SAMPLER, LIGHTMAP_INDEX_SAMPLER, TEXTURE_WIDTH,
+                                   Variant, band_limited_texture_size)
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 EQUIRECT_FILE = "sd_equirect.glsl"
@@ -125,11 +127,11 @@ def _create(info, interface, files):
     return gpu.shader.create_from_info(info)
 
 
-def _rgba32f(width, height, texels):
+def _texture(width, height, texels, format='RGBA32F'):
     import gpu
     texels = np.ascontiguousarray(texels, dtype=np.float32).ravel()
     buffer = gpu.types.Buffer('FLOAT', texels.size, texels)
-    return gpu.types.GPUTexture((width, height), format='RGBA32F', data=buffer)
+    return gpu.types.GPUTexture((width, height), format=format, data=buffer)
 
 
 def float_texture(texels):
@@ -144,7 +146,7 @@ def float_texture(texels):
         raise ValueError("per-vertex data too large for one texture (%d texels)" % count)
     padded = np.zeros((width * height, 4), dtype=np.float32)
     padded[:len(texels)] = texels
-    return _rgba32f(width, height, padded)
+    return _texture(width, height, padded)
 
 
 def band_limited_texture(source, light):
@@ -163,7 +165,7 @@ def band_limited_texture(source, light):
         texels = np.zeros((height, width, 4), dtype=np.float32)
         texels[..., :3] = image[::-1]     # sdnative's rows are top-first
         texels[..., 3] = 1.0
-        texture = _rgba32f(width, height, texels)
+        texture = _texture(width, height, texels)
         _band_limited_textures[key] = texture
     return texture
 
@@ -201,7 +203,7 @@ def draw_background(source, view, to_environment, scale):
         height, width, _ = texels.shape
         rgba = np.ones((height, width, 4), dtype=np.float32)
         rgba[..., :3] = texels
-        texture = _background[source.key] = _rgba32f(width, height, rgba)
+        texture = _background[source.key] = _texture(width, height, rgba)
     rotation = np.eye(4)
     rotation[:3, :3] = to_environment
     shader.bind()
@@ -300,6 +302,10 @@ class ObjectData:
             texels_mesh = None
         self.lightmap = (int(bake["lightmap"]),) * 2 if texels_mesh is not None else ()
         per_pixel = per_pixel or bool(self.lightmap)
+        self.lightmap_index = None
+        if self.lightmap:
+            index = texture_space.index_map(attributes.read_texels_entries(texels_mesh), *self.lightmap)
+            self.lightmap_index = _texture(self.lightmap[0], self.lightmap[1], index, 'R32F')
         self.data_texture, stride = None, 0
         if self.method.data is not None:
             texels = attributes.read_texels(mesh if texels_mesh is None else texels_mesh, self.method.data)
@@ -433,7 +439,8 @@ class ObjectData:
         self.shader.bind()
         self.shader.uniform_block("sd", self.ubo)
         textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
-                    BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture}
+                    BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture,
+                    LIGHTMAP_INDEX_SAMPLER[1]: self.lightmap_index}
         if self.variant.albedo_texture:
             textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
         for _, name in self.variant.samplers():

@@ -78,11 +78,14 @@ def test_dilation_takes_the_nearest_baked_texel_within_the_radius():
     assert two.tolist() == [0, 0, 0, 0, 7, 7, 7, 7]
 
 
-def test_spread_lays_values_out_by_source():
+def test_spread_gives_the_stored_texels_their_sources_values():
     entries = np.array([1, 5])
     sources = np.array([1, 1, -1, 5, 5, 5])
+    assert lightmap.stored(sources).tolist() == [0, 1, 3, 4, 5]
     out = lightmap.spread(np.array([[1.0, 2.0], [3.0, 4.0]]), entries, sources)
-    np.testing.assert_array_equal(out, [[1, 2], [1, 2], [0, 0], [3, 4], [3, 4], [3, 4]])
+    np.testing.assert_array_equal(out, [[1, 2], [1, 2], [3, 4], [3, 4], [3, 4]])
+    index = lightmap.index_map(lightmap.stored(sources), 3, 2)
+    np.testing.assert_array_equal(index, [[0, 1, -1], [2, 3, 4]])
 
 
 def test_a_triangle_larger_than_a_chunk_is_rasterized_in_pieces(monkeypatch):
@@ -95,11 +98,11 @@ def test_a_triangle_larger_than_a_chunk_is_rasterized_in_pieces(monkeypatch):
 def test_which_methods_texels_hold_and_what_their_data_take():
     held = {m.id for m in methods.METHODS if lightmap.applies(m)}
     assert held == {"ambient_occlusion", "prt_diffuse", "prt_matrix", "prt_gaunt", "msd_lobe"}
-    assert lightmap.data_entries(methods.get("ambient_occlusion"), 4, 2, 1024) == 1024 ** 2
-    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 1024) == 3 * 1024 ** 2       # 9 floats
-    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 2048) == 21 * 2048 ** 2      # 81 floats
-    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 2048) > lightmap.MAX_DATA_TEXELS
-    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 4096) <= lightmap.MAX_DATA_TEXELS
+    assert lightmap.data_entries(methods.get("ambient_occlusion"), 4, 2, 1000) == 1000
+    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 1000) == 3 * 1000       # 9 floats
+    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 1000) == 21 * 1000      # 81 floats
+    assert lightmap.data_entries(methods.get("prt_matrix"), 2, 2, 2048 ** 2) > lightmap.MAX_DATA_TEXELS
+    assert lightmap.data_entries(methods.get("prt_diffuse"), 2, 0, 4096 ** 2) <= lightmap.MAX_DATA_TEXELS
     assert lightmap.expected_texels(1000) == int(lightmap.COVERAGE * 1e6)
 
 

@@ -22,6 +22,7 @@ BAKE = PREFIX + "bake"              # custom property: the bake's settings and s
 BAKED_MESH = PREFIX + "baked_mesh"  # custom property of an object: its baked mesh
 LIGHTMAP = PREFIX + "lightmap"      # custom property of a baked mesh: its texels' mesh (texture space)
 LIGHTMAP_UV = "SD Lightmap"         # the baked mesh's UV map of those texels
+TEXEL = PREFIX + "texel"            # FLOAT: a texels' mesh point's texel, y W + x (exact below 2^24)
 
 
 def vec4_groups(values):

@@ -10,8 +10,11 @@ has that texel) and their points on the surface (`sample_points`); those are bak
 without faces (their rays start along their normal, traced_scene.h) against the copy's own
 triangles and the other objects. `dilation_sources` then gives each texel within DILATION texels
 of a chart the value of its nearest baked texel, so that bilinear lookups at a chart's border
-never blend in empty texels. The shader blends the four texels around a pixel's lightmap UV
-(shaders/sd_shading_frag.glsl), evaluating B at each with the pixel's normal and view.
+never blend in empty texels. Only those texels are stored (`spread`: baked and dilated, by
+entry), each with its entry; the shader finds a texel's row through an index map of the whole
+lightmap (its row, -1 for a texel not stored), blends the four texels around a pixel's
+lightmap UV (shaders/sd_shading_frag.glsl), evaluating B at each with the pixel's normal and
+view, and divides by the weight of those stored (all four wherever a chart is).
 
 Which methods: those whose data are linear in the rays and the same size at every point
 (least_squares.FITTED: AO, V~, T, M); MSD (13)'s per-point designs cost milliseconds each.
@@ -36,18 +39,44 @@ GPU_TEXTURE_ROWS = 16384   # the data texture's rows a GPU is counted on for (Op
 MAX_DATA_TEXELS = TEXTURE_WIDTH * GPU_TEXTURE_ROWS
 
 
-def data_entries(method, light_order, visibility_order, size):
-    """The data texels (RGBA) a size x size map of the method's data takes in the shader's data
-    texture: every texel of the map (dense), each its array's vec4 groups."""
+def data_entries(method, light_order, visibility_order, stored):
+    """The data texels (RGBA) `stored` lightmap texels of the method's data take in the shader's
+    data texture: each its array's vec4 groups."""
     array = method.data
     floats = int(np.prod(array.shape(light_order, visibility_order))) if array.shape else 1
-    return size * size * ((floats + 3) // 4)
+    return stored * ((floats + 3) // 4)
 
 
 def applies(method):
     """Whether texels can hold a method's data (utils/methods.Method): the arrays linear in the
     rays and of one size at every point, as least squares fits them."""
     return least_squares.applies(method)
+
+
+UNWRAP_TRIES = 3          # unwraps until the charts' scale leaves the margin (baking.lightmap_uvs)
+MARGIN_SLACK = 1.1        # the margin asked for, over what the expected scale needs
+
+
+def expected_scale(area):
+    """The scale (UV units per surface unit) a surface of this area is expected to get in a map
+    whose charts cover COVERAGE of it."""
+    return np.sqrt(COVERAGE / area) if area > 0.0 else 1.0
+
+
+def add_margin(size, scale):
+    """The 'ADD' margin, in surface units (added before the charts are scaled into the map), that
+    leaves MARGIN_TEXELS texels of a size x size map between charts at this scale, with
+    MARGIN_SLACK (the scale shrinks a little as the margins grow)."""
+    return MARGIN_SLACK * MARGIN_TEXELS / (size * scale)
+
+
+def uv_scale(corner_uvs, area):
+    """The scale the charts got: sqrt(UV area / surface area), from each triangle corner's UV
+    [T, 3, 2] and the surface's area."""
+    uv = np.asarray(corner_uvs, dtype=np.float64)
+    d, e = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    uv_area = 0.5 * np.abs(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]).sum()
+    return float(np.sqrt(uv_area / area)) if area > 0.0 else 0.0
 
 
 def expected_texels(size):
@@ -151,13 +180,23 @@ def dilation_sources(entries, width, height, radius=DILATION):
     return source.reshape(-1)
 
 
+def stored(sources):
+    """The entries of the texels stored: those dilation_sources reached, in entry order."""
+    return np.flatnonzero(np.asarray(sources) >= 0)
+
+
 def spread(values, entries, sources):
-    """The baked texels' values [S, ...] (in `entries` order) laid out over the whole lightmap by
-    dilation_sources: [W H, ...], zero where no baked texel is near."""
+    """The baked texels' values [S, ...] (in `entries` order) given to the stored texels by
+    dilation_sources: [len(stored(sources)), ...], in entry order."""
     values = np.asarray(values)
     row = np.full(int(np.max(entries)) + 1 if len(entries) else 0, -1, dtype=np.int64)
     row[entries] = np.arange(len(entries))
-    out = np.zeros((len(sources),) + values.shape[1:], dtype=values.dtype)
-    reached = sources >= 0
-    out[reached] = values[row[sources[reached]]]
-    return out
+    return values[row[np.asarray(sources)[stored(sources)]]]
+
+
+def index_map(stored_entries, width, height):
+    """The shader's index map: float32 [H, W] holding each stored texel's row (exact in float32
+    below 2^24 texels: a 4096 x 4096 map at most) and -1 elsewhere."""
+    out = np.full(width * height, -1.0, dtype=np.float32)
+    out[np.asarray(stored_entries, dtype=np.int64)] = np.arange(len(stored_entries), dtype=np.float32)
+    return out.reshape(height, width)

@@ -21,6 +21,7 @@ DATA_SAMPLER = (0, "sd_data")                               # per-vertex texels
 GAUNT_SAMPLER = (1, "sd_gaunt")                             # (a, b, c, G) of eq. (10)
 BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equirect image
 ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
+LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texel's data row, or -1
 
 
 def band_limited_texture_size(order):
@@ -222,6 +223,8 @@ class Variant:
             out.append(BAND_LIMITED_TEXTURE_SAMPLER)
         if self.material_count and self.albedo_texture:
             out.append(ALBEDO_TEXTURE_SAMPLER)
+        if self.lightmap:
+            out.append(LIGHTMAP_INDEX_SAMPLER)
         return out
 
     def frame_fields(self):

@@ -278,5 +278,10 @@ def test_fit_vertex_values_progress_and_cancel(sd):
     assert calls[0] == (0, 1) and calls[-1] == (1, 1)
     with pytest.raises(sd.BakeCancelled):
         sd.fit_vertex_values(**FIT, progress=lambda done, total: False)
+    # cancelled after the factorization, as the solves start (its second report)
+    reports = []
+    with pytest.raises(sd.BakeCancelled):
+        sd.fit_vertex_values(**FIT, progress=lambda done, total: reports.append(done) or len(reports) < 2)
+    assert len(reports) == 2
     with pytest.raises(ValueError, match="progress"):
         sd.fit_vertex_values(**FIT, progress=3)

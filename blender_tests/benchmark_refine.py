@@ -10,7 +10,7 @@ With --without, also the last budget with Least Squares on (the defaults) withou
   welded mesh; a file whose vertices are already split at hard edges, as glTF's are, keeps its
   split).
 With --texture-space, also a bake with texture-space data at each lightmap size (Refine and
-Least Squares then do not apply); its memory counts the texels' data beside the vertices'.
+Least Squares then do not apply); its memory counts the stored texels' data beside the vertices'.
 
     blender -b --factory-startup --python blender_tests/benchmark_refine.py -- --zip Z --out DIR
         [--assets engine,house,wuson] [--hdris forest.exr,sunrise.exr] [--budgets 100000,250000]
@@ -90,7 +90,8 @@ def main():
         print("| %s | %s | %s | %s | %s | %s | %.1f %% | %d | %.1f s | %.1fx | %.1f MB |" % (
             name, hdri, "off" if budget is None else "max %d vertices" % budget, "on" if fit else "off",
             fix or "-", "%d x %d" % (size, size) if size else "-", 100 * rms, info["vertices"], seconds,
-            seconds / max(base, 1e-9), (info["vertices"] + size * size) * info["bytes_per_vertex"] / 1e6))
+            seconds / max(base, 1e-9),
+            (info["vertices"] + info.get("lightmap_stored", 0)) * info["bytes_per_vertex"] / 1e6))
     return 0
 
 

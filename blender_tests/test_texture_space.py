@@ -116,6 +116,15 @@ def chart_gap(package, mesh):
     return package.utils.lightmap.MARGIN_TEXELS + 1
 
 
+def check_chart_gap(checks, package, obj):
+    """Charts MARGIN_TEXELS apart in UV: their texel centres at least one less apart by rows or
+    columns (a diagonal neighbour)."""
+    least = package.utils.lightmap.MARGIN_TEXELS - 1
+    gap = chart_gap(package, package.baking.baked_mesh(obj))
+    checks.check(gap >= least, "%s: the texels of two charts at least %d texels apart" % (obj.name, least),
+                 "nearest %d apart" % gap)
+
+
 def main():
     checks = sdtest.Checks("test_texture_space")
     args = sdtest.arguments()
@@ -155,10 +164,7 @@ def main():
                      "attributes" % obj.name, "%d texels baked, %d stored of %d" % (
                          info.get("lightmap_texels", 0), len(entries), SIZE * SIZE))
         if obj == ball:
-            gap = chart_gap(package, mesh)
-            checks.check(gap >= package.utils.lightmap.MARGIN_TEXELS,
-                         "Ball: its charts' texels at least %d texels apart" % package.utils.lightmap.MARGIN_TEXELS,
-                         "nearest texels of two charts %d apart" % gap)
+            check_chart_gap(checks, package, obj)
         data = package.attributes.read(texels, info)
         checks.check(np.all((data["ambient_occlusion"] >= 0) & (data["ambient_occlusion"] <= 1)) and
                      np.isfinite(data["transfer"]).all(), "%s: texel AO in [0, 1], transfer finite" % obj.name)
@@ -241,6 +247,22 @@ def main():
     scene.sd_lighting.method = 'ambient_occlusion'
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
                  baking.lightmap_mesh(baking.baked_mesh(ground)) is not None, "AO bakes texels")
+
+    # A flat cube: six charts, which Smart UV Project's default margin packs about a texel apart.
+    import bmesh
+    mesh = bpy.data.meshes.new("Box")
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=0.5)
+    bm.to_mesh(mesh)
+    bm.free()
+    box = sdtest.add_object(scene, "Box", mesh)
+    box.location = (1.5, 1.5, 0.25)
+    sdtest.select_only([box])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and baking.lightmap_mesh(baking.baked_mesh(box)),
+                 "Box: bakes texels")
+    check_chart_gap(checks, package, box)
+
+    sdtest.select_only([ball, ground, box])
     checks.check(bpy.ops.sd_lighting.clear_bake() == {'FINISHED'} and
                  not any(m.name.startswith("SD ") for m in bpy.data.meshes),
                  "Clear Bake removes the baked meshes and their texels")

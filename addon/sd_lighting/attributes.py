@@ -81,6 +81,8 @@ def write_texels(mesh, entries):
 
 def read_texels_entries(mesh):
     """Each point's lightmap texel of a texels' mesh, int64 [K]."""
+    if bake_data.TEXEL not in mesh.attributes:
+        raise ValueError("%s stores no texels (baked by another version?): bake it again" % mesh.name)
     return np.rint(_read(mesh, bake_data.TEXEL, 'value', 1)).astype(np.int64)
 
 

@@ -168,11 +168,10 @@ class Geometry:
     def uvs(self):
         return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
 
-    def build_mesh(self, name, bake_frame=False):
-        """A new mesh datablock with this geometry in the local frame (or the bake frame), vertices
-        in the same order."""
-        return attributes.new_mesh(name, self.vertices if bake_frame else self.positions, self.loop_vertices,
-                                   self.loop_starts, self.loop_totals)
+    def build_mesh(self, name):
+        """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
+        return attributes.new_mesh(name, self.positions, self.loop_vertices, self.loop_starts,
+                                   self.loop_totals)
 
     def surface(self):
         """The baked vertices and triangles as a refine.Surface. Vertices at one point weld: the
@@ -217,12 +216,14 @@ def _evaluated_arrays(obj, depsgraph, shape):
 
 def lightmap_uvs(context, geometry, size):
     """Each loop's lightmap UV of the geometry (float32 [L, 2]): Blender's Smart UV Project of a
-    copy in the bake frame (texel density follows the scaled surface), its charts at least
-    lightmap.MARGIN_TEXELS texels of a size x size map apart. The margin is 'ADD'ed in the
-    surface's units before the charts are scaled into the map, so it is chosen from the scale
-    they get (lightmap.add_margin), and the unwrap repeated when the scale came out smaller than
-    expected: the default 'SCALED' margin shrinks with few charts (to about a texel on a cube),
-    and the exact 'FRACTION' one packs ten times slower (13 s on the 85k-vertex engine). The copy
+    copy in the bake frame scaled to unit area (texel density follows the scaled surface), its
+    charts at least lightmap.MARGIN_TEXELS texels of a size x size map apart. The margin is
+    'ADD'ed in the copy's units around each chart before the charts are scaled into the map, so it
+    is chosen from the scale they get (lightmap.add_margin; at unit area it stays far below the
+    operator's cap of 1), and the unwrap repeated, up to lightmap.UNWRAP_TRIES times, while the
+    scale came out smaller than that margin needs (the last is kept): the default 'SCALED'
+    margin shrinks with few charts (to about a texel on a cube), and the exact 'FRACTION' one
+    packs ten times slower (13 s on the 85k-vertex engine). The copy
     is of the split vertices, so its charts also end at sharp edges, material borders and albedo
     UV seams. It lives in a temporary scene, so that Edit Mode reaches it alone; nothing else
     changes. Raises BakeError outside Object Mode (another object would share that Edit Mode) or
@@ -231,7 +232,12 @@ def lightmap_uvs(context, geometry, size):
     if context.mode != 'OBJECT':
         raise BakeError("texture-space data are unwrapped in Object Mode (the mode is %s): switch "
                         "to Object Mode to bake them" % context.mode)
-    mesh = geometry.build_mesh("sd_lightmap unwrap", bake_frame=True)
+    corners = geometry.vertices[geometry.triangles]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    if not area > 0.0:
+        raise BakeError("the baked copy has no area to unwrap a lightmap over")
+    mesh = attributes.new_mesh("sd_lightmap unwrap", geometry.vertices / np.sqrt(area), geometry.loop_vertices,
+                               geometry.loop_starts, geometry.loop_totals)
     scene = obj = None
     try:
         scene = bpy.data.scenes.new("sd_lightmap unwrap")
@@ -241,9 +247,7 @@ def lightmap_uvs(context, geometry, size):
         layer.objects.active = obj
         obj.select_set(True, view_layer=layer)
         loops = len(mesh.loops)
-        corners = geometry.vertices[geometry.triangles]
-        area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
-        scale = lightmap.expected_scale(area)
+        scale = lightmap.expected_scale(1.0)
         for _ in range(lightmap.UNWRAP_TRIES):
             margin = lightmap.add_margin(size, scale)
             try:
@@ -263,8 +267,8 @@ def lightmap_uvs(context, geometry, size):
             if layer_uv is None or len(mesh.loops) != loops:
                 raise BakeError("Smart UV Project gave no UV map of the baked copy's %d face corners" % loops)
             uvs = attributes.read_loop_uvs(mesh, layer_uv.name)
-            scale = lightmap.uv_scale(uvs[geometry._wound_triangle_loops], area)
-            if margin * scale >= lightmap.MARGIN_TEXELS / size:
+            scale = lightmap.uv_scale(uvs[geometry._wound_triangle_loops], 1.0)
+            if lightmap.gap_texels(margin, scale, size) >= lightmap.MARGIN_TEXELS:
                 break
         return uvs
     finally:
@@ -400,9 +404,10 @@ class BakeTask:
         geometry = self.baked
         points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
         if self.bakes_lightmap:
+            plan = self.lightmap_texels()   # refused before anything is baked when too large
             result = dict(sd.bake_transfer(points, normals, triangles, progress=_share(progress, 0.0, TEXELS_START),
                                            **self.bake_arguments()))
-            result["lightmap"] = self.bake_lightmap(sd, _share(progress, TEXELS_START, 1.0))
+            result["lightmap"] = self.bake_lightmap(sd, plan, _share(progress, TEXELS_START, 1.0))
             return result
         if not self.fits_least_squares:
             return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
@@ -412,16 +417,13 @@ class BakeTask:
         return least_squares.fit(sd, result, geometry.vertices, geometry.triangles,
                                  progress=_share(progress, FIT_START, 1.0))
 
-    def bake_lightmap(self, sd, progress):
-        """The texels of the copy's lightmap (utils/lightmap.py), baked as points without faces
-        against the copy's triangles and the occluders: {"size", "entries", "sources" (dilation),
-        "positions" (in the local frame), "result" (bake_transfer's dict of the baked texels, in
-        `entries` order), "seconds"}. Raises BakeError before baking when the texels stored would
-        not fit one GPU texture."""
+    def lightmap_texels(self):
+        """The copy's lightmap texels (utils/lightmap.py): (entries, triangle, barycentric,
+        dilation sources, seconds taken). Raises BakeError when the texels stored would not fit
+        one GPU texture."""
         start = time.perf_counter()
         size, method = self.lightmap_size, methods.get(self.settings["method"])
-        geometry = self.baked
-        entries, triangle, barycentric = lightmap.texels(geometry.lightmap_corner_uvs, size, size)
+        entries, triangle, barycentric = lightmap.texels(self.baked.lightmap_corner_uvs, size, size)
         sources = lightmap.dilation_sources(entries, size, size)
         count = lightmap.data_entries(method, int(self.settings["light_order"]),
                                       int(self.settings["visibility_order"]), len(lightmap.stored(sources)))
@@ -429,6 +431,17 @@ class BakeTask:
             raise BakeError("a %d x %d lightmap of %s needs %d data texels, more than a GPU texture holds "
                             "(%d): choose a smaller lightmap" % (size, size, method.label, count,
                                                                  lightmap.MAX_DATA_TEXELS))
+        return entries, triangle, barycentric, sources, time.perf_counter() - start
+
+    def bake_lightmap(self, sd, texels, progress):
+        """The texels (lightmap_texels) baked as points without faces against the copy's
+        triangles and the occluders: {"size", "entries", "sources" (dilation), "positions" (in the
+        local frame), "result" (bake_transfer's dict of the baked texels, in `entries` order),
+        "seconds" (with lightmap_texels')}."""
+        entries, triangle, barycentric, sources, seconds = texels
+        start = time.perf_counter() - seconds
+        size = self.lightmap_size
+        geometry = self.baked
         points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
                                                  triangle, barycentric)
         # the same points in the local frame (what the baked mesh's positions are in)

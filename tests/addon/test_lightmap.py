@@ -106,6 +106,17 @@ def test_which_methods_texels_hold_and_what_their_data_take():
     assert lightmap.expected_texels(1000) == int(lightmap.COVERAGE * 1e6)
 
 
+def test_the_add_margin_leaves_the_margin_at_the_scale_the_charts_get():
+    uv = np.array([[[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]]])     # a right triangle of area 1/8 ...
+    assert lightmap.uv_scale(uv, 2.0) == pytest.approx(0.25)  # ... from one of area 2
+    scale = lightmap.expected_scale(1.0)
+    assert scale == pytest.approx(np.sqrt(lightmap.COVERAGE))
+    margin = lightmap.add_margin(1024, scale)
+    assert lightmap.gap_texels(margin, scale, 1024) == pytest.approx(lightmap.MARGIN_SLACK * lightmap.MARGIN_TEXELS)
+    assert lightmap.gap_texels(margin, 0.8 * scale, 1024) < lightmap.MARGIN_TEXELS   # a tighter packing: again
+    assert margin < 1.0 and lightmap.add_margin(256, scale) < 1.0   # under the operator's cap at unit area
+
+
 @pytest.mark.parametrize("size", lightmap.SIZES)
 def test_sizes_are_powers_of_two(size):
     assert size & (size - 1) == 0 and lightmap.DEFAULT_SIZE in lightmap.SIZES

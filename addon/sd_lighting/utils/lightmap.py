@@ -64,10 +64,17 @@ def expected_scale(area):
 
 
 def add_margin(size, scale):
-    """The 'ADD' margin, in surface units (added before the charts are scaled into the map), that
-    leaves MARGIN_TEXELS texels of a size x size map between charts at this scale, with
-    MARGIN_SLACK (the scale shrinks a little as the margins grow)."""
-    return MARGIN_SLACK * MARGIN_TEXELS / (size * scale)
+    """The 'ADD' margin, in the unwrapped surface's units, that leaves MARGIN_TEXELS texels of a
+    size x size map between charts at this scale, with MARGIN_SLACK (the scale shrinks a little as
+    the margins grow). Blender pads each chart's box by the margin on every side before scaling
+    the packing into the map (uv_pack.cc), so two charts are two margins apart."""
+    return MARGIN_SLACK * MARGIN_TEXELS / (2.0 * size * scale)
+
+
+def gap_texels(margin, scale, size):
+    """The texels of a size x size map between charts unwrapped with an 'ADD' margin that got
+    this scale (at least: uv_scale is at most the packing's scale)."""
+    return 2.0 * margin * scale * size
 
 
 def uv_scale(corner_uvs, area):

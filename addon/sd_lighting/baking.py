@@ -22,8 +22,8 @@ A bake runs in three steps:
 Texture-space data (the `lightmap` setting, utils/lightmap.py): step 1 also unwraps the baked
 copy (`lightmap_uvs`: Smart UV Project of a temporary copy in a temporary scene, so that nothing
 of the user's changes), step 2 bakes the texels after the vertices, step 3 gives the baked mesh
-the UV map "SD Lightmap" and links the texels' mesh "SD Lightmap <object>" (one point per texel,
-the same attributes) in its `sd_lightmap` property.
+the UV map "SD Lightmap" and links the texels' mesh "SD Lightmap <object>" (one point per texel
+stored, the same attributes) in its `sd_lightmap` property.
 """
 
 import functools
@@ -223,10 +223,10 @@ def lightmap_uvs(context, geometry, size):
     operator's cap of 1), and the unwrap repeated, up to lightmap.UNWRAP_TRIES times, while the
     scale came out smaller than that margin needs (the last is kept): the default 'SCALED'
     margin shrinks with few charts (to about a texel on a cube), and the exact 'FRACTION' one
-    packs ten times slower (13 s on the 85k-vertex engine). The copy
-    is of the split vertices, so its charts also end at sharp edges, material borders and albedo
-    UV seams. It lives in a temporary scene, so that Edit Mode reaches it alone; nothing else
-    changes. Raises BakeError outside Object Mode (another object would share that Edit Mode) or
+    packs ten times slower (13 s on the 85k-vertex engine). The copy is of the split vertices, so
+    its charts also end at sharp edges, material borders and albedo UV seams. It lives in a
+    temporary scene, so that Edit Mode reaches it alone; nothing else changes. Raises BakeError
+    outside Object Mode (another object would share that Edit Mode), for a copy without area, or
     when the unwrap fails."""
     import bpy
     if context.mode != 'OBJECT':
@@ -838,8 +838,6 @@ def _build_lightmap_mesh(name, texels):
         bpy.data.meshes.remove(mesh)
         raise
     return mesh
-
-
 
 
 def _result_summary(task, floats):

@@ -234,6 +234,8 @@ def cpu_reference(scene, obj, view, texels=False):
     method = methods.get(bake["method"])
     if texels:
         mesh = baking.lightmap_mesh(mesh)
+        if mesh is None:
+            raise ValueError("%s's bake has no texture-space data" % obj.name)
     data = attributes.read(mesh, bake)
     data["visibility_order"] = int(bake["visibility_order"])
     matrix = np.array(obj.matrix_world, dtype=np.float64)

@@ -34,10 +34,10 @@ import os
 import numpy as np
 
 from . import attributes, environment, materials, native
+from .utils import lightmap as texture_space
 from .utils import lobe_designs as lobe_design_cache
 from .utils import lobes, methods, transforms
 from .utils.bake_data import BAKE, LIGHTMAP, LIGHTMAP_UV
-from .utils import lightmap as texture_space
 from .utils.shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER,
                                    DATA_SAMPLER, GAUNT_SAMPLER, LIGHTMAP_INDEX_SAMPLER, TEXTURE_WIDTH,
                                    Variant, band_limited_texture_size)

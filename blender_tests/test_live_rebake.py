@@ -369,6 +369,34 @@ def check_automatic(c):
     c.consistent("automatic bake re-baked")
 
 
+def check_texture_space(c):
+    """A bake with texture-space data re-bakes with new texels in Object Mode; in Edit Mode, whose
+    unwrap needs Object Mode, the re-bake says so and the bake stays."""
+    baking = c.package.baking
+    settings = sdtest.bake_settings(c.scene, "prt_diffuse", "LAMBERT", 2, rays=64, select=[c.ball])
+    settings.texture_space, settings.lightmap_size = True, '256'
+    c.checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
+                   baking.lightmap_mesh(baking.baked_mesh(c.ball)) is not None, "bake with texture-space data")
+    first = c.bake_id()
+    c.ball.modifiers["Subdivision"].levels = 2
+    c.run_timer()
+    texels = baking.lightmap_mesh(baking.baked_mesh(c.ball))
+    c.checks.check(c.bake_id() != first and texels is not None and baking.bake_info(c.ball)["lightmap_texels"] > 0
+                   and [m.name for m in bpy.data.meshes if m.name.startswith("SD Lightmap")] == [texels.name],
+                   "a modifier change re-bakes the texels; the previous ones go", c.live.message)
+    kept = c.bake_id()
+    bpy.ops.object.mode_set(mode='EDIT')
+    bm = bmesh.from_edit_mesh(c.ball.data)
+    for vertex in bm.verts:
+        vertex.co.z += 0.1
+    bmesh.update_edit_mesh(c.ball.data)
+    c.run_timer()
+    message = c.live.message
+    bpy.ops.object.mode_set(mode='OBJECT')
+    c.checks.check(c.bake_id() == kept and "Object Mode" in message,
+                   "in Edit Mode the re-bake says it needs Object Mode, the bake stays", message)
+
+
 def main():
     checks = sdtest.Checks("test_live_rebake")
     args = sdtest.arguments()
@@ -402,6 +430,7 @@ def main():
     check_blender_undo(c)
     check_slow_method(c)
     check_automatic(c)
+    check_texture_space(c)
     return checks.summary()
 
 

@@ -606,13 +606,24 @@ def _may_bake_lightmap(method_id):
     return method_id == analysis.AUTOMATIC or lightmap.applies(methods.get(method_id))
 
 
+def unwrap_lightmap(context, task):
+    """Gives a task whose settings ask for texture-space data its lightmap UVs (lightmap_uvs;
+    main thread, BakeError as there); nothing for the others."""
+    settings = task.settings
+    if int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
+        start = time.perf_counter()
+        task.geometry.lightmap_uvs = lightmap_uvs(context, task.geometry, int(settings["lightmap"]))
+        task.geometry.unwrap_seconds = time.perf_counter() - start
+
+
 def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
     BakeError when none is left or the bake cannot start (no sdnative, no environment).
     settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
     panel's; recorded_settings: those of its last bake). unwrap: False leaves texture-space
-    bakes without their UVs (the bake-time prediction, which estimates the texels instead)."""
+    bakes without their UVs (unwrap_lightmap: the bake-time prediction estimates the texels
+    instead; a live re-bake unwraps only what it bakes)."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
@@ -654,12 +665,10 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         occluders = _occluders(occluders_of(obj), to_frame)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        if unwrap and int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
-            start = time.perf_counter()
-            geometry.lightmap_uvs = lightmap_uvs(context, geometry, int(settings["lightmap"]))
-            geometry.unwrap_seconds = time.perf_counter() - start
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
+        if unwrap:
+            unwrap_lightmap(context, tasks[-1])
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
                         "select one or more mesh objects to bake")

@@ -143,11 +143,13 @@ def _start(name):
         return None
     started = time.perf_counter()
     try:
-        tasks, warnings = baking.prepare(bpy.context, [obj], baking.recorded_settings)
+        # the lightmap's unwrap only for a bake that changed (not, e.g., after every undo)
+        tasks, warnings = baking.prepare(bpy.context, [obj], baking.recorded_settings, unwrap=False)
+        if tasks[0].inputs_hash() == baking.bake_info(obj).get("inputs"):
+            return None
+        baking.unwrap_lightmap(bpy.context, tasks[0])
     except baking.BakeError as exc:
         _report("cannot re-bake %s, its bake stays: %s" % (name, exc), logging.WARNING)
-        return None
-    if tasks[0].inputs_hash() == baking.bake_info(obj).get("inputs"):
         return None
     job = Rebake(tasks, warnings, baking.bake_info(obj)["bake_id"], started)
     job.start()

@@ -34,7 +34,10 @@ DILATION = 3             # texels around a chart that get its nearest baked valu
 ANGLE_LIMIT_DEGREES = 66.0   # Smart UV Project's default: a chart ends at a sharper fold
 _CHUNK = 1 << 22         # candidate texels rasterized at once (memory bound)
 COVERAGE = 0.4           # texels a map's charts cover, of its size^2, for the time prediction
-                         # (measured: 0.35 / 0.44 on the house at 1024 / 2048, 0.49 on a sphere)
+                         # (baked by benchmark_refine at 1024 / 2048: engine 0.36 / 0.44, house
+                         # 0.42 / 0.48, Wuson 0.24 / 0.36)
+UNWRAP_TRIES = 3         # unwraps until the charts' scale leaves the margin (baking.lightmap_uvs)
+MARGIN_SLACK = 1.1       # the margin asked for, over what the expected scale needs
 GPU_TEXTURE_ROWS = 16384   # the data texture's rows a GPU is counted on for (OpenGL 4.1's minimum)
 MAX_DATA_TEXELS = TEXTURE_WIDTH * GPU_TEXTURE_ROWS
 
@@ -51,10 +54,6 @@ def applies(method):
     """Whether texels can hold a method's data (utils/methods.Method): the arrays linear in the
     rays and of one size at every point, as least squares fits them."""
     return least_squares.applies(method)
-
-
-UNWRAP_TRIES = 3          # unwraps until the charts' scale leaves the margin (baking.lightmap_uvs)
-MARGIN_SLACK = 1.1        # the margin asked for, over what the expected scale needs
 
 
 def expected_scale(area):

@@ -257,6 +257,19 @@ def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.
     return obj
 
 
+def flat_cube(scene, name="Cube", size=1.0, location=(0.0, 0.0, 0.0)):
+    """A cube of flat faces (six charts of a lightmap; 24 corner copies in a bake)."""
+    import bmesh
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=size)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = add_object(scene, name, mesh)
+    obj.location = location
+    return obj
+
+
 def _material(name, bsdf_type):
     """A material whose node tree is one new BSDF node of `bsdf_type` feeding the output:
     (material, the BSDF node)."""

@@ -57,18 +57,6 @@ def uv_sphere(scene):
     return sdtest.add_object(scene, "Ball", mesh)
 
 
-def flat_cube(scene):
-    import bmesh
-    mesh = bpy.data.meshes.new("Cube")
-    bm = bmesh.new()
-    bmesh.ops.create_cube(bm, size=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    obj = sdtest.add_object(scene, "Cube", mesh)
-    obj.location = (0.0, 0.0, -5.0)
-    return obj
-
-
 def main():
     checks = sdtest.Checks("test_material_colour")
     args = sdtest.arguments()
@@ -82,7 +70,7 @@ def main():
     red = sdtest.diffuse_material("Red", RED)
     ball.data.materials.append(red)
     ball.data.materials.append(sdtest.diffuse_material("Grid", image=grid))
-    cube = flat_cube(scene)
+    cube = sdtest.flat_cube(scene, location=(0.0, 0.0, -5.0))
     sdtest.camera(scene, location=(0.0, -4.2, 0.6), target=(0.0, 0.0, 0.0), lens=55.0)
 
     # Corner data

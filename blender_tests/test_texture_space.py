@@ -249,14 +249,7 @@ def main():
                  baking.lightmap_mesh(baking.baked_mesh(ground)) is not None, "AO bakes texels")
 
     # A flat cube: six charts, which Smart UV Project's default margin packs about a texel apart.
-    import bmesh
-    mesh = bpy.data.meshes.new("Box")
-    bm = bmesh.new()
-    bmesh.ops.create_cube(bm, size=0.5)
-    bm.to_mesh(mesh)
-    bm.free()
-    box = sdtest.add_object(scene, "Box", mesh)
-    box.location = (1.5, 1.5, 0.25)
+    box = sdtest.flat_cube(scene, "Box", 0.5, (1.5, 1.5, 0.25))
     sdtest.select_only([box])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and baking.lightmap_mesh(baking.baked_mesh(box)),
                  "Box: bakes texels")

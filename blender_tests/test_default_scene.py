@@ -101,7 +101,7 @@ def main():
     after = preview(os.path.join(args.out, "default_scene_reloaded.exr"))
     difference = np.abs(after - before).max(axis=2)
     changed = np.argwhere(difference >= 1e-5)
-    # Where they differ, for the log: a rare CI failure (bpy 5.0.1, once) changed pixels it did not name.
+    # Where they differ, for the log (how the stale-bind failure, test_shader_rebind, was located).
     where = "" if not len(changed) else ", %d pixels in rows %d-%d, columns %d-%d (before %s, after %s at %s)" % (
         len(changed), *changed[:, 0][[0, -1]], changed[:, 1].min(), changed[:, 1].max(),
         before[tuple(changed[0])].round(3), after[tuple(changed[0])].round(3), tuple(changed[0].tolist()))

@@ -33,7 +33,7 @@ import os
 
 import numpy as np
 
-from . import attributes, environment, materials, native
+from . import attributes, compat, environment, materials, native
 from .utils import lightmap as texture_space
 from .utils import lobe_designs as lobe_design_cache
 from .utils import lobes, methods, transforms
@@ -127,6 +127,18 @@ def _create(info, interface, files):
     return gpu.shader.create_from_info(info)
 
 
+def bind(program):
+    """Binds one of this module's programs for a draw. Blender skips a bind when the context's
+    last bound shader is at the same address (GPU_shader_bind compares pointers, and unbinding is
+    a no-op in release builds), and a program compiled after clear_cache freed the others can get
+    a freed one's address: on OpenGL the draw then ran whatever program GL had in use - after a
+    file reload, test_default_scene's Ground drew with its own white variant's program (bpy 5.0.1;
+    blender_tests/test_shader_rebind.py). A built-in shader lives as long as Blender, so binding
+    one first makes the comparison fail."""
+    compat.uniform_color_shader().bind()
+    program.bind()
+
+
 def _texture(width, height, texels, format='RGBA32F'):
     import gpu
     texels = np.ascontiguousarray(texels, dtype=np.float32).ravel()
@@ -206,7 +218,7 @@ def draw_background(source, view, to_environment, scale):
         texture = _background[source.key] = _texture(width, height, rgba)
     rotation = np.eye(4)
     rotation[:3, :3] = to_environment
-    shader.bind()
+    bind(shader)
     shader.uniform_float("sd_inverse_view_projection", Matrix(np.linalg.inv(view.view_projection).tolist()))
     shader.uniform_float("sd_to_environment", Matrix(rotation.tolist()))
     shader.uniform_float("sd_scale", float(scale))
@@ -436,7 +448,7 @@ class ObjectData:
             self.ubo = gpu.types.GPUUniformBuf(buffer)
         else:
             self.ubo.update(buffer)
-        self.shader.bind()
+        bind(self.shader)
         self.shader.uniform_block("sd", self.ubo)
         textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
                     BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture,

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Builds the installable add-on zip: sd_lighting/ with the Python package, the GLSL shaders and
-the native module sdnative (one build per CPython version: --native may be given several times).
+the native module sdnative (one build per CPython version and CPU level: --native may be given
+several times).
 
     python3 scripts/package_addon.py --native build/native/sdnative.cpython-311-x86_64-linux-gnu.so \
         [--native build/py313/native/sdnative.cpython-313-x86_64-linux-gnu.so] --output build/sd_lighting.zip
@@ -12,6 +13,7 @@ bl_info, and Get Extensions > Install from Disk on 4.2+ via blender_manifest.tom
     sd_lighting/shaders/*.glsl   (the shading, the world background, the equirect lookup they share)
     sd_lighting/sdnative.cpython-311-x86_64-linux-gnu.so   (Blender 3.4 - 5.0: CPython 3.11)
     sd_lighting/sdnative.cpython-313-x86_64-linux-gnu.so   (Blender 5.1+: CPython 3.13, if built)
+    sd_lighting/sdnative_x86_64_v3.cpython-3XX-x86_64-linux-gnu.so   (the same for AVX2/FMA CPUs)
 
 The manifest's schema (1.0.0, Blender 4.2 - 5.0) has no python_versions key (Blender derives the
 Python versions of an extension from its `wheels` only), so the manifest written into the zip
@@ -37,6 +39,11 @@ def python_version(module_path):
     if not match:
         sys.exit("package_addon: not a CPython extension module: %s" % module_path)
     return (3, int(match.group(1)))
+
+
+def build(module_path):
+    """The module's build, from its file name: "sdnative", or "sdnative_x86_64_v3" (native.py)."""
+    return os.path.basename(module_path).split(".", 1)[0]
 
 
 def manifest_text(path, natives):
@@ -71,8 +78,8 @@ def main():
     for native in natives:
         if not os.path.isfile(native):
             sys.exit("package_addon: native module not found: %s" % native)
-    if len({python_version(n) for n in natives}) != len(natives):
-        sys.exit("package_addon: two native modules for the same CPython: %s" % ", ".join(natives))
+    if len({(python_version(n), build(n)) for n in natives}) != len(natives):
+        sys.exit("package_addon: two native modules of one build for the same CPython: %s" % ", ".join(natives))
 
     entries, texts = [], []
     for directory, subdirectories, names in os.walk(package):
@@ -97,9 +104,9 @@ def main():
         for text, arcname in texts:
             archive.writestr(arcname, text)
     os.replace(temporary, args.output)
-    print("package_addon: wrote %s (%d files; sdnative for CPython %s)" % (
+    print("package_addon: wrote %s (%d files; %s)" % (
         args.output, len(entries) + len(texts),
-        ", ".join("%d.%d" % python_version(n) for n in natives)))
+        ", ".join("%s for CPython %d.%d" % ((build(n),) + python_version(n)) for n in natives)))
 
 
 if __name__ == "__main__":

@@ -2,8 +2,11 @@
 
 The add-on zip carries `sdnative.cpython-3XX-*.so` next to this file, one per CPython it was built
 for (3.11; 3.13 for Blender 5.1+); the loader picks the one of the running Python by its ABI tag.
-For development without a zip, the directory in the environment variable `SDNATIVE_PATH`, or the
-repository's `build/native/`, is searched instead.
+Next to each may be `sdnative_x86_64_v3.cpython-3XX-*.so`, the same module compiled for x86-64-v3
+(AVX2, FMA: native/CMakeLists.txt), loaded instead where /proc/cpuinfo lists every feature of that
+level; SDNATIVE_BUILD=sdnative keeps the portable one. For development without a zip, the
+directory in the environment variable `SDNATIVE_PATH`, or the repository's `build/native/`, is
+searched instead.
 """
 
 import importlib.util
@@ -24,18 +27,45 @@ def _candidate_directories():
     yield os.path.normpath(os.path.join(here, "..", "..", "build", "native"))
 
 
+# The x86-64-v3 level's features as /proc/cpuinfo names them (lzcnt is "abm").
+X86_64_V3_FEATURES = frozenset({"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
+PORTABLE, X86_64_V3 = "sdnative", "sdnative_x86_64_v3"
+
+
+def cpu_features(path="/proc/cpuinfo"):
+    """The first processor's feature flags (an empty set where the file cannot be read)."""
+    try:
+        with open(path, encoding="ascii", errors="replace") as f:
+            for line in f:
+                if line.startswith("flags"):
+                    return frozenset(line.partition(":")[2].split())
+    except OSError:
+        pass
+    return frozenset()
+
+
+def builds(features, override=None):
+    """The module builds to try, best first: the x86-64-v3 one where `features` has that level
+    (and `override`, $SDNATIVE_BUILD, does not name the portable one), then the portable one."""
+    if override == PORTABLE or not X86_64_V3_FEATURES <= features:
+        return [PORTABLE]
+    return [X86_64_V3, PORTABLE]
+
+
 def _load():
     abi = "cpython-%d%d" % sys.version_info[:2]
     for directory in _candidate_directories():
         if not os.path.isdir(directory):
             continue
-        for name in sorted(os.listdir(directory)):
-            if name.startswith("sdnative.") and name.endswith(".so") and abi in name:
-                path = os.path.join(directory, name)
-                spec = importlib.util.spec_from_file_location("sdnative", path)
-                module = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(module)
-                return module
+        names = os.listdir(directory)
+        for build in builds(cpu_features(), os.environ.get("SDNATIVE_BUILD")):
+            for name in sorted(names):
+                if name.startswith(build + ".") and name.endswith(".so") and abi in name:
+                    # Both builds define PyInit_sdnative: the module is "sdnative" either way.
+                    spec = importlib.util.spec_from_file_location("sdnative", os.path.join(directory, name))
+                    module = importlib.util.module_from_spec(spec)
+                    spec.loader.exec_module(module)
+                    return module
     raise ImportError(
         "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
         "$SDNATIVE_PATH or in the repository's build/native/" % abi)

@@ -145,8 +145,9 @@ def main():
     n = len(geometry.vertices)
     rays = args.rays
     print("mesh: %s: %d vertices, %d triangles; %d rays/samples per vertex; sdnative threads: "
-          "default (%d hardware threads)" % (mesh_name, n, len(geometry.triangles), rays,
-                                              os.cpu_count()), flush=True)
+          "default (%d hardware threads); module %s" % (
+              mesh_name, n, len(geometry.triangles), rays, os.cpu_count(),
+              os.path.basename(package.native.get().__file__)), flush=True)
 
     def bake(kwargs):
         start = time.perf_counter()

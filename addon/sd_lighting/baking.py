@@ -445,8 +445,7 @@ class BakeTask:
         points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
                                                  triangle, barycentric)
         # the same points in the local frame (what the baked mesh's positions are in)
-        positions = lightmap.sample_points(geometry.positions, geometry.normals, geometry.triangles,
-                                           triangle, barycentric)[0]
+        positions = lightmap.blend(geometry.positions, geometry.triangles, triangle, barycentric)
         arguments = self.bake_arguments()
         vertices, triangles = geometry.vertices, np.asarray(geometry.triangles, np.int32)
         if "occluder_vertices" in arguments:

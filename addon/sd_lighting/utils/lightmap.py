@@ -146,15 +146,21 @@ def _barycentric(corners, points):
     return np.stack([b0, b1, b2], axis=1), inside
 
 
+def blend(values, triangles, triangle, barycentric):
+    """Per texel sample, the barycentric blend of per-vertex `values` [V, k] over the corners of
+    its triangle: [S, k] float64."""
+    corners = np.asarray(triangles, np.int64)[triangle]
+    return (np.asarray(values, np.float64)[corners] * np.asarray(barycentric, np.float64)[:, :, None]).sum(axis=1)
+
+
 def sample_points(vertices, normals, triangles, triangle, barycentric):
     """(points [S, 3], unit normals [S, 3]) of texel samples on a mesh: the barycentric blend of
     their triangle's corners; where the corners' normals cancel, the triangle's own normal (by
     its winding)."""
-    vertices, normals = np.asarray(vertices, np.float64), np.asarray(normals, np.float64)
+    vertices = np.asarray(vertices, np.float64)
+    points = blend(vertices, triangles, triangle, barycentric)
+    blended = blend(normals, triangles, triangle, barycentric)
     corners = np.asarray(triangles, np.int64)[triangle]
-    b = np.asarray(barycentric, np.float64)[:, :, None]
-    points = (vertices[corners] * b).sum(axis=1)
-    blended = (normals[corners] * b).sum(axis=1)
     a, c, d = (vertices[corners[:, k]] for k in range(3))
     faces = np.cross(c - a, d - a)
     length = np.linalg.norm(blended, axis=1)

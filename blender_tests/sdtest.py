@@ -433,6 +433,13 @@ def load_exr(path):
     return pixels.reshape(height, width, 4)[::-1]
 
 
+def preview(path, **size):
+    """sd_lighting.render_preview into the EXR `path` (size: width=, height=; else the scene's
+    resolution), read back as load_exr reads it."""
+    assert bpy.ops.sd_lighting.render_preview(filepath=path, **size) == {'FINISHED'}, path
+    return load_exr(path)
+
+
 def block_averages(image, mask, block):
     """RGB averages over the block x block tiles that lie wholly inside the mask: [K, 3]."""
     n, m = image.shape[0] // block, image.shape[1] // block

@@ -21,16 +21,6 @@ OPTIONS = {"rays": 128, "hdri": "forest.exr", "width": 320, "height": 180, "expo
            "cuts": 24, "subdivisions": 0}
 
 
-def preview(path):
-    assert bpy.ops.sd_lighting.render_preview(filepath=path) == {'FINISHED'}, path
-    image = bpy.data.images.load(path)
-    width, height = image.size
-    pixels = np.empty(width * height * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(height, width, 4)
-
-
 def main():
     checks = sdtest.Checks("test_default_scene")
     args = sdtest.arguments()
@@ -83,7 +73,7 @@ def main():
     checks.check(data["Suzanne"]["ambient_occlusion"].min() < 0.6,
                  "Suzanne shadows herself", "min AO %.3f" % data["Suzanne"]["ambient_occlusion"].min())
 
-    before = preview(os.path.join(args.out, "default_scene.exr"))
+    before = sdtest.preview(os.path.join(args.out, "default_scene.exr"))
     covered = before[..., 3] > 0.5
     checks.check(before.shape == (OPTIONS["height"], OPTIONS["width"], 4) and 0.2 < covered.mean() < 0.99 and
                  np.isfinite(before).all() and before[covered][:, :3].max() > 0.05,
@@ -98,7 +88,7 @@ def main():
         values = attributes.read(package.baking.baked_mesh(obj))
         same &= all(np.array_equal(np.asarray(values[k]), v) for k, v in data[obj.name].items())
     checks.check(same, "bake and attributes survive save and reload")
-    after = preview(os.path.join(args.out, "default_scene_reloaded.exr"))
+    after = sdtest.preview(os.path.join(args.out, "default_scene_reloaded.exr"))
     difference = np.abs(after - before).max(axis=2)
     changed = np.argwhere(difference >= 1e-5)
     # Where they differ, for the log (how the stale-bind failure, test_shader_rebind, was located).

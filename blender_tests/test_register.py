@@ -29,6 +29,10 @@ def main():
     sd = package.native.get()
     checks.check(os.path.dirname(sd.__file__) == os.path.dirname(package.__file__),
                  "sdnative is the zip's copy", sd.__file__)
+    native = package.native
+    build = native.builds(native.cpu_features(), os.environ.get("SDNATIVE_BUILD"))[0]
+    checks.check(os.path.basename(sd.__file__).startswith(build + "."),
+                 "sdnative is the build for this CPU (%s)" % build, sd.__file__)
     checks.check(os.path.isdir(package.gpu_shading.shader_directory()) and
                  package.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
                  "shaders are the zip's copy", package.gpu_shading.shader_directory())

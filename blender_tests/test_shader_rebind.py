@@ -21,15 +21,6 @@ import numpy as np  # noqa: E402
 CYCLES = 8
 
 
-def preview(path):
-    assert bpy.ops.sd_lighting.render_preview(filepath=path, width=160, height=120) == {'FINISHED'}
-    image = bpy.data.images.load(path)
-    pixels = np.empty(160 * 120 * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(120, 160, 4)
-
-
 def main():
     checks = sdtest.Checks("test_shader_rebind")
     args = sdtest.arguments()
@@ -43,13 +34,13 @@ def main():
     sdtest.bake_settings(scene, "prt_diffuse", 'MATERIAL', 3, rays=64, select=[ball, ground])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake a white ball and a ground without material")
 
-    first = preview(os.path.join(args.out, "rebind_0.exr"))
+    first = sdtest.preview(os.path.join(args.out, "rebind_0.exr"), width=160, height=120)
     covered = first[..., 3] > 0.5
     checks.check(0.2 < covered.mean() < 0.99, "the preview shows both", "%.0f %% covered" % (100 * covered.mean()))
     differing = []
     for cycle in range(1, CYCLES + 1):
         package.registration._on_load(None)
-        image = preview(os.path.join(args.out, "rebind_%d.exr" % cycle))
+        image = sdtest.preview(os.path.join(args.out, "rebind_%d.exr" % cycle), width=160, height=120)
         difference = np.abs(image - first).max()
         if difference >= 1e-5:
             differing.append("cycle %d: max diff %.2e, %d pixels" % (

@@ -21,15 +21,6 @@ SIZE = 256
 BALL = np.array([0.0, 0.0, 0.75]), 0.75      # centre, radius
 
 
-def preview(path):
-    assert bpy.ops.sd_lighting.render_preview(filepath=path, width=WIDTH, height=HEIGHT) == {'FINISHED'}
-    image = bpy.data.images.load(path)
-    pixels = np.empty(WIDTH * HEIGHT * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(HEIGHT, WIDTH, 4)[::-1]     # rows top-first
-
-
 def ground_pixels(view):
     """Pixels whose centre's ray meets the ground plane z = 0 inside the 4 x 4 quad, clear of the
     ball (its silhouette with a margin): (rows, columns, points on the ground [P, 3])."""
@@ -143,7 +134,7 @@ def main():
 
     # Per vertex: the ground's four corners are far from the ball.
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "per-vertex bake")
-    per_vertex = preview(os.path.join(args.out, "per_vertex.exr"))
+    per_vertex = sdtest.preview(os.path.join(args.out, "per_vertex.exr"), width=WIDTH, height=HEIGHT)
 
     settings.texture_space = True
     settings.lightmap_size = str(SIZE)
@@ -170,7 +161,7 @@ def main():
                      np.isfinite(data["transfer"]).all(), "%s: texel AO in [0, 1], transfer finite" % obj.name)
 
     # The contact shadow, which the texels carry and the vertices cannot.
-    lit = preview(os.path.join(args.out, "texture_space.exr"))
+    lit = sdtest.preview(os.path.join(args.out, "texture_space.exr"), width=WIDTH, height=HEIGHT)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     rows, columns, points = ground_pixels(view)
@@ -203,7 +194,7 @@ def main():
     bpy.ops.wm.save_as_mainfile(filepath=path)
     bpy.ops.wm.open_mainfile(filepath=path)
     ball, ground = bpy.data.objects["Ball"], bpy.data.objects["Ground"]
-    reloaded = preview(os.path.join(args.out, "texture_space_reloaded.exr"))
+    reloaded = sdtest.preview(os.path.join(args.out, "texture_space_reloaded.exr"), width=WIDTH, height=HEIGHT)
     checks.check(baking.lightmap_mesh(baking.baked_mesh(ground)) is not None and
                  float(np.abs(reloaded - lit).max()) < 1e-5, "save and reload keep the texels and the picture",
                  "max diff %.2e" % float(np.abs(reloaded - lit).max()))

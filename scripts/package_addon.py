@@ -68,7 +68,7 @@ def manifest_text(path, natives):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--native", required=True, action="append",
-                        help="path of a built sdnative module (.so); once per CPython version")
+                        help="path of a built sdnative module (.so); once per CPython version and build")
     parser.add_argument("--output", required=True, help="zip to write")
     args = parser.parse_args()
 

@@ -27,8 +27,10 @@ def _candidate_directories():
     yield os.path.normpath(os.path.join(here, "..", "..", "build", "native"))
 
 
-# The x86-64-v3 level's features as /proc/cpuinfo names them (lzcnt is "abm").
-X86_64_V3_FEATURES = frozenset({"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
+# The x86-64-v3 level's features, with the v2 ones it includes, as /proc/cpuinfo names them (lzcnt
+# is "abm", sse3 "pni"): virtual machines may hide any of them.
+X86_64_V3_FEATURES = frozenset({"cx16", "lahf_lm", "popcnt", "pni", "ssse3", "sse4_1", "sse4_2",
+                                "avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
 PORTABLE, X86_64_V3 = "sdnative", "sdnative_x86_64_v3"
 
 

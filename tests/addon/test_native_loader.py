@@ -10,7 +10,8 @@ import pytest
 
 from sd_lighting import native
 
-V3_FLAGS = "fpu sse sse2 ssse3 sse4_1 sse4_2 popcnt avx avx2 bmi1 bmi2 f16c fma abm movbe xsave"
+V3_FLAGS = ("fpu sse sse2 pni ssse3 sse4_1 sse4_2 cx16 lahf_lm popcnt avx avx2 bmi1 bmi2 f16c fma abm "
+            "movbe xsave")
 
 
 def write_cpuinfo(tmp_path, flags):

@@ -54,6 +54,15 @@ def builds(features, override=None):
     return [X86_64_V3, PORTABLE]
 
 
+def load_file(path):
+    """Imports the module file `path`, of either build: both define PyInit_sdnative, so the
+    module is "sdnative" either way."""
+    spec = importlib.util.spec_from_file_location("sdnative", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _load():
     abi = "cpython-%d%d" % sys.version_info[:2]
     for directory in _candidate_directories():
@@ -63,11 +72,7 @@ def _load():
         for build in builds(cpu_features(), os.environ.get("SDNATIVE_BUILD")):
             for name in sorted(names):
                 if name.startswith(build + ".") and name.endswith(".so") and abi in name:
-                    # Both builds define PyInit_sdnative: the module is "sdnative" either way.
-                    spec = importlib.util.spec_from_file_location("sdnative", os.path.join(directory, name))
-                    module = importlib.util.module_from_spec(spec)
-                    spec.loader.exec_module(module)
-                    return module
+                    return load_file(os.path.join(directory, name))
     raise ImportError(
         "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
         "$SDNATIVE_PATH or in the repository's build/native/" % abi)

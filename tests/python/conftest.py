@@ -5,7 +5,6 @@ module is an error of the whole suite, never a skip. SDNATIVE_FILE names another
 test instead (the x86-64-v3 one: tests/CMakeLists.txt); on a CPU that cannot run that build the
 suite exits with 77, which CTest reports as skipped.
 """
-import importlib.util
 import os
 import sys
 
@@ -17,16 +16,13 @@ sys.path.insert(0, HERE)
 
 
 def _load_file(path):
-    """Imports the module file `path` as "sdnative" (every build defines PyInit_sdnative)."""
+    """Imports the module file `path` as "sdnative", where this CPU can run its build."""
     sys.path.insert(0, os.path.join(HERE, "..", "..", "addon"))
     from sd_lighting import native   # which builds this CPU runs, by /proc/cpuinfo
     build = os.path.basename(path).split(".", 1)[0]
     if build not in native.builds(native.cpu_features()):
         pytest.exit("this CPU cannot run %s" % os.path.basename(path), returncode=77)
-    spec = importlib.util.spec_from_file_location("sdnative", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    sys.modules["sdnative"] = module
+    sys.modules["sdnative"] = native.load_file(path)
 
 
 if os.environ.get("SDNATIVE_FILE"):

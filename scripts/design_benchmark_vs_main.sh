@@ -5,19 +5,21 @@
 # this checkout's native/benchmarks/design_benchmarks.cpp, so both print the same columns.
 #
 #   scripts/design_benchmark_vs_main.sh [base=main] [rays=1024] [degrees=4..9 as "4 5 6 7 8 9"]
+#                                       [benchmark=design_benchmarks, or design_benchmarks_x86_64_v3]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base=${1:-main}
 rays=${2:-1024}
 degrees=${3:-"4 5 6 7 8 9"}
-if [ ! -x build/main-build/native/design_benchmarks ]; then
-  rm -rf build/main-src && mkdir -p build/main-src
+benchmark=${4:-design_benchmarks}
+if [ ! -x "build/main-build/native/$benchmark" ]; then
+  rm -rf build/main-src build/main-build && mkdir -p build/main-src
   git archive "$base" | tar -x -C build/main-src
   cp native/benchmarks/design_benchmarks.cpp build/main-src/native/benchmarks/
   cmake -S build/main-src -B build/main-build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > /dev/null
-  nice -n 10 cmake --build build/main-build -j2 --target design_benchmarks > /dev/null
+  nice -n 10 cmake --build build/main-build -j2 --target "$benchmark" > /dev/null
 fi
 for d in $degrees; do
-  echo "degree $d $base:   $(nice -n 10 build/main-build/native/design_benchmarks "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
-  echo "degree $d branch: $(nice -n 10 build/native/design_benchmarks "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+  echo "degree $d $base:   $(nice -n 10 "build/main-build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+  echo "degree $d branch: $(nice -n 10 "build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
 done

@@ -50,7 +50,7 @@ void weighted(FuzzedDataProvider& data) {
   }
   mass = 0.0;
   for (double w : weights) mass += w;
-  expect_certified(sd::weighted_design(dirs, weights, degree, &design), mass);
+  expect_certified(sd::weighted_design(dirs, weights, degree, {&design}), mass);
 }
 
 void zonal(FuzzedDataProvider& data) {

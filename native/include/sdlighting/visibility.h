@@ -64,7 +64,7 @@ struct TransferOptions {
   /// vertices measures how the signal changes, not ray noise. For comparing neighbouring points
   /// (the add-on's refinement, utils/refine.py); a bake to store keeps independent rotations.
   bool common_rotation = false;
-  /// Refit each vertex's design from an already-built neighbour's (weighted_design's `start`)
+  /// Refit each vertex's design from an already-built neighbour's (weighted_design's `starts`)
   /// instead of compressing every one from scratch: the same certification at a fraction of the
   /// time. false is the benchmarks' baseline. Either way the result depends on the mesh, the
   /// options and the seed only, not on the thread count.

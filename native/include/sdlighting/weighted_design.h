@@ -21,11 +21,12 @@ namespace sd {
 /// rank-many of the sample directions with positive weights and the same moments. Gradient
 /// projection (eq. 14) then removes nodes while the design still certifies.
 ///
-/// With `start`, a certified design of the same degree for a nearby measure (a neighbouring
-/// vertex's visibility), it first refits that design's nodes and weights to this measure by
-/// gradient projection, in a basis orthonormalised through the measure's Gram matrix — a fraction
-/// of the compression's cost, with start's node count — and compresses from scratch only when the
-/// refit does not certify or the measure is too ill-conditioned for the Gram matrix.
+/// With `starts`, certified designs of the same degree for nearby measures (neighbouring
+/// vertices' visibility), it first refits the one whose moments lie closest to this measure's in
+/// a basis orthonormalised through the measure's Gram matrix, by gradient projection in that
+/// basis — a fraction of the compression's cost, with that start's node count — and compresses
+/// from scratch only when the refit does not certify or the measure is too ill-conditioned for
+/// the Gram matrix. Null, empty or other-degree starts are skipped.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum that fits a double; any scale works
@@ -34,7 +35,7 @@ namespace sd {
 /// std::runtime_error if no certified design is found. `stop` is polled between the steps of the
 /// fits (at high degree one design takes seconds); returning true throws DesignCancelled.
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree, const SphericalDesign* start = nullptr,
+                                int degree, const std::vector<const SphericalDesign*>& starts = {},
                                 const std::function<bool()>& stop = {});
 
 /// The bytes weighted_design allocates for `points` samples at `degree`: five dense points ×

@@ -1,6 +1,7 @@
 #include "bake/vertex_walk.h"
 
 #include <algorithm>
+#include <functional>
 #include <utility>
 
 namespace sd {
@@ -65,20 +66,22 @@ VertexWalk vertex_walk(std::size_t vertex_count, const std::vector<Triangle>& tr
     }
   }
 
-  walk.source.assign(vertex_count, -1);
+  walk.first_source.assign(vertex_count + 1, 0);
   for (std::size_t i = 0; i < vertex_count; ++i) {
     const std::size_t v = walk.order[i];
     const std::size_t group_start = i - i % walk.group;
-    std::int64_t best = -1;
+    const std::size_t first = walk.sources.size();
     for (std::size_t j = adjacency.first[v]; j < adjacency.first[v + 1]; ++j) {
       const std::size_t p = position[adjacency.neighbours[j]];
-      if (p >= group_start && p < i) best = std::max(best, static_cast<std::int64_t>(p));
+      if (p >= group_start && p < i) walk.sources.push_back(p);
     }
-    // No earlier neighbour in the group (its walk parent lies in an earlier group, or it has no
-    // edges): the previous position, a few edges away after a backtrack, still sees a closer sky
-    // than a design from scratch needs.
-    if (best < 0 && i > group_start) best = static_cast<std::int64_t>(i - 1);
-    walk.source[i] = best;
+    // The previous position is a neighbour, or after a backtrack a few edges away: it still sees
+    // a closer sky than a design from scratch needs.
+    if (i > group_start && std::find(walk.sources.begin() + first, walk.sources.end(), i - 1) == walk.sources.end()) {
+      walk.sources.push_back(i - 1);
+    }
+    std::sort(walk.sources.begin() + first, walk.sources.end(), std::greater<>());
+    walk.first_source[i + 1] = walk.sources.size();
   }
   return walk;
 }

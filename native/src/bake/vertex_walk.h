@@ -12,17 +12,17 @@
 namespace sd {
 
 /// Vertices in depth-first preorder over the mesh's edges, cut into groups of `group` consecutive
-/// positions that one worker runs in order. Within a group, each vertex after the first starts from
-/// an earlier vertex's design: usually a neighbour (its depth-first parent), else the previous
-/// position; across groups nothing is shared, so the results do not depend on which worker runs
-/// which group.
+/// positions that one worker runs in order. Within a group, each vertex after the first may start
+/// from the design of any of a few earlier vertices (its candidates): its neighbours visited
+/// earlier in the group, and the previous position; across groups nothing is shared, so the
+/// results do not depend on which worker runs which group.
 struct VertexWalk {
   std::size_t group = 1;
-  std::vector<std::size_t> order;     ///< [N] the vertex at each position
-  /// [N] per position, the earlier position in the same group to warm-start from, or -1 for a
-  /// group's first: the latest-visited neighbour in the group; for a vertex without one (its
-  /// parent in an earlier group, or no edges), the previous position.
-  std::vector<std::int64_t> source;
+  std::vector<std::size_t> order;  ///< [N] the vertex at each position
+  /// The candidates of position i are sources[first_source[i] .. first_source[i + 1]): earlier
+  /// positions in the same group, latest first; none for a group's first position.
+  std::vector<std::size_t> first_source;  ///< [N + 1]
+  std::vector<std::size_t> sources;
 };
 
 /// The walk of `vertex_count` vertices joined by `triangles` (indices already validated), in

@@ -101,6 +101,7 @@ struct Scratch {
   std::vector<glm::dvec3> directions;  // their directions in double
   std::vector<glm::dvec3> escaped;
   std::vector<double> weights;
+  std::vector<const SphericalDesign*> starts;  // earlier neighbours' designs to refit
   RowMatrix y;           // [escaping rays][sh_count(basis_order)]
   Eigen::VectorXd cosine;  // 4 max(0, n·x_r) at the escaping rays
   Eigen::MatrixXd product;
@@ -112,10 +113,10 @@ struct Outputs {
   std::vector<SphericalDesign>* designs;
 };
 
-// `start`: a neighbour's design to refit for this vertex's (Theorem 2.2), or null. Returns false,
-// the vertex unfinished, when `stopping` interrupted its design.
+// s.starts: neighbours' designs to refit for this vertex's (Theorem 2.2), possibly none. Returns
+// false, the vertex unfinished, when `stopping` interrupted its design.
 bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
-                 const SphericalDesign* start, const StopQuery& stopping, Scratch& s, const Outputs& out) {
+                 const StopQuery& stopping, Scratch& s, const Outputs& out) {
   const glm::dmat3 rotation = vertex_ray_rotation(plan.seed, plan.common_rotation ? 0 : v);
   const std::vector<glm::dvec3>& base = *plan.fibonacci;
   const int rays = plan.rays;
@@ -177,7 +178,7 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   if (plan.design_degree >= 0 && e > 0) {
     s.weights.assign(e, inv_rays);
     try {
-      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree, start, stopping);
+      (*out.designs)[v] = weighted_design(s.escaped, s.weights, plan.design_degree, s.starts, stopping);
     } catch (const DesignCancelled&) {
       return false;
     } catch (const std::exception& error) {
@@ -331,10 +332,13 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
       [&, scratch = Scratch()](std::size_t begin, std::size_t end, const StopQuery& stopping) mutable {
         for (std::size_t i = begin; i < end && !stopping(); ++i) {
           const std::size_t v = walk.order.empty() ? i : walk.order[i];
-          const SphericalDesign* start = walk.source.empty() || walk.source[i] < 0
-                                             ? nullptr
-                                             : &designs[walk.order[static_cast<std::size_t>(walk.source[i])]];
-          if (!bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, start, stopping, scratch, outputs)) return;
+          scratch.starts.clear();
+          if (!walk.order.empty()) {
+            for (std::size_t j = walk.first_source[i]; j < walk.first_source[i + 1]; ++j) {
+              scratch.starts.push_back(&designs[walk.order[walk.sources[j]]]);
+            }
+          }
+          if (!bake_vertex(traced.scene().scene(), plan, traced.origin(v), units[v], v, stopping, scratch, outputs)) return;
         }
       },
       parallel);

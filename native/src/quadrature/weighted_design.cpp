@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <numeric>
 #include <stdexcept>
@@ -28,6 +29,10 @@ constexpr double kGramPivotFloor = 1e-12;
 // Levenberg–Marquardt steps per refit: from a neighbour's design a fit that will certify does so
 // in a few dozen; one that has not is cheaper to redo from scratch.
 constexpr int kWarmIterations = 40;
+// A start's node where this measure's Christoffel function, normalised to average 1 over the
+// measure, exceeds this sits where the measure has (almost) no mass; it moves to the nearest
+// sample direction before the refit.
+constexpr double kOutsideSupport = 3.0;
 // When a refit stalls, up to kExchangeRounds times kExchangeNodes sample directions join it.
 constexpr int kExchangeRounds = 2;
 constexpr int kExchangeNodes = 3;
@@ -167,13 +172,57 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
   return basis;
 }
 
+// `start` with its weights scaled to the measure's mass.
+SphericalDesign scaled_start(const SphericalDesign& start, double mass) {
+  double start_mass = 0.0;
+  for (double w : start.weights) start_mass += w;
+  SphericalDesign design = start;
+  for (double& w : design.weights) w *= mass / start_mass;
+  return design;
+}
+
+// How far a refit from `start` has to go: the moment residual of scaled_start in `basis`,
+// relative to √mass. At degree 9 (bumpy sphere, 1024 rays) refits from starts at 1–10 mostly
+// certify and those beyond 10³ never did.
+double start_distance(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
+                  const SphericalDesign& start) {
+  const SphericalDesign scaled = scaled_start(start, measure.mass);
+  const std::vector<double> moments = design_moments(scaled.nodes, scaled.weights, samples.degree);
+  const Eigen::VectorXd residual =
+      basis.transform * (Eigen::Map<const Eigen::VectorXd>(moments.data(), samples.moments.size()) - samples.moments);
+  return residual.norm() / std::sqrt(measure.mass);
+}
+
+// A neighbour's nodes where this measure has no mass (a direction the neighbour sees and this
+// vertex does not) cost the most in the orthonormal basis, whose functions grow fast away from
+// the measure's support, and the fit rarely moves them out: they start at the nearest sample
+// direction instead (at degree 9, a third fewer refits fail).
+void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basis, SphericalDesign& design) {
+  const Eigen::Index k = basis.transform.cols();
+  const double normalisation = measure.mass / static_cast<double>(basis.transform.rows());
+  Eigen::VectorXd y(k);
+  for (glm::dvec3& node : design.nodes) {
+    sh_basis(basis.degree, node, y.data());
+    if ((basis.transform * y).squaredNorm() * normalisation <= kOutsideSupport) continue;
+    const glm::dvec3 outside = node;
+    double nearest = -2.0;
+    for (const glm::dvec3& dir : measure.dirs) {
+      const double cosine = glm::dot(dir, outside);
+      if (cosine > nearest) {
+        nearest = cosine;
+        node = dir;
+      }
+    }
+  }
+}
+
 // Theorem 2.2 from `start`, a design of a nearby measure (a neighbouring vertex's): its weights
-// scaled to this mass, then nodes and weights refitted by gradient projection (eq. 14) in `basis`
-// (gram_basis's, or qr_basis's where the Gram matrix is ill-conditioned). Neighbours
-// see nearly the same sky, so most refits certify with start's node count. A refit that stalls
-// gains the sample directions along which added weight lowers E fastest (the entering variables
-// of an active-set step), and is pruned back to the generic count (rank + 2)/3 after it
-// certifies. Returns nothing when it does not certify.
+// scaled to this mass, nodes outside this measure's support moved into it, then nodes and weights
+// refitted by gradient projection (eq. 14) in `basis` (gram_basis's, or qr_basis's where the Gram
+// matrix is ill-conditioned). Neighbours see nearly the same sky, so most refits certify with
+// start's node count. A refit that stalls gains the sample directions along which added weight
+// lowers E fastest (the entering variables of an active-set step), and is pruned back to the
+// generic count (rank + 2)/3 after it certifies. Returns nothing when it does not certify.
 std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                                      const SphericalDesign& start, const std::function<bool()>& stop) {
   const MomentSystem system = basis.system(samples.moments);
@@ -181,14 +230,9 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
 
-  double start_mass = 0.0;
-  for (double w : start.weights) start_mass += w;
-  SphericalDesign design;
-  design.degree = samples.degree;
+  SphericalDesign design = scaled_start(start, measure.mass);
   design.method = "refit";
-  design.nodes = start.nodes;
-  design.weights = start.weights;
-  for (double& w : design.weights) w *= measure.mass / start_mass;
+  move_into_support(measure, basis, design);
   fit_design(system, design.nodes, design.weights, options);
   drop_zero_weights(design);
   for (int round = 0; !certified(design) && round < kExchangeRounds; ++round) {
@@ -272,16 +316,25 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
 }  // namespace
 
 SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights,
-                                int degree, const SphericalDesign* start, const std::function<bool()>& stop) {
+                                int degree, const std::vector<const SphericalDesign*>& starts,
+                                const std::function<bool()>& stop) {
   const CleanMeasure measure = validate(dirs, weights, degree);
   const Samples samples(measure, degree);
-  std::optional<SphericalDesign> design;
-  std::optional<OrthonormalBasis> qr;
-  if (start != nullptr && start->degree == degree && start->size() > 0) {
-    std::optional<OrthonormalBasis> basis = gram_basis(samples);
+  std::optional<OrthonormalBasis> basis, qr;
+  const SphericalDesign* start = nullptr;
+  double closest = std::numeric_limits<double>::infinity();
+  for (const SphericalDesign* candidate : starts) {
+    if (candidate == nullptr || candidate->degree != degree || candidate->size() == 0) continue;
+    if (!basis) basis = gram_basis(samples);
     if (!basis) basis = qr = qr_basis(samples);
-    design = refit(measure, samples, *basis, *start, stop);
+    const double distance = start_distance(measure, samples, *basis, *candidate);
+    if (distance < closest) {
+      closest = distance;
+      start = candidate;
+    }
   }
+  std::optional<SphericalDesign> design;
+  if (start != nullptr) design = refit(measure, samples, *basis, *start, stop);
   // A refit with more nodes than its start is kept only where the compression does no better.
   if (!design || design->size() > start->size()) {
     if (!qr) qr = qr_basis(samples);

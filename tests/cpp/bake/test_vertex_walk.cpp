@@ -1,5 +1,5 @@
-// The bake's vertex walk (src/bake/vertex_walk.h): every vertex once, warm-start sources earlier in
-// the same group, adjacent where an earlier neighbour is in the group.
+// The bake's vertex walk (src/bake/vertex_walk.h): every vertex once, warm-start candidates earlier
+// in the same group: the earlier neighbours there and the previous position.
 #include "bake/vertex_walk.h"
 
 #include "sdtesting/meshes.h"
@@ -25,7 +25,7 @@ std::set<std::pair<std::size_t, std::size_t>> edges_of(const std::vector<Triangl
   return edges;
 }
 
-TEST(VertexWalk, VisitsEveryVertexOnceAndStartsFromAnEarlierNeighbourOrThePreviousPosition) {
+TEST(VertexWalk, VisitsEveryVertexOnceAndStartsFromEarlierNeighboursAndThePreviousPosition) {
   test::Mesh mesh = test::bumpy_sphere(2);
   // A second component and a loose vertex.
   const test::Mesh box = test::solid_box({3, 3, 3}, {4, 4, 4});
@@ -39,6 +39,7 @@ TEST(VertexWalk, VisitsEveryVertexOnceAndStartsFromAnEarlierNeighbourOrThePrevio
   for (std::size_t group : {1, 7, 32}) {
     const VertexWalk walk = vertex_walk(n, mesh.triangles, group);
     ASSERT_EQ(walk.order.size(), n);
+    ASSERT_EQ(walk.first_source.size(), n + 1);
     std::vector<std::size_t> sorted = walk.order;
     std::sort(sorted.begin(), sorted.end());
     for (std::size_t v = 0; v < n; ++v) ASSERT_EQ(sorted[v], v);
@@ -47,26 +48,24 @@ TEST(VertexWalk, VisitsEveryVertexOnceAndStartsFromAnEarlierNeighbourOrThePrevio
     std::size_t adjacent = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t group_start = i - i % group;
-      const std::int64_t source = walk.source[i];
-      if (i == group_start) {
-        EXPECT_EQ(source, -1) << "a source outside the group makes the result depend on the threads";
-        continue;
-      }
-      // The latest earlier neighbour in the group, else the previous position.
-      std::int64_t expected = static_cast<std::int64_t>(i - 1);
-      std::int64_t latest = -1;
+      const std::vector<std::size_t> sources(walk.sources.begin() + walk.first_source[i],
+                                             walk.sources.begin() + walk.first_source[i + 1]);
+      // Earlier neighbours in the group and the previous position, latest first: a source outside
+      // the group would make the result depend on the threads.
+      std::set<std::size_t> expected;
+      if (i > group_start) expected.insert(i - 1);
       for (const auto& [a, b] : edges) {
-        if (a != walk.order[i]) continue;
-        const std::size_t p = position[b];
-        if (p >= group_start && p < i) latest = std::max(latest, static_cast<std::int64_t>(p));
+        if (a == walk.order[i] && position[b] >= group_start && position[b] < i) expected.insert(position[b]);
       }
-      if (latest >= 0) {
-        expected = latest;
-        ++adjacent;
+      EXPECT_EQ(sources, std::vector<std::size_t>(expected.rbegin(), expected.rend()))
+          << "position " << i << ", group " << group;
+      if (i > group_start && edges.count({walk.order[i], walk.order[i - 1]}) == 0) {
+        adjacent += sources.size() > 1;
+      } else {
+        adjacent += i > group_start;
       }
-      EXPECT_EQ(source, expected) << "position " << i << ", group " << group;
     }
-    // Depth-first, most vertices follow an earlier neighbour in their group; those that do not are
+    // Depth-first, most vertices have an earlier neighbour in their group; those that do not are
     // a group's first and those whose parent is in an earlier group after a backtrack.
     EXPECT_GE(static_cast<double>(adjacent), (1.0 - 3.0 / group) * n) << "group " << group;
   }
@@ -76,7 +75,9 @@ TEST(VertexWalk, VerticesWithoutEdgesStartFromThePreviousPosition) {
   const VertexWalk walk = vertex_walk(10, {}, 4);
   for (std::size_t i = 0; i < 10; ++i) {
     EXPECT_EQ(walk.order[i], i);
-    EXPECT_EQ(walk.source[i], i % 4 == 0 ? -1 : static_cast<std::int64_t>(i - 1));
+    const std::vector<std::size_t> sources(walk.sources.begin() + walk.first_source[i],
+                                           walk.sources.begin() + walk.first_source[i + 1]);
+    EXPECT_EQ(sources, i % 4 == 0 ? std::vector<std::size_t>{} : std::vector<std::size_t>{i - 1});
   }
 }
 

@@ -104,7 +104,7 @@ TEST(DesignProperties, RefitsToARandomlyChangedMeasure) {  // the bake's vertex 
     const SphericalDesign start = weighted_design(m.dirs, m.weights, degree);
     std::uniform_real_distribution<double> change(0.5, 1.5);
     for (double& w : m.weights) w *= change(rng);
-    expect_design_of(weighted_design(m.dirs, m.weights, degree, &start), m, degree, rng);
+    expect_design_of(weighted_design(m.dirs, m.weights, degree, {&start}), m, degree, rng);
   }
 }
 

@@ -231,7 +231,7 @@ TEST(WeightedDesign, RefitsANeighboursDesign) {
   const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024);
   for (int degree : {4, 6}) {
     const SphericalDesign start = weighted_design(here, here_weights, degree);
-    const SphericalDesign design = weighted_design(next, next_weights, degree, &start);
+    const SphericalDesign design = weighted_design(next, next_weights, degree, {&start});
     EXPECT_EQ(design.method, "refit") << "degree " << degree;
     EXPECT_LE(design.size(), start.size());
     const auto expected = design_moments(next, next_weights, degree);
@@ -243,13 +243,31 @@ TEST(WeightedDesign, RefitsANeighboursDesign) {
   }
 }
 
+TEST(WeightedDesign, RefitsTheClosestOfSeveralStarts) {
+  const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05), far = tilted_hemisphere(7, 3.1);
+  const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024),
+      far_weights(far.size(), 1.0 / 1024);
+  const SphericalDesign near_start = weighted_design(here, here_weights, 6);
+  const SphericalDesign far_start = weighted_design(far, far_weights, 6);
+  // In either order the near one is refitted: the design is the one from it alone, not the far one's.
+  const SphericalDesign from_near = weighted_design(next, next_weights, 6, {&near_start});
+  ASSERT_NE(weighted_design(next, next_weights, 6, {&far_start}).nodes, from_near.nodes);
+  for (const auto& starts : {std::vector<const SphericalDesign*>{&far_start, nullptr, &near_start},
+                             std::vector<const SphericalDesign*>{&near_start, &far_start}}) {
+    const SphericalDesign design = weighted_design(next, next_weights, 6, starts);
+    EXPECT_EQ(design.method, "refit");
+    EXPECT_EQ(design.nodes, from_near.nodes);
+    EXPECT_EQ(design.weights, from_near.weights);
+  }
+}
+
 TEST(WeightedDesign, AnUnusableStartFallsBackToCompression) {
   const auto up = tilted_hemisphere(5, 0.0), down = tilted_hemisphere(6, 3.1);
   const std::vector<double> up_weights(up.size(), 1.0 / 1024), down_weights(down.size(), 1.0 / 1024);
   const SphericalDesign start = weighted_design(up, up_weights, 6);
   const SphericalDesign other_degree = weighted_design(up, up_weights, 4);
   for (const SphericalDesign* given : {&start, &other_degree}) {
-    const SphericalDesign design = weighted_design(down, down_weights, 6, given);
+    const SphericalDesign design = weighted_design(down, down_weights, 6, {given});
     EXPECT_LE(design.residual, kDesignTolerance);
     for (double w : design.weights) EXPECT_GT(w, 0.0);
     if (given == &other_degree) EXPECT_NE(design.method, "refit");

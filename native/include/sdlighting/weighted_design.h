@@ -24,9 +24,10 @@ namespace sd {
 /// With `starts`, certified designs of the same degree for nearby measures (neighbouring
 /// vertices' visibility), it first refits the one whose moments lie closest to this measure's in
 /// a basis orthonormalised through the measure's Gram matrix, by gradient projection in that
-/// basis — a fraction of the compression's cost, with that start's node count — and compresses
-/// from scratch only when the refit does not certify or the measure is too ill-conditioned for
-/// the Gram matrix. Null, empty or other-degree starts are skipped.
+/// basis — a fraction of the compression's cost, with that start's node count. Where that start
+/// is far, its refit fails or needs more nodes, it refits a start clustered from the measure's own
+/// samples, and compresses from scratch only when that too fails or needs more nodes. Null, empty
+/// or other-degree starts are skipped.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum that fits a double; any scale works

@@ -261,7 +261,7 @@ TEST(WeightedDesign, RefitsTheClosestOfSeveralStarts) {
   }
 }
 
-TEST(WeightedDesign, AnUnusableStartFallsBackToCompression) {
+TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
   const auto up = tilted_hemisphere(5, 0.0), down = tilted_hemisphere(6, 3.1);
   const std::vector<double> up_weights(up.size(), 1.0 / 1024), down_weights(down.size(), 1.0 / 1024);
   const SphericalDesign start = weighted_design(up, up_weights, 6);
@@ -270,8 +270,14 @@ TEST(WeightedDesign, AnUnusableStartFallsBackToCompression) {
     const SphericalDesign design = weighted_design(down, down_weights, 6, {given});
     EXPECT_LE(design.residual, kDesignTolerance);
     for (double w : design.weights) EXPECT_GT(w, 0.0);
-    if (given == &other_degree) EXPECT_NE(design.method, "refit");
   }
+  // A start of another degree is skipped: the design is the clustered start's refit, as with no
+  // usable start at all; without starts, the compression from scratch.
+  const SphericalDesign skipped = weighted_design(down, down_weights, 6, {&other_degree});
+  const SphericalDesign none = weighted_design(down, down_weights, 6, {nullptr});
+  EXPECT_EQ(skipped.method, "refit");
+  EXPECT_EQ(skipped.nodes, none.nodes);
+  EXPECT_NE(weighted_design(down, down_weights, 6).method, "refit");
 }
 
 TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {

@@ -193,7 +193,7 @@ SphericalDesign scaled_start(const SphericalDesign& start, double mass) {
 // relative to √mass. At degree 9 (bumpy sphere, 1024 rays) refits from starts at 1–10 mostly
 // certify and those beyond 10³ never did.
 double start_distance(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
-                  const SphericalDesign& start) {
+                      const SphericalDesign& start) {
   const SphericalDesign scaled = scaled_start(start, measure.mass);
   const std::vector<double> moments = design_moments(scaled.nodes, scaled.weights, samples.degree);
   const Eigen::VectorXd residual =
@@ -249,8 +249,13 @@ SphericalDesign clustered_start(const CleanMeasure& measure, int count, int degr
     std::fill(masses.begin(), masses.end(), 0.0);
     for (int i = 0; i < points; ++i) {
       int nearest = 0;
-      for (int c = 1; c < count; ++c) {
-        if (glm::dot(measure.dirs[i], centres[c]) > glm::dot(measure.dirs[i], centres[nearest])) nearest = c;
+      double nearest_cosine = -2.0;
+      for (int c = 0; c < count; ++c) {
+        const double cosine = glm::dot(measure.dirs[i], centres[c]);
+        if (cosine > nearest_cosine) {
+          nearest_cosine = cosine;
+          nearest = c;
+        }
       }
       sums[nearest] += measure.weights[i] * measure.dirs[i];
       masses[nearest] += measure.weights[i];

@@ -50,7 +50,13 @@ void weighted(FuzzedDataProvider& data) {
   }
   mass = 0.0;
   for (double w : weights) mass += w;
-  expect_certified(sd::weighted_design(dirs, weights, degree, {&design}), mass);
+  // Starts as the bake passes them: the neighbour's design, and null ones (skipped: the clustered
+  // start) before or after it.
+  std::vector<const sd::SphericalDesign*> starts{&design};
+  if (data.ConsumeBool()) starts.insert(starts.begin(), nullptr);
+  if (data.ConsumeBool()) starts.push_back(nullptr);
+  if (data.ConsumeBool()) starts = {nullptr};
+  expect_certified(sd::weighted_design(dirs, weights, degree, starts), mass);
 }
 
 void zonal(FuzzedDataProvider& data) {

@@ -28,8 +28,9 @@ struct SphericalDesign {
   int degree = 0;
   /// ‖Σ_ν λ_ν y(x_ν) − ∫ y w dμ‖₂ / mass over all real SH y_lm with l <= degree.
   double residual = 0.0;
-  /// How it was built: "gauss", "gauss-radau", "gradient", "tchakaloff" or "refit" (from a
-  /// nearby measure's design, weighted_design.h).
+  /// How it was built: "gauss", "gauss-radau", "gradient", "tchakaloff", "refit" (from a
+  /// nearby measure's design, weighted_design.h) or "clustered" (refitted from clusters of the
+  /// measure's samples, quadrature/clustered_start.h).
   std::string method;
   int size() const { return static_cast<int>(nodes.size()); }
 };

@@ -23,11 +23,13 @@ namespace sd {
 ///
 /// With `starts`, certified designs of the same degree for nearby measures (neighbouring
 /// vertices' visibility), it first refits the one whose moments lie closest to this measure's in
-/// a basis orthonormalised through the measure's Gram matrix, by gradient projection in that
-/// basis — a fraction of the compression's cost, with that start's node count. Where that start
-/// is far, its refit fails or needs more nodes, it refits a start clustered from the measure's own
-/// samples, and compresses from scratch only when that too fails or needs more nodes. Null, empty
-/// or other-degree starts are skipped.
+/// a basis orthonormal for the measure (through its Gram matrix, or the QR above where that is
+/// too ill-conditioned), by gradient projection in that basis — a fraction of the compression's
+/// cost, with that start's node count. Where that start is far, its refit fails or needs more
+/// nodes, it refits a start clustered from the measure's own samples (method "clustered"), and
+/// compresses only when that too fails or needs more nodes than the start (than a little over
+/// the generic count (rank + 2)/3 when no start was usable). Null, empty and other-degree starts
+/// are skipped; an empty `starts` compresses at once.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum that fits a double; any scale works

@@ -75,8 +75,8 @@ VertexWalk vertex_walk(std::size_t vertex_count, const std::vector<Triangle>& tr
       const std::size_t p = position[adjacency.neighbours[j]];
       if (p >= group_start && p < i) walk.sources.push_back(p);
     }
-    // The previous position is a neighbour, or after a backtrack a few edges away: it still sees
-    // a closer sky than a design from scratch needs.
+    // The previous position is a neighbour, or after a backtrack a few edges away, or in another
+    // component; weighted_design does not refit a start whose sky is too far from this vertex's.
     if (i > group_start && std::find(walk.sources.begin() + first, walk.sources.end(), i - 1) == walk.sources.end()) {
       walk.sources.push_back(i - 1);
     }

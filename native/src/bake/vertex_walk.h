@@ -6,7 +6,6 @@
 #include "sdlighting/mesh.h"
 
 #include <cstddef>
-#include <cstdint>
 #include <vector>
 
 namespace sd {

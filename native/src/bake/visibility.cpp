@@ -101,7 +101,7 @@ struct Scratch {
   std::vector<glm::dvec3> directions;  // their directions in double
   std::vector<glm::dvec3> escaped;
   std::vector<double> weights;
-  std::vector<const SphericalDesign*> starts;  // earlier neighbours' designs to refit
+  std::vector<const SphericalDesign*> starts;  // the walk's candidates' designs (weighted_design)
   RowMatrix y;           // [escaping rays][sh_count(basis_order)]
   Eigen::VectorXd cosine;  // 4 max(0, n·x_r) at the escaping rays
   Eigen::MatrixXd product;
@@ -113,7 +113,7 @@ struct Outputs {
   std::vector<SphericalDesign>* designs;
 };
 
-// s.starts: neighbours' designs to refit for this vertex's (Theorem 2.2), possibly none. Returns
+// s.starts: candidate designs to refit for this vertex's (Theorem 2.2), possibly none. Returns
 // false, the vertex unfinished, when `stopping` interrupted its design.
 bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, const glm::dvec3& n, std::size_t v,
                  const StopQuery& stopping, Scratch& s, const Outputs& out) {

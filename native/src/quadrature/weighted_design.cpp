@@ -1,5 +1,6 @@
 #include "sdlighting/weighted_design.h"
 
+#include "quadrature/clustered_start.h"
 #include "quadrature/design_fit.h"
 #include "quadrature/nnls.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -34,13 +35,12 @@ constexpr int kWarmIterations = 40;
 // sample direction before the refit.
 constexpr double kOutsideSupport = 3.0;
 // A start farther than this (start_distance) is not refitted: at degree 9 (bumpy sphere, 1024
-// rays) none of the 119 refits from beyond it certified.
+// rays) most refits from starts at 1–10 certified, none of the 119 from beyond 10³.
 constexpr double kFarStart = 1e3;
 // Without a neighbour to tell how many nodes to aim for, a clustered start has this many times
-// the generic count (rank + 2)/3: about the designs' count at degree 9 (43 of 34), and the refit
-// prunes towards the generic count from there.
+// the generic count: about the designs' count at degree 9 (43 of 34), and the refit prunes
+// towards the generic count from there.
 constexpr double kClusteredNodesPerGeneric = 1.3;
-constexpr int kLloydIterations = 5;
 // When a refit stalls, up to kExchangeRounds times kExchangeNodes sample directions join it.
 constexpr int kExchangeRounds = 2;
 constexpr int kExchangeNodes = 3;
@@ -52,6 +52,10 @@ constexpr double kFitRelativeTolerance = 1e-14;
 constexpr double kNegligibleWeight = 1e-20;
 
 double fit_tolerance_for(double mass) { return kFitRelativeTolerance * std::sqrt(mass); }
+
+// The generic node count for `rank` moments: below it a design has fewer unknowns (3 per node)
+// than moment equations.
+int generic_count(int rank) { return std::max(1, (rank + 2) / 3); }
 
 // A refit keeps nodes whose weight reaches 0 (they may regain it); they leave the design here.
 void drop_zero_weights(SphericalDesign& design) {
@@ -180,7 +184,8 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
   return basis;
 }
 
-// `start` with its weights scaled to the measure's mass.
+// `start` with its weights scaled to the measure's mass: a neighbour sees more or less sky, and a
+// design's weights sum to its measure's mass.
 SphericalDesign scaled_start(const SphericalDesign& start, double mass) {
   double start_mass = 0.0;
   for (double w : start.weights) start_mass += w;
@@ -190,8 +195,7 @@ SphericalDesign scaled_start(const SphericalDesign& start, double mass) {
 }
 
 // How far a refit from `start` has to go: the moment residual of scaled_start in `basis`,
-// relative to √mass. At degree 9 (bumpy sphere, 1024 rays) refits from starts at 1–10 mostly
-// certify and those beyond 10³ never did.
+// relative to √mass (kFarStart). NaN for a start without mass, which is then never chosen.
 double start_distance(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                       const SphericalDesign& start) {
   const SphericalDesign scaled = scaled_start(start, measure.mass);
@@ -224,64 +228,13 @@ void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basi
   }
 }
 
-// A start made from the measure itself: `count` clusters of its sample directions (farthest-point
-// seeds, then Lloyd's iterations on the sphere), each a node at its cluster's normalised weighted
-// mean with the cluster's mass. Inside the support by construction, it stands in for a
-// neighbour's design where there is none, it is far, or the refit from it failed: refitted, it
-// certifies about twice as often as it fails, at a third of the compression's cost (degree 9).
-SphericalDesign clustered_start(const CleanMeasure& measure, int count, int degree) {
-  const int points = static_cast<int>(measure.dirs.size());
-  count = std::clamp(count, 1, points);
-  std::vector<glm::dvec3> centres;
-  std::vector<double> closeness(points, -2.0);  // cosine to the nearest centre so far
-  int farthest = 0;
-  while (static_cast<int>(centres.size()) < count) {
-    centres.push_back(measure.dirs[farthest]);
-    for (int i = 0; i < points; ++i) {
-      closeness[i] = std::max(closeness[i], glm::dot(measure.dirs[i], centres.back()));
-      if (closeness[i] < closeness[farthest]) farthest = i;
-    }
-  }
-  std::vector<glm::dvec3> sums(count);
-  std::vector<double> masses(count);
-  for (int iteration = 0; iteration <= kLloydIterations; ++iteration) {
-    std::fill(sums.begin(), sums.end(), glm::dvec3(0.0));
-    std::fill(masses.begin(), masses.end(), 0.0);
-    for (int i = 0; i < points; ++i) {
-      int nearest = 0;
-      double nearest_cosine = -2.0;
-      for (int c = 0; c < count; ++c) {
-        const double cosine = glm::dot(measure.dirs[i], centres[c]);
-        if (cosine > nearest_cosine) {
-          nearest_cosine = cosine;
-          nearest = c;
-        }
-      }
-      sums[nearest] += measure.weights[i] * measure.dirs[i];
-      masses[nearest] += measure.weights[i];
-    }
-    for (int c = 0; c < count; ++c) {
-      if (masses[c] > 0.0 && glm::length(sums[c]) > 0.0) centres[c] = glm::normalize(sums[c]);
-    }
-  }
-  SphericalDesign design;
-  design.degree = degree;
-  for (int c = 0; c < count; ++c) {
-    if (masses[c] > 0.0) {
-      design.nodes.push_back(centres[c]);
-      design.weights.push_back(masses[c]);
-    }
-  }
-  return design;
-}
-
 // Theorem 2.2 from `start`, a design of a nearby measure (a neighbouring vertex's): its weights
 // scaled to this mass, nodes outside this measure's support moved into it, then nodes and weights
 // refitted by gradient projection (eq. 14) in `basis` (gram_basis's, or qr_basis's where the Gram
 // matrix is ill-conditioned). Neighbours see nearly the same sky, so most refits certify with
 // start's node count. A refit that stalls gains the sample directions along which added weight
 // lowers E fastest (the entering variables of an active-set step), and is pruned back to the
-// generic count (rank + 2)/3 after it certifies. Returns nothing when it does not certify.
+// generic count after it certifies. Returns nothing when it does not certify.
 std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                                      const SphericalDesign& start, const std::function<bool()>& stop) {
   const MomentSystem system = basis.system(samples.moments);
@@ -313,7 +266,7 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
     drop_zero_weights(design);
   }
   if (!certified(design)) return std::nullopt;
-  const int generic = (system.size + 2) / 3;
+  const int generic = generic_count(system.size);
   if (design.size() > generic) {
     design = prune_design(system, std::move(design), generic, certified,
                           FitOptions{options.tolerance, kWarmIterations, true, false, stop});
@@ -367,7 +320,7 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
                              " failed certification: residual " + number_string(best.residual));
   }
 
-  const int generic = std::max(1, (rank + 2) / 3);
+  const int generic = generic_count(rank);
   return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
                       FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop});
 }
@@ -395,13 +348,18 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
         start = candidate;
       }
     }
-    const int generic = (static_cast<int>(basis->transform.rows()) + 2) / 3;
+    const int generic = generic_count(static_cast<int>(basis->transform.rows()));
     wanted = start != nullptr ? start->size() : static_cast<int>(std::ceil(kClusteredNodesPerGeneric * generic));
     if (start != nullptr && closest <= kFarStart) design = refit(measure, samples, *basis, *start, stop);
+    // At degree 9 the refit of a clustered start certifies about twice as often as it fails, at
+    // a third of the compression's cost.
     if (!design || design->size() > wanted) {
       std::optional<SphericalDesign> clustered =
-          refit(measure, samples, *basis, clustered_start(measure, wanted, degree), stop);
-      if (clustered && (!design || clustered->size() < design->size())) design = std::move(clustered);
+          refit(measure, samples, *basis, clustered_start(measure.dirs, measure.weights, wanted, degree), stop);
+      if (clustered && (!design || clustered->size() < design->size())) {
+        design = std::move(clustered);
+        design->method = "clustered";
+      }
     }
   }
   // A refit with more nodes than wanted is kept only where the compression does no better.

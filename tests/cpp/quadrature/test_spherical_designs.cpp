@@ -4,6 +4,7 @@
 #include "sdlighting/zonal_design.h"
 #include "sdtesting/sphere.h"
 #include "design_test_support.h"
+#include "quadrature/clustered_start.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -244,18 +245,21 @@ TEST(WeightedDesign, RefitsANeighboursDesign) {
 }
 
 TEST(WeightedDesign, RefitsTheClosestOfSeveralStarts) {
-  const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05), far = tilted_hemisphere(7, 3.1);
+  const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05),
+             farther = tilted_hemisphere(7, 0.3);
   const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024),
-      far_weights(far.size(), 1.0 / 1024);
+      farther_weights(farther.size(), 1.0 / 1024);
   const SphericalDesign near_start = weighted_design(here, here_weights, 6);
-  const SphericalDesign far_start = weighted_design(far, far_weights, 6);
-  // In either order the near one is refitted: the design is the one from it alone, not the far one's.
+  const SphericalDesign farther_start = weighted_design(farther, farther_weights, 6);
+  // Both refit on their own, to different designs; in either order the nearer one is refitted.
   const SphericalDesign from_near = weighted_design(next, next_weights, 6, {&near_start});
-  ASSERT_NE(weighted_design(next, next_weights, 6, {&far_start}).nodes, from_near.nodes);
-  for (const auto& starts : {std::vector<const SphericalDesign*>{&far_start, nullptr, &near_start},
-                             std::vector<const SphericalDesign*>{&near_start, &far_start}}) {
+  const SphericalDesign from_farther = weighted_design(next, next_weights, 6, {&farther_start});
+  ASSERT_EQ(from_near.method, "refit");
+  ASSERT_EQ(from_farther.method, "refit");
+  ASSERT_NE(from_farther.nodes, from_near.nodes);
+  for (const auto& starts : {std::vector<const SphericalDesign*>{&farther_start, nullptr, &near_start},
+                             std::vector<const SphericalDesign*>{&near_start, &farther_start}}) {
     const SphericalDesign design = weighted_design(next, next_weights, 6, starts);
-    EXPECT_EQ(design.method, "refit");
     EXPECT_EQ(design.nodes, from_near.nodes);
     EXPECT_EQ(design.weights, from_near.weights);
   }
@@ -275,9 +279,48 @@ TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
   // usable start at all; without starts, the compression from scratch.
   const SphericalDesign skipped = weighted_design(down, down_weights, 6, {&other_degree});
   const SphericalDesign none = weighted_design(down, down_weights, 6, {nullptr});
-  EXPECT_EQ(skipped.method, "refit");
+  EXPECT_EQ(skipped.method, "clustered");
   EXPECT_EQ(skipped.nodes, none.nodes);
-  EXPECT_NE(weighted_design(down, down_weights, 6).method, "refit");
+  const std::string compressed = weighted_design(down, down_weights, 6).method;
+  EXPECT_TRUE(compressed == "tchakaloff" || compressed == "gradient") << compressed;
+}
+
+TEST(ClusteredStart, SpreadsDistinctNodesOverTheSamplesAndKeepsTheMass) {
+  // Four directions on a meridian: three clusters seed at the two ends and the middle pair's
+  // farther point, never twice at one direction.
+  std::vector<glm::dvec3> meridian;
+  for (double degrees : {0.0, 60.0, 120.0, 180.0}) {
+    const double a = degrees * 3.14159265358979323846 / 180.0;
+    meridian.emplace_back(std::sin(a), 0.0, std::cos(a));
+  }
+  const SphericalDesign three = clustered_start(meridian, {1.0, 2.0, 3.0, 4.0}, 3, 4);
+  ASSERT_EQ(three.size(), 3);
+  EXPECT_NEAR(std::accumulate(three.weights.begin(), three.weights.end(), 0.0), 10.0, 1e-12);
+  EXPECT_EQ(three.method, "clustered");
+  // As many clusters as directions: the measure itself.
+  const SphericalDesign four = clustered_start(meridian, {1.0, 2.0, 3.0, 4.0}, 9, 4);
+  ASSERT_EQ(four.size(), 4);
+  for (int i = 0; i < 4; ++i) {
+    const auto direction = static_cast<std::size_t>(four.weights[i]) - 1;  // weights 1..4 name them
+    ASSERT_LT(direction, meridian.size());
+    EXPECT_NEAR(glm::dot(four.nodes[i], meridian[direction]), 1.0, 1e-12);
+  }
+
+  // A vertex's visibility: every requested cluster is used, each node within a few sample
+  // spacings of its nearest sample direction, and the weights sum to the mass.
+  const auto sky = tilted_hemisphere(5, 0.4);
+  const std::vector<double> weights(sky.size(), 1.0 / 1024);
+  const double mass = sky.size() / 1024.0;
+  for (int count : {1, 9, 17, 44}) {
+    const SphericalDesign design = clustered_start(sky, weights, count, 9);
+    ASSERT_EQ(design.size(), count);
+    EXPECT_NEAR(std::accumulate(design.weights.begin(), design.weights.end(), 0.0), mass, 1e-12);
+    const glm::dvec3 normal(std::sin(0.4), 0.0, std::cos(0.4));
+    for (const glm::dvec3& node : design.nodes) {
+      EXPECT_NEAR(glm::length(node), 1.0, 1e-12);
+      EXPECT_GT(glm::dot(node, normal), 0.0) << "a node outside the visible hemisphere";
+    }
+  }
 }
 
 TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {

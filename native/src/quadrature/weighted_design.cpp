@@ -208,7 +208,8 @@ double start_distance(const CleanMeasure& measure, const Samples& samples, const
 // A neighbour's nodes where this measure has no mass (a direction the neighbour sees and this
 // vertex does not) cost the most in the orthonormal basis, whose functions grow fast away from
 // the measure's support, and the fit rarely moves them out: they start at the nearest sample
-// direction instead (at degree 9, a third fewer refits fail).
+// direction instead (at degree 9, with the closest start chosen as well, failed refits fell from
+// 305 to 145 of 621).
 void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basis, SphericalDesign& design) {
   const Eigen::Index k = basis.transform.cols();
   const double normalisation = measure.mass / static_cast<double>(basis.transform.rows());

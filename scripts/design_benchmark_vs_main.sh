@@ -12,12 +12,15 @@ base=${1:-main}
 rays=${2:-1024}
 degrees=${3:-"4 5 6 7 8 9"}
 benchmark=${4:-design_benchmarks}
-if [ ! -x "build/main-build/native/$benchmark" ]; then
+# The base's build is reused only for the same commit and benchmark.
+stamp="$(git rev-parse "$base") $benchmark"
+if [ ! -x "build/main-build/native/$benchmark" ] || [ "$(cat build/main-build/stamp 2>/dev/null)" != "$stamp" ]; then
   rm -rf build/main-src build/main-build && mkdir -p build/main-src
   git archive "$base" | tar -x -C build/main-src
   cp native/benchmarks/design_benchmarks.cpp build/main-src/native/benchmarks/
   cmake -S build/main-src -B build/main-build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > /dev/null
   nice -n 10 cmake --build build/main-build -j2 --target "$benchmark" > /dev/null
+  echo "$stamp" > build/main-build/stamp
 fi
 for d in $degrees; do
   echo "degree $d $base:   $(nice -n 10 "build/main-build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"

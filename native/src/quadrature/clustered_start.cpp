@@ -11,20 +11,20 @@ namespace {
 // seeds already spread the nodes over the support.
 constexpr int kLloydIterations = 5;
 
-int nearest_centre(const glm::dvec3& dir, const std::vector<glm::dvec3>& centres) {
+}  // namespace
+
+int nearest_direction(const glm::dvec3& dir, const std::vector<glm::dvec3>& dirs) {
   int nearest = 0;
   double nearest_cosine = -2.0;
-  for (int c = 0; c < static_cast<int>(centres.size()); ++c) {
-    const double cosine = glm::dot(dir, centres[c]);
+  for (int i = 0; i < static_cast<int>(dirs.size()); ++i) {
+    const double cosine = glm::dot(dir, dirs[i]);
     if (cosine > nearest_cosine) {
       nearest_cosine = cosine;
-      nearest = c;
+      nearest = i;
     }
   }
   return nearest;
 }
-
-}  // namespace
 
 SphericalDesign clustered_start(const std::vector<glm::dvec3>& dirs, const std::vector<double>& weights, int count,
                                 int degree) {
@@ -54,7 +54,7 @@ SphericalDesign clustered_start(const std::vector<glm::dvec3>& dirs, const std::
     std::fill(sums.begin(), sums.end(), glm::dvec3(0.0));
     std::fill(masses.begin(), masses.end(), 0.0);
     for (int i = 0; i < points; ++i) {
-      const int c = nearest_centre(dirs[i], centres);
+      const int c = nearest_direction(dirs[i], centres);
       sums[c] += weights[i] * dirs[i];
       masses[c] += weights[i];
     }

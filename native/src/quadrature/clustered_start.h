@@ -10,6 +10,9 @@
 
 namespace sd {
 
+/// The index of the direction in `dirs` (non-empty, unit) nearest to the unit vector `dir`.
+int nearest_direction(const glm::dvec3& dir, const std::vector<glm::dvec3>& dirs);
+
 /// `count` clusters (at most one per direction) of the discrete measure Σ weights_i δ(dirs_i)
 /// (unit directions, weights > 0): farthest-point seeds, then Lloyd iterations on the sphere; each
 /// cluster becomes a node at its normalised weighted mean with the cluster's mass, so the weights

@@ -216,15 +216,8 @@ void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basi
   Eigen::VectorXd y(k);
   for (glm::dvec3& node : design.nodes) {
     sh_basis(basis.degree, node, y.data());
-    if ((basis.transform * y).squaredNorm() * normalisation <= kOutsideSupport) continue;
-    const glm::dvec3 outside = node;
-    double nearest = -2.0;
-    for (const glm::dvec3& dir : measure.dirs) {
-      const double cosine = glm::dot(dir, outside);
-      if (cosine > nearest) {
-        nearest = cosine;
-        node = dir;
-      }
+    if ((basis.transform * y).squaredNorm() * normalisation > kOutsideSupport) {
+      node = measure.dirs[nearest_direction(node, measure.dirs)];
     }
   }
 }

@@ -265,6 +265,27 @@ TEST(WeightedDesign, RefitsTheClosestOfSeveralStarts) {
   }
 }
 
+TEST(WeightedDesign, RanksTheStartsAfterMovingTheirNodesIntoTheSupport) {
+  const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05);
+  const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024);
+  // A cap around the zenith: its design lies inside next's support, away from next's moments.
+  std::vector<glm::dvec3> cap;
+  for (const glm::dvec3& d : tilted_hemisphere(7, 0.0))
+    if (d.z > 0.5) cap.push_back(d);
+  const SphericalDesign cap_start = weighted_design(cap, std::vector<double>(cap.size(), 1.0 / 1024), 6);
+  // The near start with a node at the nadir, where `next` has no mass: as given, far beyond the
+  // cap's design; with that node on the nearest sample direction, nearer than it.
+  SphericalDesign near_start = weighted_design(here, here_weights, 6);
+  near_start.nodes.emplace_back(0.0, 0.0, -1.0);
+  near_start.weights.push_back(0.1 * near_start.weights.front());
+  const SphericalDesign from_near = weighted_design(next, next_weights, 6, {&near_start});
+  const SphericalDesign from_cap = weighted_design(next, next_weights, 6, {&cap_start});
+  ASSERT_EQ(from_near.method, "refit");
+  ASSERT_NE(from_near.nodes, from_cap.nodes);
+  const SphericalDesign design = weighted_design(next, next_weights, 6, {&cap_start, &near_start});
+  EXPECT_EQ(design.nodes, from_near.nodes);
+}
+
 TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
   const auto up = tilted_hemisphere(5, 0.0), down = tilted_hemisphere(6, 3.1);
   const std::vector<double> up_weights(up.size(), 1.0 / 1024), down_weights(down.size(), 1.0 / 1024);

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace sd {
@@ -56,10 +57,11 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
 /// Gradient projection used to remove nodes: drops the `step` lightest nodes of a certified
 /// design, refits, keeps the result if `certify` accepts it (it sets the residual), and halves the
 /// step after a failure; the first step aims at `target_size`, below which it never goes (the
-/// generic count: fewer nodes have fewer unknowns than moment equations). Returns the smallest
-/// design found.
+/// generic count: fewer nodes have fewer unknowns than moment equations), and stops after
+/// `max_failures` failed steps. Returns the smallest design found.
 SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design, int target_size,
-                             const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options);
+                             const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options,
+                             int max_failures = std::numeric_limits<int>::max());
 
 /// Two unit vectors completing `dir` to an orthonormal frame.
 void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2);

@@ -211,13 +211,23 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
 
 SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design, int target_size,
                              const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options,
-                             int max_failures) {
+                             const PruneOptions& pruning) {
   int step = std::max(1, design.size() - target_size);
   int failures = 0;
-  while (step >= 1 && design.size() - step >= std::max(target_size, 1) && failures < max_failures) {
+  Eigen::VectorXd values(raw_size(system)), in_basis;
+  std::vector<double> size;  // what orders the nodes to keep: w, or w‖F(x)‖
+  while (step >= 1 && design.size() - step >= std::max(target_size, 1) && failures < pruning.max_failures) {
+    size = design.weights;
+    if (pruning.smallest_moments_first) {
+      for (int j = 0; j < design.size(); ++j) {
+        system.evaluate(design.nodes[j], values.data(), nullptr);
+        to_basis(system, values, in_basis);
+        size[j] *= in_basis.norm();
+      }
+    }
     std::vector<int> order(design.size());
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return design.weights[a] > design.weights[b]; });
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return size[a] > size[b]; });
     SphericalDesign candidate;
     candidate.degree = design.degree;
     candidate.method = "gradient";

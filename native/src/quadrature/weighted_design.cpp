@@ -267,7 +267,7 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   const int generic = generic_count(system.size);
   if (design.size() > generic) {
     design = prune_design(system, std::move(design), generic, certified,
-                          FitOptions{options.tolerance, kWarmIterations, true, false, stop});
+                          FitOptions{options.tolerance, kWarmIterations, true, false, stop}, PruneOptions{true});
   }
   design.method = "refit";
   return design;
@@ -320,7 +320,8 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
 
   const int generic = generic_count(rank);
   return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
-                      FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop}, kCompressionPruneFailures);
+                      FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop},
+                      PruneOptions{true, kCompressionPruneFailures});
 }
 
 }  // namespace

@@ -349,6 +349,11 @@ TEST(WeightedDesign, FewerPointsThanMomentsKeepsThePoints) {
   const SphericalDesign design = weighted_design(dirs, {0.5, 0.25, 0.25}, 6);
   EXPECT_LE(design.size(), 3);
   EXPECT_LE(design.residual, kDesignTolerance);
+  // Given a start, the compression still runs, and not a refit: even of a start that is already
+  // this measure's design.
+  const SphericalDesign from_start = weighted_design(dirs, {0.5, 0.25, 0.25}, 6, {&design});
+  EXPECT_TRUE(from_start.method == "tchakaloff" || from_start.method == "gradient") << from_start.method;
+  EXPECT_EQ(from_start.nodes, design.nodes);
 }
 
 TEST(WeightedDesign, APointMassGivesOneNode) {

@@ -213,10 +213,9 @@ SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design,
                              const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options,
                              const PruneOptions& pruning) {
   int step = std::max(1, design.size() - target_size);
-  int failures = 0;
   Eigen::VectorXd values(raw_size(system)), in_basis;
   std::vector<double> size;  // what orders the nodes to keep: w, or w‖F(x)‖
-  while (step >= 1 && design.size() - step >= std::max(target_size, 1) && failures < pruning.max_failures) {
+  while (step >= 1 && design.size() - step >= std::max(target_size, 1)) {
     size = design.weights;
     if (pruning.smallest_moments_first) {
       for (int j = 0; j < design.size(); ++j) {
@@ -241,7 +240,6 @@ SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design,
       step = std::min(step, std::max(1, design.size() - target_size));
     } else {
       step /= 2;
-      ++failures;
     }
   }
   return design;

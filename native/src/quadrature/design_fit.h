@@ -9,7 +9,6 @@
 #include <Eigen/Dense>
 
 #include <functional>
-#include <limits>
 #include <vector>
 
 namespace sd {
@@ -54,17 +53,15 @@ struct FitOptions {
 double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
                   std::vector<double>& weights, const FitOptions& options);
 
-/// Which nodes prune_design drops first, and when it gives up.
+/// Which nodes prune_design drops first.
 struct PruneOptions {
   /// Drop the nodes with the smallest moments w‖F(x)‖ in the system's basis, rather than the
   /// lightest. A pruned fit starts at the dropped nodes' moment residual Σ w F(x), and in a basis
   /// orthonormal for a measure the two orders differ where the measure thins out: for the
   /// per-vertex designs of V at degree 9 (bumpy sphere, 1024 rays) smallest moments first took
-  /// 16.0 → 13.9 ms per vertex and 42.06 → 41.27 nodes; for the lobes' continuation at degree 10 it
+  /// 18.2 → 16.0 ms per vertex and 41.22 → 39.92 nodes; for the lobes' continuation at degree 10 it
   /// kept one node more (42 against 41), so they drop the lightest.
   bool smallest_moments_first = false;
-  /// Stop after this many failed steps.
-  int max_failures = std::numeric_limits<int>::max();
 };
 
 /// Gradient projection used to remove nodes: drops the `step` first nodes of a certified design

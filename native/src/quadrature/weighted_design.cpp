@@ -42,10 +42,6 @@ constexpr int kSpareNodes = 2;
 // the generic count: about the designs' count at degree 9 (43 of 34), and the refit prunes
 // towards the generic count from there.
 constexpr double kClusteredNodesPerGeneric = 1.3;
-// The compression's pruning from ~rank nodes stops after this many failed steps: at degree 9 the
-// failed steps below the third saved 0.9 nodes per compression at ~2.5 ms each (bumpy sphere,
-// 1024 rays; most compressions are of the narrow visibility near the ground, ~60–90 nodes).
-constexpr int kCompressionPruneFailures = 3;
 // When a refit stalls, up to kExchangeRounds times kExchangeNodes sample directions join it.
 constexpr int kExchangeRounds = 2;
 constexpr int kExchangeNodes = 3;
@@ -320,8 +316,7 @@ SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, co
 
   const int generic = generic_count(rank);
   return prune_design(basis.system(samples.moments), std::move(best), generic, certified,
-                      FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop},
-                      PruneOptions{true, kCompressionPruneFailures});
+                      FitOptions{fit_tolerance_for(measure.mass), 100, true, false, stop}, PruneOptions{true});
 }
 
 }  // namespace

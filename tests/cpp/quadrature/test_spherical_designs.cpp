@@ -5,6 +5,7 @@
 #include "sdtesting/sphere.h"
 #include "design_test_support.h"
 #include "quadrature/clustered_start.h"
+#include "quadrature/design_fit.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -304,6 +305,30 @@ TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
   EXPECT_EQ(skipped.nodes, none.nodes);
   const std::string compressed = weighted_design(down, down_weights, 6).method;
   EXPECT_TRUE(compressed == "tchakaloff" || compressed == "gradient") << compressed;
+}
+
+TEST(PruneDesign, DropsTheLightestOrTheSmallestMomentsFirst) {
+  // F(x) = (x, y, 100 z): the lightest node, on the z axis, has the largest moments.
+  MomentSystem system;
+  system.size = system.raw_size = 3;
+  system.transform = Eigen::Vector3d(1.0, 1.0, 100.0).asDiagonal();
+  system.target = Eigen::Vector3d::Zero();
+  system.evaluate = [](const glm::dvec3& x, double* values, double* gradients) {
+    values[0] = x.x, values[1] = x.y, values[2] = x.z;
+    if (gradients) {
+      for (int i = 0; i < 9; ++i) gradients[i] = i % 4 == 0 ? 1.0 : 0.0;
+    }
+  };
+  SphericalDesign design;
+  design.nodes = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}};
+  design.weights = {0.1, 0.5, 1.0};
+  // No fit steps and every candidate accepted: one node dropped, the others as they were.
+  const FitOptions unchanged{0.0, 0};
+  auto accept = [](SphericalDesign&) { return true; };
+  const SphericalDesign lightest = prune_design(system, design, 2, accept, unchanged);
+  EXPECT_EQ(lightest.nodes, (std::vector<glm::dvec3>{{0, 1, 0}, {1, 0, 0}}));
+  const SphericalDesign smallest = prune_design(system, design, 2, accept, unchanged, PruneOptions{true});
+  EXPECT_EQ(smallest.nodes, (std::vector<glm::dvec3>{{0, 0, 1}, {0, 1, 0}}));
 }
 
 TEST(ClusteredStart, SpreadsDistinctNodesOverTheSamplesAndKeepsTheMass) {

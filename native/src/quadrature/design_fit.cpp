@@ -37,15 +37,15 @@ struct Linearisation {
   Eigen::Matrix<double, 3, Eigen::Dynamic> gradients;
 };
 
-int raw_size(const MomentSystem& system) { return system.transform.size() == 0 ? system.size : system.raw_size; }
+int raw_size(const MomentSystem& system) { return system.transform.identity() ? system.size : system.raw_size; }
 
 // The basis from the raw functions: `raw` itself, or transform × raw.
 template <typename Raw, typename Out>
 void to_basis(const MomentSystem& system, const Raw& raw, Out& out) {
-  if (system.transform.size() == 0) {
+  if (system.transform.identity()) {
     out = raw;
   } else {
-    out.noalias() = system.transform * raw;
+    system.transform.apply(raw, out);
   }
 }
 
@@ -58,8 +58,7 @@ double cost_of(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
     lin.raw_sum += weights[i] * lin.values;
   }
   lin.raw_sum -= system.target;
-  if (system.transform.size() == 0) return lin.raw_sum.norm();
-  lin.residual_trial.noalias() = system.transform * lin.raw_sum;
+  to_basis(system, lin.raw_sum, lin.residual_trial);
   return lin.residual_trial.norm();
 }
 

@@ -146,12 +146,14 @@ struct Samples {
 // φ(x) = T y(x): functions of degree <= `degree` orthonormal for the measure (rank-many of them).
 struct OrthonormalBasis {
   int degree = 0;
-  Eigen::MatrixXd transform;  // T, [rank][sh_count(degree)]
+  BasisTransform transform;  // T, [rank][sh_count(degree)]
+
+  int rank() const { return transform.size(); }
 
   MomentSystem system(const Eigen::VectorXd& moments) const {
     MomentSystem s;
-    s.size = static_cast<int>(transform.rows());
-    s.raw_size = static_cast<int>(transform.cols());
+    s.size = rank();
+    s.raw_size = sh_count(degree);
     s.transform = transform;
     s.target = moments;
     s.evaluate = [d = degree](const glm::dvec3& x, double* values, double* gradients) {
@@ -166,7 +168,7 @@ struct OrthonormalBasis {
 };
 
 // The basis from the Gram matrix G = Σ w y yᵀ: with P G Pᵀ = L D Lᵀ (pivoted LDLT),
-// T = D^{-1/2} L⁻¹ P gives T G Tᵀ = I. k³ work after e k² for G, against e k² with a much larger
+// T = D^{-1/2} L⁻¹ P gives T G Tᵀ = I, lower triangular after the permutation P. k³ work after e k² for G, against e k² with a much larger
 // constant for the QR of the e × k Vandermonde — but only where G is well conditioned.
 std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
   const int k = static_cast<int>(samples.vandermonde.cols());
@@ -179,9 +181,11 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
   if (!(pivots.minCoeff() > kGramPivotFloor * pivots.maxCoeff())) return std::nullopt;
   OrthonormalBasis basis;
   basis.degree = samples.degree;
-  basis.transform = ldlt.transpositionsP() * Eigen::MatrixXd::Identity(k, k);
-  ldlt.matrixL().solveInPlace(basis.transform);
-  basis.transform = pivots.cwiseSqrt().cwiseInverse().asDiagonal() * basis.transform;
+  const Eigen::VectorXi order = ldlt.transpositionsP() * Eigen::VectorXi::LinSpaced(k, 0, k - 1);
+  basis.transform.rows.assign(order.data(), order.data() + k);
+  basis.transform.lower = Eigen::MatrixXd::Identity(k, k);
+  ldlt.matrixL().solveInPlace(basis.transform.lower);
+  basis.transform.lower = pivots.cwiseSqrt().cwiseInverse().asDiagonal() * basis.transform.lower;
   return basis;
 }
 
@@ -191,12 +195,12 @@ std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
 // direction instead (at degree 9, with the closest start chosen as well, failed refits fell from
 // 305 to 145 of 621).
 void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basis, SphericalDesign& design) {
-  const Eigen::Index k = basis.transform.cols();
-  const double normalisation = measure.mass / static_cast<double>(basis.transform.rows());
-  Eigen::VectorXd y(k);
+  const double normalisation = measure.mass / static_cast<double>(basis.rank());
+  Eigen::VectorXd y(sh_count(basis.degree)), phi;
   for (glm::dvec3& node : design.nodes) {
     sh_basis(basis.degree, node, y.data());
-    if ((basis.transform * y).squaredNorm() * normalisation > kOutsideSupport) {
+    basis.transform.apply(y, phi);
+    if (phi.squaredNorm() * normalisation > kOutsideSupport) {
       node = measure.dirs[nearest_direction(node, measure.dirs)];
     }
   }
@@ -220,8 +224,9 @@ SphericalDesign prepared_start(const CleanMeasure& measure, const OrthonormalBas
 double start_distance(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                       const SphericalDesign& start) {
   const std::vector<double> moments = design_moments(start.nodes, start.weights, samples.degree);
-  const Eigen::VectorXd residual =
-      basis.transform * (Eigen::Map<const Eigen::VectorXd>(moments.data(), samples.moments.size()) - samples.moments);
+  const Eigen::VectorXd raw = Eigen::Map<const Eigen::VectorXd>(moments.data(), samples.moments.size()) - samples.moments;
+  Eigen::VectorXd residual;
+  basis.transform.apply(raw, residual);
   return residual.norm() / std::sqrt(measure.mass);
 }
 
@@ -243,10 +248,11 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
   drop_zero_weights(design);
   for (int round = 0; !certified(design) && round < kExchangeRounds; ++round) {
     const std::vector<double> now = design_moments(design.nodes, design.weights, samples.degree);
-    const Eigen::VectorXd residual =
-        basis.transform * (Eigen::Map<const Eigen::VectorXd>(now.data(), samples.moments.size()) - system.target);
+    const Eigen::VectorXd raw = Eigen::Map<const Eigen::VectorXd>(now.data(), samples.moments.size()) - system.target;
+    Eigen::VectorXd residual;
+    basis.transform.apply(raw, residual);
     // dE/dλ at a new node x is 2 φ(x)·residual: the most negative ones enter.
-    const Eigen::VectorXd slope = samples.vandermonde * (basis.transform.transpose() * residual);
+    const Eigen::VectorXd slope = samples.vandermonde * basis.transform.transpose_apply(residual, system.raw_size);
     std::vector<int> order(static_cast<std::size_t>(slope.size()));
     std::iota(order.begin(), order.end(), 0);
     const int entering = std::min<int>(kExchangeNodes, static_cast<int>(order.size()));
@@ -272,19 +278,18 @@ std::optional<SphericalDesign> refit(const CleanMeasure& measure, const Samples&
 // The basis from the column-pivoted QR of the weighted Vandermonde, which decides the rank where
 // the Gram matrix is too ill-conditioned for gram_basis.
 OrthonormalBasis qr_basis(const Samples& samples) {
-  const int k = static_cast<int>(samples.vandermonde.cols());
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
   qr.setThreshold(kRankThreshold);
   qr.compute(samples.weights.cwiseSqrt().asDiagonal() * samples.vandermonde);
   const int rank = static_cast<int>(qr.rank());
 
   // Only the kept columns enter T = R11⁻ᵀ (the pivoted columns' selection).
-  const Eigen::MatrixXd inverse_r = qr.matrixR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solve(
-      Eigen::MatrixXd::Identity(rank, rank));
   OrthonormalBasis basis;
   basis.degree = samples.degree;
-  basis.transform = Eigen::MatrixXd::Zero(rank, k);
-  for (int j = 0; j < rank; ++j) basis.transform.col(qr.colsPermutation().indices()(j)) = inverse_r.row(j).transpose();
+  const auto& pivots = qr.colsPermutation().indices();
+  basis.transform.rows.assign(pivots.data(), pivots.data() + rank);
+  basis.transform.lower = qr.matrixR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solve(
+      Eigen::MatrixXd::Identity(rank, rank)).transpose();
   return basis;
 }
 
@@ -292,8 +297,10 @@ OrthonormalBasis qr_basis(const Samples& samples) {
 SphericalDesign compress(const CleanMeasure& measure, const Samples& samples, const OrthonormalBasis& basis,
                          const std::function<bool()>& stop) {
   const int points = static_cast<int>(measure.dirs.size());
-  const int rank = static_cast<int>(basis.transform.rows());
-  const Eigen::MatrixXd phi = samples.vandermonde * basis.transform.transpose();  // orthonormal for the measure
+  const int rank = basis.rank();
+  Eigen::MatrixXd phi_transposed;
+  basis.transform.apply(samples.vandermonde.transpose(), phi_transposed);
+  const Eigen::MatrixXd phi = phi_transposed.transpose();  // orthonormal for the measure
   const Eigen::VectorXd target = phi.transpose() * samples.weights;
   const std::vector<double> moments = samples.moment_vector();
   auto certified = [&](SphericalDesign& design) { return certify_design(design, moments, measure.mass); };
@@ -347,7 +354,7 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
         start = std::move(prepared);
       }
     }
-    const int rank = static_cast<int>(basis->transform.rows());
+    const int rank = basis->rank();
     // The count to aim at: the start's, or without one the clustered start's.
     const int aim = start ? start->size() : static_cast<int>(std::ceil(kClusteredNodesPerGeneric * generic_count(rank)));
     // Never more than the compression's bound, the rank.

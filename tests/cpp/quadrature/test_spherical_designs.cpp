@@ -311,7 +311,7 @@ TEST(PruneDesign, DropsTheLightestOrTheSmallestMomentsFirst) {
   // F(x) = (x, y, 100 z): the lightest node, on the z axis, has the largest moments.
   MomentSystem system;
   system.size = system.raw_size = 3;
-  system.transform = Eigen::Vector3d(1.0, 1.0, 100.0).asDiagonal();
+  system.transform = BasisTransform{{0, 1, 2}, Eigen::Vector3d(1.0, 1.0, 100.0).asDiagonal()};
   system.target = Eigen::Vector3d::Zero();
   system.evaluate = [](const glm::dvec3& x, double* values, double* gradients) {
     values[0] = x.x, values[1] = x.y, values[2] = x.z;

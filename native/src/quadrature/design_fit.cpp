@@ -119,12 +119,17 @@ class DampedSystem {
   bool solve(double damping, Eigen::VectorXd& step, double& predicted) {
     damped_ = gram_;
     damped_.diagonal().array() += damping;
-    llt_.compute(damped_);
-    if (llt_.info() != Eigen::Success) return false;
+    // Eigen's LLT factorises in panels of 8 columns at these sizes (k = 100 at degree 9), 1.4×
+    // slower than its unblocked kernel, which it uses below 32.
+    if (Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(damped_) >= 0) return false;
+    const auto factor = damped_.triangularView<Eigen::Lower>();
+    solution_ = wide_ ? residual_ : scaled_gradient_;
+    factor.solveInPlace(solution_);
+    factor.adjoint().solveInPlace(solution_);
     if (wide_) {
-      step.noalias() = -(scaled_.transpose() * llt_.solve(residual_));
+      step.noalias() = -(scaled_.transpose() * solution_);
     } else {
-      step = -llt_.solve(scaled_gradient_);
+      step = -solution_;
     }
     predicted = 0.5 * step.dot(damping * step - scaled_gradient_);
     step.array() *= inverse_root_.array();
@@ -133,9 +138,8 @@ class DampedSystem {
 
  private:
   const Eigen::VectorXd& residual_;
-  Eigen::VectorXd inverse_root_, scaled_gradient_;
+  Eigen::VectorXd inverse_root_, scaled_gradient_, solution_;
   Eigen::MatrixXd scaled_, gram_, damped_;
-  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt_;
   bool wide_ = false;
 };
 

@@ -19,17 +19,18 @@ namespace sd {
 /// Carathéodory–Tchakaloff compression (Sommariva–Vianello): in a basis orthonormal for the
 /// measure (column-pivoting QR of the weighted SH Vandermonde, rank-truncated), NNLS picks at most
 /// rank-many of the sample directions with positive weights and the same moments. Gradient
-/// projection (eq. 14) then removes nodes while the design still certifies.
+/// projection (eq. 14) then removes nodes while the design still certifies (where the measure
+/// has more points than moments; with no more, the compression's nodes are kept).
 ///
 /// With `starts`, certified designs of the same degree for nearby measures (neighbouring
 /// vertices' visibility), it first refits the one whose moments lie closest to this measure's in
 /// a basis orthonormal for the measure (through its Gram matrix, or the QR above where that is
 /// too ill-conditioned), by gradient projection in that basis — a fraction of the compression's
 /// cost, with that start's node count. Where that start is far, its refit fails or needs more
-/// nodes, it refits a start clustered from the measure's own samples (method "clustered"), and
-/// compresses only when that too fails or needs more nodes than the start (than a little over
-/// the generic count (rank + 2)/3 when no start was usable). Null, empty and other-degree starts
-/// are skipped; an empty `starts` compresses at once.
+/// nodes, it refits a start clustered from the measure's own samples (method "clustered", kept
+/// where it has fewer nodes), and compresses only when neither refit certifies. Null, empty and
+/// other-degree starts are skipped; an empty `starts`, or a measure of no more points than
+/// moments, compresses at once.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum that fits a double; any scale works

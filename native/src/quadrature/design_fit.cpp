@@ -27,13 +27,14 @@ constexpr double kPolishZone = 1e3;
 // did no better within the noise).
 constexpr double kLargestDampingDecrease = 10.0;
 // With FitOptions::backtrack, a rejected step is halved up to this many times before μ rises: a
-// halved step costs one evaluation of E, a new μ a factorisation as well. At degree 9 (bumpy sphere, 1024 rays) the
-// fits then took 84k factorisations instead of 116k, in 57.8k steps instead of 60.2k.
+// halved step costs one evaluation of E, a new μ a factorisation as well. At degree 9 (bumpy
+// sphere, 1024 rays) the fits took 84k factorisations instead of 116k, in 57.8k steps, not 60.2k.
 constexpr int kBacktracks = 2;
-// Once √E is within this factor of the tolerance, a stallable fit ends at a step that fails at
-// its μ and at both backtracks, rather than raising μ until a step descends: that close, the
-// failures are the rounding of E (the per-vertex designs of V stall at 1e-11..1e-9 √mass) and
-// raising μ rarely helps. At degree 9: 75.8k → 53.7k factorisations, 39.61 → 39.04 nodes.
+// Once √E is within this factor of the tolerance (1e-4 √mass for the per-vertex designs), a
+// stallable fit ends at a step that fails at its μ and at both backtracks, rather than raising μ
+// until a step descends: that close, the failures are the rounding of E (the designs of V stall
+// at 1e-11..1e-9 √mass). At degree 9, 1,730 fits had spent ~20 trials each raising μ to 10¹²:
+// 75.8k → 53.7k factorisations.
 constexpr double kConvergingZone = 1e10;
 
 // The buffers of one fit, sized once per node count rather than once per step or trial.

@@ -168,8 +168,9 @@ struct OrthonormalBasis {
 };
 
 // The basis from the Gram matrix G = Σ w y yᵀ: with P G Pᵀ = L D Lᵀ (pivoted LDLT),
-// T = D^{-1/2} L⁻¹ P gives T G Tᵀ = I, lower triangular after the permutation P. k³ work after e k² for G, against e k² with a much larger
-// constant for the QR of the e × k Vandermonde — but only where G is well conditioned.
+// T = D^{-1/2} L⁻¹ P gives T G Tᵀ = I, lower triangular after the permutation P. k³ work after
+// e k² for G, against e k² with a much larger constant for the QR of the e × k Vandermonde — but
+// only where G is well conditioned.
 std::optional<OrthonormalBasis> gram_basis(const Samples& samples) {
   const int k = static_cast<int>(samples.vandermonde.cols());
   const Eigen::MatrixXd weighted = samples.weights.cwiseSqrt().asDiagonal() * samples.vandermonde;

@@ -31,7 +31,7 @@ constexpr double kLargestDampingDecrease = 10.0;
 // sphere, 1024 rays) the fits took 84k factorisations instead of 116k, in 57.8k steps, not 60.2k.
 constexpr int kBacktracks = 2;
 // Once √E is within this factor of the tolerance (1e-4 √mass for the per-vertex designs), a
-// stallable fit ends at a step that fails at its μ and at both backtracks, rather than raising μ
+// stallable fit ends at a step that fails at its μ (and at its backtracks), rather than raising μ
 // until a step descends: that close, the failures are the rounding of E (the designs of V stall
 // at 1e-11..1e-9 √mass). At degree 9, 1,730 fits had spent ~20 trials each raising μ to 10¹²:
 // 75.8k → 53.7k factorisations.

@@ -42,10 +42,11 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
                                 int degree, const std::vector<const SphericalDesign*>& starts = {},
                                 const std::function<bool()>& stop = {});
 
-/// The bytes weighted_design allocates for `points` samples at `degree`: five dense points ×
-/// (degree+1)² matrices of doubles (the SH Vandermonde, its weighted QR, the kept columns, the
-/// orthonormal basis at the samples and its transpose for NNLS). weighted_design refuses measures
-/// that would need more than kMaxCallBytes.
+/// The bytes weighted_design allocates for `points` samples at `degree`: at most five dense
+/// points × (degree+1)² matrices of doubles at once (the SH Vandermonde, and in the compression
+/// the permuted Vandermonde the orthonormal basis at the samples is computed from, that basis, its
+/// transpose and NNLS's copy). weighted_design refuses measures that would need more than
+/// kMaxCallBytes.
 inline double weighted_design_bytes(std::size_t points, int degree) {
   return 5.0 * sizeof(double) * static_cast<double>(points) * sh_count(degree);
 }

@@ -32,9 +32,9 @@ constexpr double kLargestDampingDecrease = 10.0;
 constexpr int kBacktracks = 2;
 // Once √E is within this factor of the tolerance (1e-4 √mass for the per-vertex designs), a
 // stallable fit ends at a step that fails at its μ (and at its backtracks), rather than raising μ
-// until a step descends: that close, the failures are the rounding of E (the designs of V stall
-// at 1e-11..1e-9 √mass). At degree 9, 1,730 fits had spent ~20 trials each raising μ to 10¹²:
-// 75.8k → 53.7k factorisations.
+// until a step descends. At degree 9, 1,730 fits had spent ~20 trials each raising μ to 10¹² and
+// ended there all the same, at √E of 1e-13..1e-5 √mass, most at 1e-12..1e-9 (the rounding of E):
+// 75.8k → 53.7k factorisations. A factorisation that fails is no such evidence: μ rises.
 constexpr double kConvergingZone = 1e10;
 
 // The buffers of one fit, sized once per node count rather than once per step or trial.
@@ -224,7 +224,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
         break;
       } else if (solved && options.backtrack && backtracks < kBacktracks) {
         ++backtracks;
-      } else if (converging) {
+      } else if (solved && converging) {
         break;
       } else {
         damping *= growth;

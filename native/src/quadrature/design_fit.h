@@ -19,7 +19,7 @@ namespace sd {
 /// T times a step's Jacobian is a fifth of a degree-9 per-vertex design's time.
 struct BasisTransform {
   std::vector<int> rows;
-  Eigen::MatrixXd lower;  ///< [rows.size()][rows.size()], read below the diagonal only
+  Eigen::MatrixXd lower;  ///< [rows.size()][rows.size()], read on and below the diagonal only
 
   bool identity() const { return rows.empty(); }
   int size() const { return static_cast<int>(rows.size()); }
@@ -64,8 +64,10 @@ struct MomentSystem {
 struct FitOptions {
   double tolerance = 0.0;   ///< stop once √E <= tolerance
   int max_iterations = 300;
-  /// Give up once E stops halving over 10 iterations: cheap for the many small per-vertex
-  /// designs of a bake, while one-off lobe designs are worth the slow phases some fits go through.
+  /// Give up once E stops halving over 10 iterations, and near the tolerance at the first step
+  /// that fails (design_fit.cpp, kPolishZone and kConvergingZone): cheap for the many small
+  /// per-vertex designs of a bake (and the lobes' thinning), while one-off lobe designs are worth
+  /// the slow phases some fits go through.
   bool stop_when_stalled = false;
   /// Keep nodes whose weight reaches 0 (they may regain weight later) instead of removing them.
   bool keep_zero_weights = false;

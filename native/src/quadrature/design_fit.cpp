@@ -40,7 +40,7 @@ constexpr double kConvergingZone = 1e10;
 // The buffers of one fit, sized once per node count rather than once per step or trial.
 struct Linearisation {
   Eigen::VectorXd residual, residual_trial;
-  Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2)
+  Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2); DampedSystem scales them
   std::vector<glm::dvec3> e1, e2;
   Eigen::MatrixXd raw_jacobian;
   Eigen::VectorXd raw_sum, values;
@@ -105,22 +105,28 @@ void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
 // pivoted LDLT), and it is formed once per step for all the dampings tried. A node at weight 0
 // whose weight the gradient pushes below 0 is held there (its λ column left out: an active bound
 // of the projection, whose clipped step the model would otherwise mispredict at every step).
+// One per fit, set up again at every step: its buffers keep their allocation across steps.
 class DampedSystem {
  public:
-  DampedSystem(const Linearisation& lin, const std::vector<double>& weights) : residual_(lin.residual) {
-    inverse_root_ = lin.jacobian.colwise().squaredNorm().transpose().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-    scaled_.noalias() = lin.jacobian * inverse_root_.asDiagonal();
+  /// The system at `lin`'s nodes; scales lin.jacobian's columns in place into J_s, which it keeps
+  /// using until the next linearise.
+  void set_up(Linearisation& lin, const std::vector<double>& weights) {
+    residual_ = &lin.residual;
+    scaled_ = &lin.jacobian;
+    Eigen::MatrixXd& scaled = lin.jacobian;
+    inverse_root_ = scaled.colwise().squaredNorm().transpose().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    scaled *= inverse_root_.asDiagonal();
     for (std::size_t i = 0; i < weights.size(); ++i) {
-      if (weights[i] <= 0.0 && scaled_.col(3 * i).dot(residual_) > 0.0) scaled_.col(3 * i).setZero();
+      if (weights[i] <= 0.0 && scaled.col(3 * i).dot(lin.residual) > 0.0) scaled.col(3 * i).setZero();
     }
-    scaled_gradient_.noalias() = scaled_.transpose() * lin.residual;
-    wide_ = scaled_.cols() > scaled_.rows();
-    const Eigen::Index size = wide_ ? scaled_.rows() : scaled_.cols();
+    scaled_gradient_.noalias() = scaled.transpose() * lin.residual;
+    wide_ = scaled.cols() > scaled.rows();
+    const Eigen::Index size = wide_ ? scaled.rows() : scaled.cols();
     gram_.setZero(size, size);
     if (wide_) {
-      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_);
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled);
     } else {
-      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled_.transpose());
+      gram_.selfadjointView<Eigen::Lower>().rankUpdate(scaled.transpose());
     }
   }
 
@@ -133,11 +139,11 @@ class DampedSystem {
     // slower than its unblocked kernel, which it uses below 32.
     if (Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(damped_) >= 0) return false;
     const auto factor = damped_.triangularView<Eigen::Lower>();
-    solution_ = wide_ ? residual_ : scaled_gradient_;
+    solution_ = wide_ ? *residual_ : scaled_gradient_;
     factor.solveInPlace(solution_);
     factor.adjoint().solveInPlace(solution_);
     if (wide_) {
-      step.noalias() = -(scaled_.transpose() * solution_);
+      step.noalias() = -(scaled_->transpose() * solution_);
     } else {
       step = -solution_;
     }
@@ -147,9 +153,10 @@ class DampedSystem {
   }
 
  private:
-  const Eigen::VectorXd& residual_;
+  const Eigen::VectorXd* residual_ = nullptr;
+  const Eigen::MatrixXd* scaled_ = nullptr;  // J_s
   Eigen::VectorXd inverse_root_, scaled_gradient_, solution_;
-  Eigen::MatrixXd scaled_, gram_, damped_;
+  Eigen::MatrixXd gram_, damped_;
   bool wide_ = false;
 };
 
@@ -165,6 +172,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
   double growth = 2.0;  // of μ after a rejected step, doubling while steps keep failing
   double cost_before = cost;  // kStallWindow iterations ago
   Eigen::VectorXd step;
+  DampedSystem system_at_nodes;
   std::vector<glm::dvec3> trial_nodes;
   std::vector<double> trial_weights;
   for (int iteration = 0; iteration < options.max_iterations && cost > tolerance && !nodes.empty(); ++iteration) {
@@ -174,7 +182,7 @@ double fit_design(const MomentSystem& system, std::vector<glm::dvec3>& nodes,
       cost_before = cost;
     }
     const int n = static_cast<int>(nodes.size());
-    DampedSystem system_at_nodes(lin, weights);
+    system_at_nodes.set_up(lin, weights);
     // Within kPolishZone of the tolerance, rounding starts to dominate E: a stallable fit stops at
     // the first step that fails or does not halve it, rather than growing μ for nothing.
     const bool polishing = options.stop_when_stalled && cost < kPolishZone * tolerance;

@@ -209,6 +209,33 @@ void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basi
   }
 }
 
+// Σ w x, normalised; zero where it vanishes.
+glm::dvec3 mean_direction(const std::vector<glm::dvec3>& points, const std::vector<double>& weights) {
+  glm::dvec3 sum(0.0);
+  for (std::size_t i = 0; i < points.size(); ++i) sum += weights[i] * points[i];
+  const double length = glm::length(sum);
+  return length > 0.0 ? sum / length : glm::dvec3(0.0);
+}
+
+// A neighbour's design turned towards this vertex's sky, by the smallest rotation that takes its
+// mean direction onto this measure's (a design has its measure's first moments: it integrates
+// degree 1 exactly). Where the surface bends, the sky a vertex sees turns with its normal: at
+// degree 9 (bumpy sphere, 1024 rays) the chosen starts' distances fell from a median of 0.97 to
+// 0.78, and LM steps from 73.3 to 68.1 per vertex. Fitting the whole rotation to the moments as
+// well took them to 0.69 and 67, at the price of the rotation's own fit.
+SphericalDesign turned_to(const CleanMeasure& measure, SphericalDesign design) {
+  const glm::dvec3 from = mean_direction(design.nodes, design.weights);
+  const glm::dvec3 to = mean_direction(measure.dirs, measure.weights);
+  const glm::dvec3 axis = glm::cross(from, to);
+  const double sine = glm::length(axis), cosine = glm::dot(from, to);
+  if (!(sine > 1e-12)) return design;  // aligned, opposite (no smallest rotation) or without mass
+  const glm::dvec3 k = axis / sine;
+  for (glm::dvec3& x : design.nodes) {
+    x = glm::normalize(x * cosine + glm::cross(k, x) * sine + k * glm::dot(k, x) * (1.0 - cosine));
+  }
+  return design;
+}
+
 // `start` as a refit begins from it: its weights scaled to the measure's mass (a neighbour sees
 // more or less sky, and a design's weights sum to its measure's mass), its nodes moved into the
 // support.
@@ -359,7 +386,7 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
     double closest = std::numeric_limits<double>::infinity();
     for (const SphericalDesign* candidate : starts) {
       if (candidate == nullptr || candidate->degree != degree || candidate->size() == 0) continue;
-      SphericalDesign prepared = prepared_start(measure, *basis, *candidate);
+      SphericalDesign prepared = prepared_start(measure, *basis, turned_to(measure, *candidate));
       const double distance = start_distance(measure, samples, *basis, prepared);
       if (distance < closest) {
         closest = distance;

@@ -219,12 +219,14 @@ TEST(WeightedDesign, VisibilityLikeHemisphere) {
 
 // Equal weights 1/1024 on the directions of `count` random rays that are above the plane with
 // normal (sin tilt, 0, cos tilt): a vertex's visibility, tilted.
-std::vector<glm::dvec3> tilted_hemisphere(std::uint64_t seed, double tilt) {
+// 1024 random directions, those above the plane at `height` under the normal tilted by `tilt` from
+// the zenith towards +x: a hemisphere at height 0.
+std::vector<glm::dvec3> tilted_hemisphere(std::uint64_t seed, double tilt, double height = 0.0) {
   std::mt19937_64 rng(seed);
   const glm::dvec3 normal(std::sin(tilt), 0.0, std::cos(tilt));
   std::vector<glm::dvec3> dirs;
   for (const auto& d : random_directions(1024, rng))
-    if (glm::dot(d, normal) > 0.0) dirs.push_back(d);
+    if (glm::dot(d, normal) > height) dirs.push_back(d);
   return dirs;
 }
 
@@ -245,9 +247,43 @@ TEST(WeightedDesign, RefitsANeighboursDesign) {
   }
 }
 
+TEST(WeightedDesign, TurnsANeighboursDesignWithItsSky) {
+  // next's sky is here's turned by 0.8 rad about y. Here's is symmetric about the zenith, its mean
+  // direction, so the smallest rotation between the mean directions is that turn: turned, here's
+  // design is next's already, and the refit stays by it (0.08 rad at most at degree 4, where a
+  // node by the horizon is moved into the support). Unturned, half of its nodes lie where next has
+  // no mass, and the refit ends elsewhere (0.36 rad at degree 4, 0.38 at 6).
+  std::vector<glm::dvec3> here;
+  for (const glm::dvec3& d : tilted_hemisphere(5, 0.0)) {
+    here.push_back(d);
+    here.emplace_back(-d.x, -d.y, d.z);
+  }
+  const double c = std::cos(0.8), s = std::sin(0.8);
+  auto turned = [&](const glm::dvec3& d) { return glm::dvec3(c * d.x + s * d.z, d.y, -s * d.x + c * d.z); };
+  std::vector<glm::dvec3> next;
+  for (const glm::dvec3& d : here) next.push_back(turned(d));
+  const std::vector<double> weights(here.size(), 1.0 / 1024);
+  for (int degree : {4, 6}) {
+    const SphericalDesign start = weighted_design(here, weights, degree);
+    const SphericalDesign design = weighted_design(next, weights, degree, {&start});
+    EXPECT_EQ(design.method, "refit") << "degree " << degree;
+    EXPECT_EQ(design.size(), start.size()) << "degree " << degree;
+    EXPECT_LE(design.residual, kDesignTolerance);
+    double farthest = 0.0;  // of the design's nodes from the turned start's nearest
+    for (const glm::dvec3& node : design.nodes) {
+      double nearest = M_PI;
+      for (const glm::dvec3& x : start.nodes) nearest = std::min(nearest, std::acos(std::min(1.0, glm::dot(node, turned(x)))));
+      farthest = std::max(farthest, nearest);
+    }
+    EXPECT_LT(farthest, 0.2) << "degree " << degree;
+  }
+}
+
 TEST(WeightedDesign, RefitsTheClosestOfSeveralStarts) {
+  // The farther start's sky is smaller as well as tilted: turning it towards next's does not
+  // bring it nearer than here's.
   const auto here = tilted_hemisphere(5, 0.0), next = tilted_hemisphere(6, 0.05),
-             farther = tilted_hemisphere(7, 0.3);
+             farther = tilted_hemisphere(7, 0.3, 0.3);
   const std::vector<double> here_weights(here.size(), 1.0 / 1024), next_weights(next.size(), 1.0 / 1024),
       farther_weights(farther.size(), 1.0 / 1024);
   const SphericalDesign near_start = weighted_design(here, here_weights, 6);

@@ -2,16 +2,19 @@
 # Per-vertex design cost (Theorem 2.2) of a base branch's builder against this checkout's, back to
 # back per degree on one thread (CPU ms per vertex, nodes mean and max), so that the ratios come
 # from one run on a shared machine. The base's library is built once into build/main-build with
-# this checkout's native/benchmarks/design_benchmarks.cpp, so both print the same columns.
+# this checkout's native/benchmarks/design_benchmarks.cpp, so both print the same columns. With
+# rounds > 1 the pairs repeat, interleaved, so that a slow spell of the machine hits both builders.
 #
 #   scripts/design_benchmark_vs_main.sh [base=main] [rays=1024] [degrees=4..9 as "4 5 6 7 8 9"]
 #                                       [benchmark=design_benchmarks, or design_benchmarks_x86_64_v3]
+#                                       [rounds=1]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base=${1:-main}
 rays=${2:-1024}
 degrees=${3:-"4 5 6 7 8 9"}
 benchmark=${4:-design_benchmarks}
+rounds=${5:-1}
 # The base's build is reused only for the same commit and benchmark.
 stamp="$(git rev-parse "$base") $benchmark"
 if [ ! -x "build/main-build/native/$benchmark" ] || [ "$(cat build/main-build/stamp 2>/dev/null)" != "$stamp" ]; then
@@ -22,7 +25,9 @@ if [ ! -x "build/main-build/native/$benchmark" ] || [ "$(cat build/main-build/st
   nice -n 10 cmake --build build/main-build -j2 --target "$benchmark" > /dev/null
   echo "$stamp" > build/main-build/stamp
 fi
-for d in $degrees; do
-  echo "degree $d $base:   $(nice -n 10 "build/main-build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
-  echo "degree $d branch: $(nice -n 10 "build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+for round in $(seq "$rounds"); do
+  for d in $degrees; do
+    echo "degree $d $base:   $(nice -n 10 "build/main-build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+    echo "degree $d branch: $(nice -n 10 "build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
+  done
 done

@@ -40,7 +40,8 @@ constexpr double kConvergingZone = 1e10;
 // The buffers of one fit, sized once per node count rather than once per step or trial.
 struct Linearisation {
   Eigen::VectorXd residual, residual_trial;
-  Eigen::MatrixXd jacobian;  // columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2); DampedSystem scales them
+  // Columns per node: d/dλ, d/d(tangent 1), d/d(tangent 2); DampedSystem scales them in place.
+  Eigen::MatrixXd jacobian;
   std::vector<glm::dvec3> e1, e2;
   Eigen::MatrixXd raw_jacobian;
   Eigen::VectorXd raw_sum, values;

@@ -382,7 +382,8 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
   // compression keeps at most that many: at degree 9 (30 vertices of 50–99 points) refits from a
   // neighbour's design never did better, at ~20 ms each. Nor did they with up to a tenth more
   // points (kFewPoints): 10 vertices of 101–110, at ~15 ms each.
-  const bool few_points = static_cast<double>(measure.dirs.size()) <= kFewPoints * static_cast<double>(samples.moments.size());
+  const bool few_points =
+      static_cast<double>(measure.dirs.size()) <= kFewPoints * static_cast<double>(samples.moments.size());
   if (!starts.empty() && !few_points) {
     std::optional<OrthonormalBasis> basis = gram_basis(samples);
     if (!basis) basis = qr = qr_basis(samples);

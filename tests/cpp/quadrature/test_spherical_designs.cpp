@@ -217,10 +217,8 @@ TEST(WeightedDesign, VisibilityLikeHemisphere) {
   EXPECT_LE(design.size(), 30);
 }
 
-// Equal weights 1/1024 on the directions of `count` random rays that are above the plane with
-// normal (sin tilt, 0, cos tilt): a vertex's visibility, tilted.
-// 1024 random directions, those above the plane at `height` under the normal tilted by `tilt` from
-// the zenith towards +x: a hemisphere at height 0.
+// Of 1024 random directions, those above the plane at `height` along the normal (sin tilt, 0,
+// cos tilt): a vertex's visibility, tilted (a hemisphere at height 0, a cap above it).
 std::vector<glm::dvec3> tilted_hemisphere(std::uint64_t seed, double tilt, double height = 0.0) {
   std::mt19937_64 rng(seed);
   const glm::dvec3 normal(std::sin(tilt), 0.0, std::cos(tilt));
@@ -272,7 +270,9 @@ TEST(WeightedDesign, TurnsANeighboursDesignWithItsSky) {
     double farthest = 0.0;  // of the design's nodes from the turned start's nearest
     for (const glm::dvec3& node : design.nodes) {
       double nearest = M_PI;
-      for (const glm::dvec3& x : start.nodes) nearest = std::min(nearest, std::acos(std::min(1.0, glm::dot(node, turned(x)))));
+      for (const glm::dvec3& x : start.nodes) {
+        nearest = std::min(nearest, std::acos(std::min(1.0, glm::dot(node, turned(x)))));
+      }
       farthest = std::max(farthest, nearest);
     }
     EXPECT_LT(farthest, 0.2) << "degree " << degree;

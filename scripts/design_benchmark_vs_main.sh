@@ -15,6 +15,10 @@ rays=${2:-1024}
 degrees=${3:-"4 5 6 7 8 9"}
 benchmark=${4:-design_benchmarks}
 rounds=${5:-1}
+if ! [[ $rounds =~ ^[1-9][0-9]*$ ]]; then
+  echo "rounds must be a positive integer, not '$rounds'" >&2
+  exit 2
+fi
 # The base's build is reused only for the same commit and benchmark.
 stamp="$(git rev-parse "$base") $benchmark"
 if [ ! -x "build/main-build/native/$benchmark" ] || [ "$(cat build/main-build/stamp 2>/dev/null)" != "$stamp" ]; then
@@ -26,6 +30,7 @@ if [ ! -x "build/main-build/native/$benchmark" ] || [ "$(cat build/main-build/st
   echo "$stamp" > build/main-build/stamp
 fi
 for round in $(seq "$rounds"); do
+  [ "$rounds" -gt 1 ] && echo "round $round of $rounds"
   for d in $degrees; do
     echo "degree $d $base:   $(nice -n 10 "build/main-build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"
     echo "degree $d branch: $(nice -n 10 "build/native/$benchmark" "$rays" "$d" 3 0 "$d" | grep -a -E "^ +$d \|")"

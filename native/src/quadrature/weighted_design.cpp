@@ -40,6 +40,9 @@ constexpr double kOutsideSupport = 3.0;
 constexpr int kSpareNodes = 2;
 // A measure with up to this many points per moment is only compressed (weighted_design).
 constexpr double kFewPoints = 1.1;
+// A neighbour's design is turned towards this vertex's sky only where both have a mean direction
+// (Σ w x / Σ w) at least this long (turned_to).
+constexpr double kClearMean = 0.1;
 // Without a neighbour to tell how many nodes to aim for, a clustered start has this many times
 // the generic count: about the designs' count at degree 9 (43 of 34), and the refit prunes
 // towards the generic count from there.
@@ -213,26 +216,32 @@ void move_into_support(const CleanMeasure& measure, const OrthonormalBasis& basi
   }
 }
 
-// Σ w x, normalised; zero where it vanishes.
+// Σ w x / Σ w, as a unit direction where that mean is at least kClearMean long (a sky with a
+// direction: a hemisphere's is 0.5 long), else zero (a band, two opposite caps: no direction to
+// turn by). Divided by Σ w first, so that weights of any scale neither overflow nor vanish.
 glm::dvec3 mean_direction(const std::vector<glm::dvec3>& points, const std::vector<double>& weights) {
-  glm::dvec3 sum(0.0);
-  for (std::size_t i = 0; i < points.size(); ++i) sum += weights[i] * points[i];
-  const double length = glm::length(sum);
-  return length > 0.0 ? sum / length : glm::dvec3(0.0);
+  double mass = 0.0;
+  for (double w : weights) mass += w;
+  glm::dvec3 mean(0.0);
+  for (std::size_t i = 0; i < points.size(); ++i) mean += (weights[i] / mass) * points[i];
+  const double length = glm::length(mean);
+  return length >= kClearMean ? mean / length : glm::dvec3(0.0);
 }
 
-// A neighbour's design turned towards this vertex's sky, by the smallest rotation that takes its
-// mean direction onto this measure's (a design has its measure's first moments: it integrates
-// degree 1 exactly). Where the surface bends, the sky a vertex sees turns with its normal: at
-// degree 9 (bumpy sphere, 1024 rays) the chosen starts' distances fell from a median of 0.97 to
-// 0.78, and LM steps from 73.3 to 68.1 per vertex. Fitting the whole rotation to the moments as
-// well took them to 0.69 and 67, at the price of the rotation's own fit.
-SphericalDesign turned_to(const CleanMeasure& measure, SphericalDesign design) {
+// A neighbour's design turned towards this vertex's sky, whose mean direction is `sky`: by the
+// smallest rotation that takes its own mean direction onto it (a design of degree >= 1 has its
+// measure's first moments). Where the surface bends, the sky a vertex sees turns with its normal:
+// at degree 9 (bumpy sphere, 1024 rays) the chosen starts' distances fell from a median of 0.97
+// to 0.78, and LM steps from 73.3 to 68.1 per vertex. Fitting the whole rotation to the moments
+// as well took them to 0.69 and 67, at the price of the rotation's own fit.
+SphericalDesign turned_to(const glm::dvec3& sky, SphericalDesign design) {
+  if (design.degree < 1) return design;
   const glm::dvec3 from = mean_direction(design.nodes, design.weights);
-  const glm::dvec3 to = mean_direction(measure.dirs, measure.weights);
-  const glm::dvec3 axis = glm::cross(from, to);
-  const double sine = glm::length(axis), cosine = glm::dot(from, to);
-  if (!(sine > 1e-12)) return design;  // aligned, opposite (no smallest rotation) or without mass
+  const glm::dvec3 axis = glm::cross(from, sky);
+  const double sine = glm::length(axis), cosine = glm::dot(from, sky);
+  // Aligned, without a clear mean direction, or opposite: no smallest rotation, and any half turn
+  // would be a guess.
+  if (!(sine > 1e-12)) return design;
   const glm::dvec3 k = axis / sine;
   for (glm::dvec3& x : design.nodes) {
     x = glm::normalize(x * cosine + glm::cross(k, x) * sine + k * glm::dot(k, x) * (1.0 - cosine));
@@ -389,9 +398,10 @@ SphericalDesign weighted_design(const std::vector<glm::dvec3>& dirs, const std::
     if (!basis) basis = qr = qr_basis(samples);
     std::optional<SphericalDesign> start;
     double closest = std::numeric_limits<double>::infinity();
+    const glm::dvec3 sky = mean_direction(measure.dirs, measure.weights);
     for (const SphericalDesign* candidate : starts) {
       if (candidate == nullptr || candidate->degree != degree || candidate->size() == 0) continue;
-      SphericalDesign prepared = prepared_start(measure, *basis, turned_to(measure, *candidate));
+      SphericalDesign prepared = prepared_start(measure, *basis, turned_to(sky, *candidate));
       const double distance = start_distance(measure, samples, *basis, prepared);
       if (distance < closest) {
         closest = distance;

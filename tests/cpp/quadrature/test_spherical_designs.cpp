@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <random>
@@ -269,7 +270,7 @@ TEST(WeightedDesign, TurnsANeighboursDesignWithItsSky) {
     EXPECT_LE(design.residual, kDesignTolerance);
     double farthest = 0.0;  // of the design's nodes from the turned start's nearest
     for (const glm::dvec3& node : design.nodes) {
-      double nearest = M_PI;
+      double nearest = std::numeric_limits<double>::infinity();
       for (const glm::dvec3& x : start.nodes) {
         nearest = std::min(nearest, std::acos(std::min(1.0, glm::dot(node, turned(x)))));
       }
@@ -324,15 +325,22 @@ TEST(WeightedDesign, RanksTheStartsAfterMovingTheirNodesIntoTheSupport) {
 }
 
 TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
-  const auto up = tilted_hemisphere(5, 0.0), down = tilted_hemisphere(6, 3.1);
-  const std::vector<double> up_weights(up.size(), 1.0 / 1024), down_weights(down.size(), 1.0 / 1024);
-  const SphericalDesign start = weighted_design(up, up_weights, 6);
-  const SphericalDesign other_degree = weighted_design(up, up_weights, 4);
+  // A point mass's design, one node: turned onto down's sky it still cannot hold degree 6, nor
+  // can the three rounds of exchanged nodes or a clustered start of its count, and the compression
+  // builds the design. A start of another degree is skipped.
+  const auto down = tilted_hemisphere(6, 3.1);
+  const std::vector<double> down_weights(down.size(), 1.0 / 1024);
+  const SphericalDesign start = weighted_design({{0.0, 0.0, 1.0}}, {1.0}, 6);
+  const auto up = tilted_hemisphere(5, 0.0);
+  const SphericalDesign other_degree = weighted_design(up, std::vector<double>(up.size(), 1.0 / 1024), 4);
+  ASSERT_EQ(start.size(), 1);
   for (const SphericalDesign* given : {&start, &other_degree}) {
     const SphericalDesign design = weighted_design(down, down_weights, 6, {given});
     EXPECT_LE(design.residual, kDesignTolerance);
     for (double w : design.weights) EXPECT_GT(w, 0.0);
   }
+  const std::string from_point = weighted_design(down, down_weights, 6, {&start}).method;
+  EXPECT_TRUE(from_point == "tchakaloff" || from_point == "gradient") << from_point;
   // A start of another degree is skipped: the design is the clustered start's refit, as with no
   // usable start at all; without starts, the compression from scratch.
   const SphericalDesign skipped = weighted_design(down, down_weights, 6, {&other_degree});
@@ -341,6 +349,19 @@ TEST(WeightedDesign, AnUnusableStartFallsBackToAClusteredStartThenCompression) {
   EXPECT_EQ(skipped.nodes, none.nodes);
   const std::string compressed = weighted_design(down, down_weights, 6).method;
   EXPECT_TRUE(compressed == "tchakaloff" || compressed == "gradient") << compressed;
+}
+
+TEST(WeightedDesign, HardlyMorePointsThanMomentsAreCompressedAtOnce) {
+  // 27 points for the 25 moments of degree 4: even the measure's own design, which would refit at
+  // once, is not refitted (weighted_design.cpp, kFewPoints).
+  std::mt19937_64 rng(11);
+  const auto dirs = random_directions(27, rng);
+  const std::vector<double> weights(dirs.size(), 1.0 / 27);
+  const SphericalDesign own = weighted_design(dirs, weights, 4);
+  const SphericalDesign design = weighted_design(dirs, weights, 4, {&own});
+  EXPECT_TRUE(design.method == "tchakaloff" || design.method == "gradient") << design.method;
+  EXPECT_EQ(design.nodes, own.nodes);
+  EXPECT_LE(design.residual, kDesignTolerance);
 }
 
 TEST(PruneDesign, DropsTheLightestOrTheSmallestMomentsFirst) {

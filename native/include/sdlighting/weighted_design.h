@@ -22,16 +22,16 @@ namespace sd {
 /// projection (eq. 14) then removes nodes while the design still certifies (where the measure
 /// has more points than moments; with no more, the compression's nodes are kept).
 ///
-/// With `starts`, certified designs of the same degree for nearby measures (neighbouring
-/// vertices' visibility), it first turns each by the smallest rotation that takes its mean
-/// direction onto this measure's (where both have a clear one), then refits the one whose moments lie closest to this measure's
-/// in a basis orthonormal for the measure (through its Gram matrix, or the QR above where that is
-/// too ill-conditioned), by gradient projection in that basis — a fraction of the compression's
-/// cost, with that start's node count. Where that start is far, its refit fails or needs more
-/// nodes, it refits a start clustered from the measure's own samples (method "clustered", kept
-/// where it has fewer nodes), and compresses only when neither refit certifies. Null, empty and
-/// other-degree starts are skipped; an empty `starts`, or a measure of at most kFewPoints
-/// (weighted_design.cpp) points per moment, compresses at once.
+/// With `starts`, certified designs of the same degree for nearby measures (neighbouring vertices'
+/// visibility), it first turns each by the smallest rotation that takes its mean direction onto
+/// this measure's (where both have a clear one), then refits the one whose moments lie closest to
+/// this measure's in a basis orthonormal for the measure (through its Gram matrix, or the QR above
+/// where that is too ill-conditioned), by gradient projection in that basis — a fraction of the
+/// compression's cost, with that start's node count. Where that start is far, its refit fails or
+/// needs more nodes, it refits a start clustered from the measure's own samples (method
+/// "clustered", kept where it has fewer nodes), and compresses only when neither refit certifies.
+/// Null, empty and other-degree starts are skipped; an empty `starts`, or a measure of at most
+/// kFewPoints (weighted_design.cpp) points per moment, compresses at once.
 ///
 /// `dirs` need not be unit length (they are normalised) but must be finite and non-zero;
 /// weights must be finite and >= 0 with a positive sum that fits a double; any scale works

@@ -12,7 +12,7 @@ Two references:
     material. Shading is the raw formula without a ringing window (the seed's method). The mix
     material is 0.5 Lambert + 0.5 Phong sigma 16 (eq. 1 is linear in the lobe). Phong is measured
     from two views (the camera, and the camera turned 120 degrees about the object's vertical), at
-    the probes that face the view. The panel's predicted error (utils/accuracy.ErrorTable, from
+    the probes that face the view. The panel's predicted error (plan/accuracy.ErrorTable, from
     its own sample) is compared with the measured one of the same settings.
 (b) what the user sees: the add-on's bake and preview render (per vertex and per pixel, with the
     ringing window and the clamp of the live shading) against a Cycles render from the same camera
@@ -136,12 +136,12 @@ def design_subset(offsets, nodes, weights, index):
 
 
 class SceneData:
-    """The measured object of one scene in its bake frame (baking.prepare's arrays), its probes,
+    """The measured object of one scene in its bake frame (bake/prepare.py's arrays), its probes,
     views and g R."""
 
     def __init__(self, package, name, scene, objects, camera, config):
         sdtest.select_only(objects)
-        tasks, _ = package.baking.prepare(bpy.context, objects[:1])
+        tasks, _ = package.bake.prepare.prepare(bpy.context, objects[:1])
         task = tasks[0]
         geometry = task.geometry
         self.name, self.objects, self.camera = name, objects, camera
@@ -157,13 +157,13 @@ class SceneData:
             [task.occluder_triangles + len(self.vertices)] if task.occluder_vertices is not None else [])).astype(np.int32)
         obj = objects[0]
         matrix = np.array(obj.matrix_world, dtype=np.float64)
-        transforms = package.utils.transforms
+        transforms = package.scene.transforms
         _, to_frame = transforms.bake_frame(matrix)
         self.rotation = transforms.rotation_part(matrix)
         self.world = transforms.transform_points(np.linalg.inv(to_frame), self.vertices)
-        self.g = package.environment.rotation_matrix(scene) @ self.rotation
+        self.g = package.scene.environment.rotation_matrix(scene) @ self.rotation
         depsgraph = bpy.context.evaluated_depsgraph_get()
-        view = package.drawing.View.from_camera(camera, depsgraph, 64, 64, scene)
+        view = package.live.drawing.View.from_camera(camera, depsgraph, 64, 64, scene)
         centre = self.world.mean(axis=0)
         eyes = []
         for k in range(PHONG_VIEWS):
@@ -171,7 +171,7 @@ class SceneData:
             c, s = math.cos(angle), math.sin(angle)
             offset = view.camera[:3] - centre
             turned = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1], offset[2]])
-            eyes.append(package.drawing.View(view.view_projection, tuple(centre + turned) + (1.0,)))
+            eyes.append(package.live.drawing.View(view.view_projection, tuple(centre + turned) + (1.0,)))
         self.views = [v.view_directions(self.world, self.rotation.T) for v in eyes]
         self.eye, self.to_world = eyes[0], np.linalg.inv(to_frame)
         self.view_projection = view.view_projection
@@ -331,7 +331,7 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
             truth, se = truth_views[front], se_views[front]
             scale = math.sqrt(float(np.mean(truth ** 2))) or 1e-30
             se_rel = math.sqrt(float(np.mean(se ** 2))) / scale
-            # As utils/accuracy.py measures (for the comparison with its prediction): the first
+            # As plan/accuracy.py measures (for the comparison with its prediction): the first
             # view, every probe, the reference's noise removed.
             scale_first = math.sqrt(float(np.mean(truth_views[0] ** 2))) or 1e-30
             se_first = math.sqrt(float(np.mean(se_views[0] ** 2))) / scale_first
@@ -365,7 +365,7 @@ def strip_vertices(package, sdnative, data, bakes, designs, hdri_path, config, s
     values = {}
     for method, s, sv in STRIP_METHODS:
         kwargs = shade_inputs(bakes, designs, method, s, sv, config["full_rays"])
-        values[package.utils.methods.get(method).label] = sdnative.shade(method, light, data.normals, rotation=data.g,
+        values[package.methods.get(method).label] = sdnative.shade(method, light, data.normals, rotation=data.g,
                                                                           **kwargs)
     clip = np.c_[data.world, np.ones(len(data.world))] @ data.view_projection.T
     strip["vertex_clip"] = clip
@@ -378,7 +378,7 @@ def stored_floats(package, method, arrays):
     """The floats per vertex a bake of the method stores, counted as its floats_per_vertex
     (attributes.write: the ambient occlusion and the method's vec4 groups; sd_normal not), from
     the arrays it would store (shade_inputs' keywords)."""
-    data = package.utils.methods.get(method).data
+    data = package.methods.get(method).data
     groups = data.texels(arrays).shape[1] if data is not None and data.grouped else 0
     return 1 + 4 * groups
 
@@ -433,7 +433,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
         info = dict(objects[0]["sd_bake"])
         method = info["method"]          # the automatic mode's choice for the object measured
         variants = [("vertex", False, False), ("pixel", True, False)]
-        if package.utils.methods.get(method).band_limited_texture:
+        if package.methods.get(method).band_limited_texture:
             variants.append(("vertex", False, True))
         for hdri, (image_cycles, noise) in cycles.items():
             accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
@@ -445,7 +445,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
                 rms, p99 = relative_errors(ours, theirs)
                 rows.append({"reference": "cycles", "scene": name, "hdri": hdri, "material": "lambert",
                              "method": method, "s": int(info["light_order"]),
-                             "s_v": int(info["visibility_order"]) if package.utils.methods.get(method).uses_visibility_order else None,
+                             "s_v": int(info["visibility_order"]) if package.methods.get(method).uses_visibility_order else None,
                              "rays": int(info["rays"]) if method != "unshadowed" else None, "shading": shading,
                              "light": "texture" if band_limited else "sh", "setting": label,
                              "rel_rms": rms, "p99": p99, "reference_se": noise, "points": int(len(ours)),
@@ -454,7 +454,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
                              "design_nodes_mean": info.get("design_nodes_mean"),
                              "design_nodes_max": info.get("design_nodes_max")})
                 if strip is not None and hdri == strip["hdri"] and not band_limited:
-                    strip["images"]["%s (%s)" % (package.utils.methods.get(method).label, shading)] = image
+                    strip["images"]["%s (%s)" % (package.methods.get(method).label, shading)] = image
         progress.step("%s: %s, under %d HDRIs" % (name, label, len(cycles)), len(cycles))
 
 
@@ -501,9 +501,9 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
     pixel), the MSD methods also with the band-limited texture."""
     from benchmark_viewport import HEIGHT, WIDTH, time_frames
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.live.drawing.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     settings = scene.sd_lighting
-    for method in package.utils.methods.METHODS:
+    for method in package.methods.METHODS:
         sdtest.bake_settings(scene, method.id, 'LAMBERT', 4, 2, rays=256, select=objects[:1])
         if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
             raise RuntimeError("the bake of %s failed (%s)" % (name, method.id))
@@ -511,7 +511,7 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
         for texture in ((False, True) if method.band_limited_texture else (False,)):
             settings.band_limited_texture = texture
             for per_pixel in (False, True) if method.id in PER_PIXEL_FRAMES else (False,):
-                seconds = time_frames(lambda: package.drawing.draw_objects(scene, objects[:1], view, 1.0, per_pixel,
+                seconds = time_frames(lambda: package.live.drawing.draw_objects(scene, objects[:1], view, 1.0, per_pixel,
                                                                            wait=True), config["gpu_frames"])
                 gpu_rows.append({"scene": name, "method": method.id, "s": 4, "s_v": 2, "rays": 256,
                                  "shading": "pixel" if per_pixel else "vertex",
@@ -523,24 +523,24 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
                                  "design_nodes_mean": info.get("design_nodes_mean"),
                                  "design_nodes_max": info.get("design_nodes_max")})
             settings.band_limited_texture = False
-        package.baking.clear(objects[0])
-    package.drawing.clear_cache()
+        package.store.baked.clear(objects[0])
+    package.live.drawing.clear_cache()
     progress.step("%s: GPU frame times" % name, 3.0)
 
 
 # ----------------------------------------------------------------------------------------------
-# The panel's predicted error (utils/accuracy.py) against the measured one
+# The panel's predicted error (plan/accuracy.py) against the measured one
 
 def predictions(package, sdnative, data, hdris, config, rows, progress):
-    """utils/accuracy.ErrorTable - the automatic mode's and the panel's prediction, from its own
+    """plan/accuracy.ErrorTable - the automatic mode's and the panel's prediction, from its own
     sample of the object, measured with the bake's rays - for each HDRI of `hdris`, Lambert and
     Phong 16 and each ray count of config["predicted_rays"], against this report's measured error
     of the same settings. The table shades with the same unwindowed L as the grid. A table's
     prediction for other ray counts (its noise model, 1/sqrt(rays)) is recorded as extrapolated.
     [records]"""
-    accuracy = importlib.import_module(package.__name__ + ".utils.accuracy")
+    accuracy = importlib.import_module(package.__name__ + ".plan.accuracy")
     views = lambda points: data.eye.view_directions(  # noqa: E731
-        package.utils.transforms.transform_points(data.to_world, points), data.rotation.T)
+        package.scene.transforms.transform_points(data.to_world, points), data.rotation.T)
     sample = accuracy.Sample.of_mesh(data.vertices, data.normals, data.triangles, data.occluders or None, views)
     max_order = max(config["orders"])
     out = []
@@ -552,7 +552,7 @@ def predictions(package, sdnative, data, hdris, config, rows, progress):
             for table_rays in config["predicted_rays"]:
                 table = accuracy.ErrorTable(sdnative, sample, sdnative.load_environment(path),
                                             lambda s: light[:(s + 1) ** 2], lobe, exponent, data.g,
-                                            [m.id for m in package.utils.methods.METHODS], max_order, table_rays)
+                                            [m.id for m in package.methods.METHODS], max_order, table_rays)
                 for row in rows:
                     if (row["reference"], row["scene"], row["hdri"], row["material"]) != ("monte_carlo", data.name, hdri, material) \
                             or row["method"] not in table.methods or (row["s_v"] or 0) > accuracy.MAX_VISIBILITY_ORDER:
@@ -607,10 +607,10 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
             design_seconds[record["scene"], record["light_order"], record["visibility_order"]] = record
         elif record["kind"] != "grid":
             per_ray[record["scene"], record["kind"]] = record["seconds"] / (n * rays)
-    # Each timing against its method's frame_terms (utils/methods.py, the automatic mode's cost
+    # Each timing against its method's frame_terms (methods.py, the automatic mode's cost
     # model): ns per vertex = intercept + ns_per_term x frame_terms.
-    methods = package.utils.methods
-    cost = importlib.import_module(package.__name__ + ".utils.cost")
+    methods = package.methods
+    cost = importlib.import_module(package.__name__ + ".plan.cost")
     gaunt = lambda s, sv: cost.gaunt_terms(sdnative, s, sv)  # noqa: E731
     frame_points = {}
     for (scene, method, s, sv, lobe), ns in costs["frame"].items():
@@ -638,7 +638,7 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
     for (method, lobe), points in sorted(frame_points.items()):
         a, b = fit_line(*zip(*points))
         model["frame_ns_per_vertex"].setdefault(method, {})[lobe] = {
-            "intercept_ns": a, "ns_per_term": b, "terms": "utils/methods.py frame_terms", "points": len(points)}
+            "intercept_ns": a, "ns_per_term": b, "terms": "methods.py frame_terms", "points": len(points)}
     for kind in sorted({k for _, k in per_ray}):
         values = [v for (scene, k), v in per_ray.items() if k == kind]
         model["bake_seconds_per_vertex_per_ray"][kind] = {
@@ -652,7 +652,7 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
         per_vertex = [v["seconds_per_vertex"] for v in entry["scenes"].values()]
         entry["median_seconds_per_vertex"] = float(np.median(per_vertex))
         entry["median_seconds_per_vertex_per_ray"] = float(np.median(per_vertex)) / entry["rays"]
-    # In the automatic mode's units (utils/cost.py: RAY_SECONDS per ray per core, DESIGN_MS per
+    # In the automatic mode's units (plan/cost.py: RAY_SECONDS per ray per core, DESIGN_MS per
     # vertex per core by degree s + s', the rays' share taken out): the bakes ran on every core.
     threads = os.cpu_count()
     ray_seconds = [v * threads for (scene, kind), v in per_ray.items() if kind == "ambient_occlusion"]
@@ -749,7 +749,7 @@ def invariants(rows, equalities, predicted, config):
     out.append(("the reference's standard error is at most 1/3 of the error at s = 4, s' = 2",
                 not bad and bool(recommended), "largest ratio %.2f over %d cases%s" % (
                     ratio, len(recommended), ("; not: %s" % bad[:3]) if bad else "")))
-    # The panel's predicted error (utils/accuracy.py) is within a factor 2 of the measured one,
+    # The panel's predicted error (plan/accuracy.py) is within a factor 2 of the measured one,
     # where the measurement is not limited by the reference's noise: for PREDICTED_SHARE of the
     # settings, the median ratio within 20 % (a prediction from ~250 sampled vertices, measured at
     # 64 other probes, cannot hold everywhere; the outliers are listed).
@@ -758,7 +758,7 @@ def invariants(rows, equalities, predicted, config):
     ratios = [p["ratio"] for p in compared]
     held = bool(compared) and len(bad) <= (1.0 - PREDICTED_SHARE) * len(compared) and \
         0.8 <= float(np.median(ratios)) <= 1.25
-    out.append(("the predicted error (utils/accuracy.py, measured with the bake's rays) is within a factor 2 of the "
+    out.append(("the predicted error (plan/accuracy.py, measured with the bake's rays) is within a factor 2 of the "
                 "measured one for %d %% of the settings, median ratio within 20 %%" % (100 * PREDICTED_SHARE),
                 held, "%d of %d settings; ratio predicted / measured %.2f .. %.2f (median %.2f)%s" % (
                     len(compared) - len(bad), len(compared), min(ratios, default=float("nan")),
@@ -822,7 +822,7 @@ def main():
     renderer = ""
     if config["gpu_frames"]:
         import gpu
-        package.gpu_context.ensure()
+        package.live.gpu_context.ensure()
         renderer = "%s, %s" % (gpu.platform.renderer_get(), gpu.platform.version_get())
     progress = Progress(planned_work(config, hdris))
     rows, gpu_rows = [], []
@@ -850,7 +850,7 @@ def main():
                 accuracy_scenes.set_hdri(texture, sdtest.hdri("forest.exr"))
                 glossy_case(package, name, scene, objects, config, work, progress, rows)
         for obj in objects:
-            package.baking.clear(obj)
+            package.store.baked.clear(obj)
     model = attach_costs(package, sdnative, rows, costs, vertex_counts)
 
     checks = sdtest.Checks("accuracy_report")

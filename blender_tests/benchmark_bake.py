@@ -4,7 +4,7 @@ against the rays alone, on the same mesh and ray count, as ratios measured in on
 For each bake the add-on does (one per distinct set of sdnative.bake_transfer arguments, built as
 BakeTask.bake_arguments builds them for the method, s = 4, s' = 2, seed 0, sdnative's default
 threads: every core), the wall time of `sdnative.bake_transfer` on the mesh's vertices, unit normals
-and triangles as the add-on reads them (baking.Geometry). Against:
+and triangles as the add-on reads them (bake/geometry.Geometry). Against:
 - Cycles: `bpy.ops.object.bake(type='AO', target='VERTEX_COLORS')` of the same object, CPU, all
   threads, samples = rays, adaptive sampling and denoising off, into a colour attribute; timed
   around the operator (scene sync and BVH build included, as for ours). Its AO distance (the
@@ -82,14 +82,14 @@ def load_mesh(scene, args):
 def bake_jobs(package, skip):
     """[(labels, method ids, bake_transfer keywords)]: one per distinct bake the add-on does, with
     the arguments BakeTask.bake_arguments gives the method at s = 4, s' = 2."""
-    methods = package.utils.methods
+    methods = package.methods
     jobs = {}
     for method in methods.METHODS:
         if method.data is None or method.id in skip:    # unshadowed: nothing to bake
             continue
         settings = {"method": method.id, "rays": 0, "seed": SEED, "light_order": LIGHT_ORDER,
                     "visibility_order": VISIBILITY_ORDER if method.uses_visibility_order else 0}
-        task = package.baking.BakeTask("benchmark", None, (None, None), settings, None)
+        task = package.bake.task.BakeTask("benchmark", None, (None, None), settings, None)
         kwargs = task.bake_arguments()
         kwargs.pop("rays")
         key = tuple(sorted((k, repr(v)) for k, v in kwargs.items()))
@@ -140,8 +140,8 @@ def main():
     obj, mesh_name = load_mesh(scene, args)
     bpy.context.view_layer.update()
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    shape, _ = package.utils.transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
-    geometry = package.baking._evaluated_arrays(obj, depsgraph, shape)
+    shape, _ = package.scene.transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
+    geometry = package.bake.geometry.evaluated_geometry(obj, depsgraph, shape)
     n = len(geometry.vertices)
     rays = args.rays
     print("mesh: %s: %d vertices, %d triangles; %d rays/samples per vertex; sdnative threads: "

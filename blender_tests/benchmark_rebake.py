@@ -70,7 +70,7 @@ def edit(obj, offset):
 def main():
     args = options()
     package = sdtest.install_addon(args.zip)
-    live = package.live_rebake
+    live = package.live.live_rebake
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     sdtest.grid(scene, cuts=10, size=6.0, location=(0.0, 0.0, -1.0))
@@ -92,15 +92,15 @@ def main():
         settings.live_rebake = True
         bpy.ops.object.mode_set(mode='EDIT')
         run_timer(live)                       # entering edit mode changes nothing to bake
-        first = package.baking.bake_info(suzanne)["bake_id"]
+        first = package.store.baked.record(suzanne).bake_id
         changed = edit(suzanne, 0.05)
         busy, longest = run_timer(live)
         total = time.perf_counter() - changed - live.DELAY
-        info = package.baking.bake_info(suzanne)
-        assert info["bake_id"] != first, live.message
+        record = package.store.baked.record(suzanne)
+        assert record.bake_id != first, live.message
         print("%-28s %6d vertices: bake %.2f s; re-bake total %.2f s, main thread %.2f s (longest "
-              "call %.2f s), worker %.2f s" % (package.utils.methods.get(method).label, info["vertices"],
-                                                bake, total, busy, longest, info["seconds"]), flush=True)
+              "call %.2f s), worker %.2f s" % (package.methods.get(method).label, record.vertices,
+                                                bake, total, busy, longest, record.seconds), flush=True)
 
     edit(suzanne, 0.05)
     run_timer(live, until=lambda: live.running() is not None and live.running()[1].fraction > 0.0)
@@ -110,7 +110,7 @@ def main():
     while not job.finished:
         time.sleep(0.005)
     print("cancel latency (%s): the superseded bake stopped %.3f s after the edit"
-          % (package.utils.methods.get(method).label, time.perf_counter() - changed), flush=True)
+          % (package.methods.get(method).label, time.perf_counter() - changed), flush=True)
     run_timer(live)
     return 0
 

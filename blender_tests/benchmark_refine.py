@@ -50,7 +50,7 @@ def without(package, fix):
         return mock.patch.object(sdnative, "bake_transfer",
                                  functools.partial(sdnative.bake_transfer, offset_origins=False))
     if fix == "corners":
-        return mock.patch.object(package.utils.corners, "NORMAL_TOLERANCE_DEGREES", 180.0)
+        return mock.patch.object(package.bake.corners, "NORMAL_TOLERANCE_DEGREES", 180.0)
     raise ValueError("--without takes origins and corners, not %r" % fix)
 
 

@@ -92,7 +92,7 @@ def synthetic_result(package, method, normals, real_counts, s=4, sv=2, seed=0):
     rng = np.random.default_rng(seed)
     n = len(normals)
     result = {"ambient_occlusion": np.full(n, 0.5)}
-    data = package.utils.methods.get(method).data
+    data = package.methods.get(method).data
     if data is not None and data.packing == "design":
         result.update(zip(data.keys, synthetic_designs(normals, real_counts)))
     elif data is not None and data.packing == "coefficients":
@@ -107,13 +107,15 @@ def baked_object(package, scene, positions, normals, triangles, real_counts, met
                  lobes=LAMBERT):
     """A mesh object carrying a (synthetic) bake of the method with the lobes (sd_bake's lobe
     keys), as the bake operator stores it."""
-    mesh = package.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
+    mesh = package.store.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
                                        np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
     result = synthetic_result(package, method, normals, real_counts)
-    floats = package.attributes.write(mesh, normals, result)
-    mesh["sd_bake"] = dict(lobes, method=method, light_order=4, visibility_order=2, rays=0, seed=0,
-                           floats_per_vertex=floats,
-                           bake_id="benchmark-%s-%d-%s" % (method, len(positions), sorted(lobes.items())))
+    floats = package.store.attributes.write(mesh, normals, result)
+    record = package.store.record.BakeRecord.from_dict(dict(
+        lobes, method=method, light_order=4, visibility_order=2, rays=0, seed=0, environment="synthetic",
+        refine=False, refine_target=0.0, refine_max_vertices=0, least_squares=False, lightmap=0,
+        floats_per_vertex=floats, bake_id="benchmark-%s-%d-%s" % (method, len(positions), sorted(lobes.items()))))
+    mesh["sd_bake"] = record.to_dict()
     mesh.use_fake_user = True
     obj = bpy.data.objects.new("Benchmark", mesh)
     scene.collection.objects.link(obj)
@@ -125,7 +127,7 @@ def baked_object(package, scene, positions, normals, triangles, real_counts, met
 def time_frames(draw, frames):
     """Mean seconds per frame: clear, draw, read one pixel back (waits for the GPU)."""
     import gpu
-    from sd_lighting import drawing
+    from sd_lighting.live import drawing
     offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format='RGBA16F')
     try:
         def frame():
@@ -147,9 +149,9 @@ def design_node_counts_of_a_real_bake(package, scene):
     assert bpy.ops.sd_lighting.bake() == {'FINISHED'}
     counts = []
     for obj in (ball, ground):
-        counts.append(np.diff(package.attributes.read(package.baking.baked_mesh(obj))["design_offsets"]))
+        counts.append(np.diff(package.store.attributes.read(package.store.baked.baked_mesh(obj))["design_offsets"]))
     for obj in (ball, ground):
-        package.baking.clear(obj)
+        package.store.baked.clear(obj)
         mesh = obj.data
         bpy.data.objects.remove(obj)
         bpy.data.meshes.remove(mesh)
@@ -175,7 +177,7 @@ def uniform_drawer(uniform, projection, positions, triangles):
 
 def remove_object(package, obj):
     """Drops the benchmark object, its mesh and the cached GPU data."""
-    package.drawing.clear_cache()
+    package.live.drawing.clear_cache()
     mesh = obj.data
     bpy.data.objects.remove(obj)
     bpy.data.meshes.remove(mesh)
@@ -186,13 +188,13 @@ def main():
     args = sdtest.arguments()
     opts = options()
     package = sdtest.install_addon(args.zip)
-    package.gpu_context.ensure()
+    package.live.gpu_context.ensure()
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     camera = sdtest.camera(scene, location=(0.0, -4.5, 3.5), target=(0.0, 0.0, 0.0))
     real_counts = design_node_counts_of_a_real_bake(package, scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.scene.view.View.from_camera(camera, depsgraph, WIDTH, HEIGHT, scene)
     uniform = package.compat.uniform_color_shader()
     from mathutils import Matrix
     projection = Matrix(view.view_projection.tolist())
@@ -212,7 +214,7 @@ def main():
         draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)
 
         def draw_msd(per_pixel):
-            return lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel)
+            return lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel)
 
         t_uniform = time_frames(draw_uniform, opts["frames"])
         t_vertex = time_frames(draw_msd(False), opts["frames"])
@@ -234,13 +236,13 @@ def main():
         print("%-44s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
         settings = scene.sd_lighting
         times = {}
-        for method in package.utils.methods.METHODS:
+        for method in package.methods.METHODS:
             obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
             floats = obj["sd_bake"]["floats_per_vertex"]
             textures = (False, True) if method.band_limited_texture else (False,)
             for texture in textures:
                 settings.band_limited_texture = texture
-                t = time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
+                t = time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False),
                                 opts["frames"])
                 times[method.id, texture] = t
                 label = method.label + (", band-limited texture" if texture else "")
@@ -248,11 +250,11 @@ def main():
             settings.band_limited_texture = False
             remove_object(package, obj)
         del batch
-        width, height = package.utils.shader_variant.band_limited_texture_size(4)
+        width, height = package.live.shader_variant.band_limited_texture_size(4)
         print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
               "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
         print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
-        methods = package.utils.methods
+        methods = package.methods
         for method, texture in (("msd_visibility", False), ("msd_visibility", True),
                                 ("msd_lobe", False), ("msd_lobe", True),
                                 ("prt_matrix", False), ("prt_gaunt", False)):
@@ -265,20 +267,20 @@ def main():
             print("%-44s %12.2f %12.2f %12.2f" % (label, 1e3 * t, t / times["prt_matrix", False],
                                                   t / times["prt_gaunt", False]), flush=True)
 
-        sigma = package.utils.lobes.exponent_from_roughness(0.3)
+        sigma = package.scene.lobes.exponent_from_roughness(0.3)
         lobe_sets = (("Lambert", LAMBERT), ("Phong", {"lobe": "phong", "exponent": sigma}),
                      ("Lambert + Phong", {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True,
                                           "lobe_weights": True, "diffuse_share": 0.9}))
         print("\nWhat the lobes cost, %d vertices, s = 4, s' = 2, per vertex (Phong sigma %.1f; "
               "frame ms, and the ratio to Lambert):" % (len(positions), sigma))
         print("%-28s" % "method" + "".join("%22s" % name for name, _ in lobe_sets))
-        for method in package.utils.methods.METHODS:
+        for method in package.methods.METHODS:
             if method.lambert_only:
                 continue
             cells = []
             for _, lobes in lobe_sets:
                 obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id, lobes)
-                cells.append(time_frames(lambda: package.drawing.draw_objects(scene, [obj], view, 1.0, False),
+                cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False),
                                          opts["frames"]))
                 remove_object(package, obj)
             print("%-28s" % method.label + "".join("%14.2f (%4.2fx)" % (1e3 * t, t / cells[0]) for t in cells),

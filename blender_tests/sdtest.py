@@ -242,7 +242,7 @@ def add_object(scene, name, mesh):
 
 def ico_sphere(scene, name="Ball", subdivisions=2, radius=1.0, location=(0.0, 0.0, 1.0), smooth=True):
     """An icosphere, shaded smooth by default: its baked copy then keeps its vertices (flat faces
-    give each face corner a vertex of its own: utils/corners.py)."""
+    give each face corner a vertex of its own: bake/corners.py)."""
     import bmesh
     mesh = bpy.data.meshes.new(name)
     bm = bmesh.new()

@@ -32,24 +32,24 @@ import numpy as np  # noqa: E402
 def measured_error(package, scene, obj):
     """The bake's relative RMS error at every vertex against the reference of eq. (1)."""
     sd = package.native.get()
-    mesh = package.baking.baked_mesh(obj)
-    data = package.attributes.read(mesh)
-    positions = package.attributes.read_positions(mesh).astype(np.float64)
-    triangles = package.attributes.read_triangle_loops(mesh)
+    mesh = package.store.baked.baked_mesh(obj)
+    data = package.store.attributes.read(mesh)
+    positions = package.store.attributes.read_positions(mesh).astype(np.float64)
+    triangles = package.store.attributes.read_triangle_loops(mesh)
     loops = np.empty(len(mesh.loops), dtype=np.int32)
     mesh.loops.foreach_get("vertex_index", loops)
     ground = bpy.data.objects["Ground"]
     occluder = np.array([tuple(ground.matrix_world @ v.co) for v in ground.data.vertices]) - np.array(obj.location)
-    occluder_triangles = package.attributes.read_triangle_loops(ground.data)
+    occluder_triangles = package.store.attributes.read_triangle_loops(ground.data)
     ground_loops = np.empty(len(ground.data.loops), dtype=np.int32)
     ground.data.loops.foreach_get("vertex_index", ground_loops)
-    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
-    shaded = package.drawing.cpu_reference(scene, obj, view)
-    env = package.environment.environment(package.environment.source(scene))
+    view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), 64, 64, scene)
+    shaded = package.live.drawing.cpu_reference(scene, obj, view)
+    env = package.scene.environment.environment(package.scene.environment.source(scene))
     reference, error = sd.reference(env, positions, data["normals"], loops[triangles], samples=4096,
                                     occluder_vertices=occluder,
                                     occluder_triangles=ground_loops[occluder_triangles].astype(np.int32))
-    return package.utils.accuracy.relative_error(shaded, reference, error ** 2)
+    return package.plan.accuracy.relative_error(shaded, reference, error ** 2)
 
 
 def main():
@@ -71,7 +71,7 @@ def main():
 
     # A cancel while the settings are chosen: within a second, nothing changed.
     sdtest.select_only([resting])
-    tasks, _ = package.baking.prepare(bpy.context, [resting])
+    tasks, _ = package.bake.prepare.prepare(bpy.context, [resting])
     # The choice is held at its start until the test has looked (a fast machine chose within the
     # half second the test used to wait), then released and cancelled while it runs.
     entered, release, choose = threading.Event(), threading.Event(), tasks[0].choose
@@ -81,7 +81,7 @@ def main():
         release.wait(10.0)
         return choose(stop)
     tasks[0].choose = held_choose
-    job = package.baking.BakeJob(tasks)
+    job = package.bake.job.BakeJob(tasks)
     job.start()
     entered.wait(10.0)
     checks.check(job.choosing, "the bake starts by choosing the settings", job.status_text())
@@ -91,7 +91,7 @@ def main():
     job.join(10.0)
     took = time.perf_counter() - start
     checks.check(job.finished and job.cancelled and took < 1.0 and
-                 package.baking.baked_mesh(resting) is None,
+                 package.store.baked.baked_mesh(resting) is None,
                  "a cancel while choosing stops within a second and bakes nothing", "%.2f s" % took)
 
     sdtest.select_only([lone, resting])
@@ -102,12 +102,12 @@ def main():
             name, info["method"], info["light_order"], info["visibility_order"], info["rays"],
             info["predicted_error"]))
         print("   " + info["automatic"].replace("\n", "\n   "))
-    lone_mesh = package.baking.baked_mesh(lone)
+    lone_mesh = package.store.baked.baked_mesh(lone)
     checks.check(lone_info["method"] == "unshadowed" and
                  not any(a.name.startswith(("sd_visibility", "sd_transfer", "sd_design", "sd_product"))
                          for a in lone_mesh.attributes),
                  "the lone sphere stores no visibility", lone_info["method"])
-    method = package.utils.methods.get(resting_info["method"])
+    method = package.methods.get(resting_info["method"])
     checks.check(method.data is not None and resting_info["automatic"].startswith("Visibility: needed"),
                  "the resting sphere gets its visibility", resting_info["method"])
     checks.check(lone_info["predicted_error"] <= 0.02 and resting_info["predicted_error"] <= 0.02,
@@ -119,9 +119,9 @@ def main():
                  "per-vertex or per-pixel evaluation chosen from the triangles' size on screen",
                  "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
 
-    cost = package.utils.cost
+    cost = package.plan.cost
     checks.check(all(info["floats_per_vertex"] == cost.stored_floats(
-        package.utils.methods.get(info["method"]), info["light_order"], info["visibility_order"])
+        package.methods.get(info["method"]), info["light_order"], info["visibility_order"])
         for info in (lone_info, resting_info)),
         "the cost model's stored floats are what the bakes store",
         ", ".join(str(info["floats_per_vertex"]) for info in (lone_info, resting_info)))
@@ -131,37 +131,37 @@ def main():
     checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
                  "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
 
-    package.gpu_context.ensure()
-    data = package.drawing.object_data(resting)
+    package.live.gpu_context.ensure()
+    data = package.live.drawing.object_data(resting)
     checks.check(not data.variant.glossy and "SD_GLOSSY" not in data.variant.defines(
         package.native.get().sh_recurrence_constants), "a diffuse material compiles no glossy path")
 
     # Before a bake, the predictor measures the chosen method's error too, for the panel.
     settings.method = "prt_diffuse"
     sdtest.select_only([resting])
-    predictor = package.prediction.start(bpy.context)
+    predictor = package.ui.prediction.start(bpy.context)
     predictor.join(120.0)
-    predicted = package.prediction.predicted_errors(bpy.context)
+    predicted = package.ui.prediction.predicted_errors(bpy.context)
     checks.check(predictor.finished and len(predicted) == 1 and predicted[0][0] == "Resting" and
                  0.0 < predicted[0][2] < 0.2,
                  "the panel's prediction measures a chosen method's error before the bake",
                  str([(name, error) for name, _, error in predicted]))
     settings.method = "automatic"
-    predictor = package.prediction.start(bpy.context)
+    predictor = package.ui.prediction.start(bpy.context)
     predictor.join(120.0)
-    chosen = package.prediction.automatic_choices(bpy.context)["Resting"][0]["automatic"]
-    package.baking.clear(resting)
-    measure = package.analysis.choose
+    chosen = package.ui.prediction.automatic_choices(bpy.context)["Resting"][0]["automatic"]
+    package.store.baked.clear(resting)
+    measure = package.plan.analysis.choose
 
     def measured_again(*args, **kwargs):
         raise AssertionError("measured again")
-    package.analysis.choose = measured_again
+    package.plan.analysis.choose = measured_again
     try:
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
                      dict(resting["sd_bake"])["automatic"] == chosen,
                      "a bake after the prediction takes over its choice (not measured again)")
     finally:
-        package.analysis.choose = measure
+        package.plan.analysis.choose = measure
 
     # An override is kept per object; the rest is still chosen.
     resting.sd_lighting.use_method = True
@@ -177,7 +177,7 @@ def main():
     resting.sd_lighting.use_method = False
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake with the s' override only")
     info = dict(resting["sd_bake"])
-    chosen = package.utils.methods.get(info["method"])
+    chosen = package.methods.get(info["method"])
     checks.check("automatic" in info and info["automatic"].startswith("Overridden: visibility_order = 3")
                  and (not chosen.uses_visibility_order or info["visibility_order"] == 3),
                  "the automatic mode keeps the override", info.get("automatic", "")[:80])
@@ -192,7 +192,7 @@ def plastic(checks, package, scene):
     settings = scene.sd_lighting
     sdtest.select_only([ball])
     settings.material_source = 'PHONG'
-    settings.phong_exponent = package.utils.lobes.exponent_from_roughness(0.3)
+    settings.phong_exponent = package.scene.lobes.exponent_from_roughness(0.3)
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the plastic as the Phong lobe alone")
     alone = dict(ball["sd_bake"])
     settings.material_source = 'MATERIAL'
@@ -209,10 +209,10 @@ def plastic(checks, package, scene):
                  "s = %d, %.1f %% against s = %d, %.1f %%" % (
                      mixed["light_order"], 100 * mixed["predicted_error"], alone["light_order"],
                      100 * alone["predicted_error"]))
-    package.gpu_context.ensure()
-    data = package.drawing.object_data(ball)
+    package.live.gpu_context.ensure()
+    data = package.live.drawing.object_data(ball)
     data.frame_block(np.eye(4), np.eye(4), (0.0, 0.0, 1.0, 1.0), np.zeros(((mixed["light_order"] + 1) ** 2, 3)),
-                     np.eye(3), 1.0, albedos=package.materials.object_albedos(ball))
+                     np.eye(3), 1.0, albedos=package.scene.materials.object_albedos(ball))
     defines = data.variant.defines(package.native.get().sh_recurrence_constants)
     checks.check({"SD_GLOSSY", "SD_DIFFUSE_LOBE", "SD_LOBE_WEIGHTS"} <= set(defines),
                  "its shader variant shades both lobes with the slot's weights")

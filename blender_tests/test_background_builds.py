@@ -51,8 +51,8 @@ class HeldNative:
 
 
 def check_lobe_designs(checks, package, scene, ball, view, directory):
-    drawing, gs = package.drawing, package.gpu_shading
-    lobe_designs = package.utils.lobe_designs
+    drawing, gs = package.live.drawing, package.live.gpu_shading
+    lobe_designs = package.live.lobe_designs
     sd = package.native.get()
     sdtest.bake_settings(scene, "msd_lobe", "PHONG", S, SV, rays=128, phong_exponent=SIGMA, select=[ball])
     if not checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake MSD (12)"):
@@ -103,7 +103,7 @@ def check_lobe_designs(checks, package, scene, ball, view, directory):
 
 
 def check_prediction(checks, package, scene):
-    prediction = package.prediction
+    prediction = package.ui.prediction
     big = sdtest.ico_sphere(scene, "Big", subdivisions=4, location=(2.5, 2.0, 1.0))
     sdtest.bake_settings(scene, "msd_visibility", "LAMBERT", 4, 2, rays=128, select=[big])
     predictor = prediction.start(bpy.context)
@@ -143,14 +143,14 @@ def main():
     checks = sdtest.Checks("test_background_builds")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    package.gpu_context.ensure()
+    package.live.gpu_context.ensure()
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.0, 0.0, 1.0))
     sdtest.grid(scene, cuts=8, size=4.0)
     sdtest.camera(scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
     check_lobe_designs(checks, package, scene, ball, view, os.path.join(args.out, "lobe_designs"))
     check_prediction(checks, package, scene)
     return checks.summary()

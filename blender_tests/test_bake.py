@@ -17,7 +17,7 @@ def main():
     checks = sdtest.Checks("test_bake")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    attributes = package.attributes
+    attributes = package.store.attributes
 
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
@@ -31,7 +31,7 @@ def main():
 
     result = bpy.ops.sd_lighting.bake()
     checks.check(result == {'FINISHED'}, "bake operator finishes", str(result))
-    baked = package.baking.baked_mesh(ball)
+    baked = package.store.baked.baked_mesh(ball)
     checks.check(baked is not None and baked.name == "SD Ball", "baked mesh linked from the object",
                  baked.name if baked else "none")
     depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -68,7 +68,7 @@ def main():
     checks.check(np.allclose(np.asarray(sums)[nonempty], data["ambient_occlusion"][nonempty], atol=1e-5),
                  "design weights sum to the ambient occlusion")
 
-    ground_mesh = package.baking.baked_mesh(ground)
+    ground_mesh = package.store.baked.baked_mesh(ground)
     ao = attributes.read(ground_mesh)["ambient_occlusion"]
     co = attributes.read_positions(ground_mesh)
     r = np.hypot(co[:, 0], co[:, 1])
@@ -79,12 +79,12 @@ def main():
     # Cancelled bake: nothing changes.
     before = sdtest.snapshot()
     settings.method = 'prt_matrix'
-    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
+    job = package.bake.job.BakeJob(*package.bake.prepare.prepare(bpy.context, [ball, ground]))
     job.cancel()
     job.run()
     checks.check(job.cancelled and not job.error, "cancel stops the bake", str(job.error))
     checks.check(sdtest.snapshot() == before, "a cancelled bake changes nothing")
-    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
+    job = package.bake.job.BakeJob(*package.bake.prepare.prepare(bpy.context, [ball, ground]))
     job.start()
     job.cancel()
     job.join(60)
@@ -102,7 +102,7 @@ def main():
                  "PRT (2) on a Phong material is refused, nothing changed", result.strip())
     settings.material_source = 'LAMBERT'
     settings.method = 'msd_lobe'
-    job = package.baking.BakeJob(*package.baking.prepare(bpy.context, [ball, ground]))
+    job = package.bake.job.BakeJob(*package.bake.prepare.prepare(bpy.context, [ball, ground]))
     job.tasks[1].geometry.vertices[0, 0] = float("nan")
     job.run()
     checks.check(job.error is not None and "ValueError" in job.error, "a failing native bake reports why",
@@ -113,7 +113,7 @@ def main():
     old_names = {m.name for m in bpy.data.meshes}
     result = bpy.ops.sd_lighting.bake()
     checks.check(result == {'FINISHED'}, "rebake with MSD Theorem 2.1")
-    baked = package.baking.baked_mesh(ball)
+    baked = package.store.baked.baked_mesh(ball)
     names = {a.name for a in baked.attributes}
     checks.check("sd_visibility_000" in names and not any(n.startswith("sd_design") for n in names),
                  "rebake stores V~ and no designs")
@@ -123,8 +123,8 @@ def main():
 
     # Environment sources: the world's file, the same image packed (read from its pixels), a file
     # from the panel, and a world without an Environment Texture (uniform colour).
-    environment = package.environment
-    transforms = sys.modules[package.__name__ + ".utils.transforms"]
+    environment = package.scene.environment
+    transforms = sys.modules[package.__name__ + ".scene.transforms"]
     source = environment.source(scene)
     file_light = environment.light_coefficients(source, 2)
     checks.check(source.kind == "file" and source.path.endswith("forest.exr"), "world HDRI found", source.description)
@@ -178,7 +178,7 @@ def main():
     bpy.ops.wm.open_mainfile(filepath=path)
     scene = bpy.context.scene
     ball = bpy.data.objects["Ball"]
-    baked = package.baking.baked_mesh(ball)
+    baked = package.store.baked.baked_mesh(ball)
     checks.check(baked is not None and ball["sd_bake"]["method"] == "msd_lobe",
                  "bake survives save and reload")
     checks.check(np.array_equal(attributes.read(baked)["visibility"], visibility),
@@ -187,6 +187,26 @@ def main():
                  "the rotation without a Mapping node survives save and reload",
                  str(tuple(scene.sd_lighting.environment_rotation)))
     scene.sd_lighting.environment_source = 'WORLD'
+
+    # The record's schema (store/record.py): the saved record reads as one, with its version; a
+    # record of a later version is not drawn and asks to bake again; the panel still draws.
+    record = package.store.baked.record(ball)
+    checks.check(record.method == "msd_lobe" and baked["sd_bake"]["version"] == package.store.record.VERSION
+                 and record.vertices == len(baked.vertices), "the reloaded bake's record reads")
+    baked["sd_bake"]["version"] = package.store.record.VERSION + 1
+    try:
+        package.store.baked.record(ball)
+        later = None
+    except package.store.record.RecordError as exc:
+        later = str(exc)
+    checks.check(later is not None and "bake again" in later and
+                 ball not in package.live.drawing.baked_objects(scene), "a later record asks to bake again", later)
+    bpy.context.view_layer.objects.active = ball
+    panel = sdtest.LayoutStub()
+    bpy.types.SD_PT_lighting.draw(panel, bpy.context)
+    checks.check(any("bake again" in text for text in panel.texts), "the panel says to bake again",
+                 str(panel.texts[-3:]))
+    baked["sd_bake"]["version"] = package.store.record.VERSION
 
     # Vertex and corner normals through compat (Mesh.vertex_normals 3.5+, Mesh.corner_normals
     # 4.1+, calc_normals_split before): a flat cube's corners carry their face's normal, a

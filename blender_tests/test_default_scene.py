@@ -25,14 +25,14 @@ def main():
     checks = sdtest.Checks("test_default_scene")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    attributes = package.attributes
+    attributes = package.store.attributes
     scene, mapping, monkey, ground = run_default_scene.build_scene(OPTIONS)
 
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the default scene from a script")
     depsgraph = bpy.context.evaluated_depsgraph_get()
     data = {}
     for obj in (monkey, ground):
-        baked = package.baking.baked_mesh(obj)
+        baked = package.store.baked.baked_mesh(obj)
         evaluated = obj.evaluated_get(depsgraph).to_mesh()
         count = len(evaluated.vertices)
         obj.evaluated_get(depsgraph).to_mesh_clear()
@@ -43,7 +43,7 @@ def main():
                      and len(baked.vertices) <= info["refine_max_vertices"],
                      "%s: baked mesh of the evaluated geometry, refined within the budget" % obj.name,
                      "%d evaluated, %d baked" % (count, len(baked.vertices) if baked else -1))
-        method = package.utils.methods.get(info["method"])
+        method = package.methods.get(info["method"])
         checks.check("automatic" in info and info["lobe"] == "lambert" and
                      info["predicted_error"] <= bpy.context.scene.sd_lighting.target_error,
                      "%s: the automatic mode chose %s within the target for Lambert from the rough "
@@ -85,7 +85,7 @@ def main():
     monkey, ground = bpy.data.objects["Suzanne"], bpy.data.objects["Ground"]
     same = True
     for obj in (monkey, ground):
-        values = attributes.read(package.baking.baked_mesh(obj))
+        values = attributes.read(package.store.baked.baked_mesh(obj))
         same &= all(np.array_equal(np.asarray(values[k]), v) for k, v in data[obj.name].items())
     checks.check(same, "bake and attributes survive save and reload")
     after = sdtest.preview(os.path.join(args.out, "default_scene_reloaded.exr"))

@@ -78,8 +78,8 @@ def main():
     checks.check(package.native.available() and
                  os.path.dirname(package.native.get().__file__) == root,
                  "sdnative loads from the extension's folder", package.native.error_message())
-    checks.check(package.gpu_shading.shader_directory().startswith(root),
-                 "shaders are the extension's copy", package.gpu_shading.shader_directory())
+    checks.check(package.live.gpu_shading.shader_directory().startswith(root),
+                 "shaders are the extension's copy", package.live.gpu_shading.shader_directory())
 
     for cycle in range(2):
         addon_utils.disable(module)
@@ -97,13 +97,13 @@ def main():
     sdtest.camera(scene)
     sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 3, 2, rays=64, select=[ball, ground])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
-    baked = package.baking.baked_mesh(ball)
+    baked = package.store.baked.baked_mesh(ball)
     checks.check(baked is not None and "sd_design_000" in baked.attributes and
                  "sd_normal" in baked.attributes, "baked mesh with its attributes")
     path = os.path.join(args.out, "extension_preview.png")
     checks.check(bpy.ops.sd_lighting.render_preview(filepath=path, width=160, height=120) == {'FINISHED'},
                  "render_preview")
-    image = package.preview.read_png(path)
+    image = package.live.preview.read_png(path)
     covered = image[..., 3] > 127
     checks.check(image.shape == (120, 160, 4) and 0.1 < covered.mean() < 0.99 and
                  image[covered][:, :3].max() > 20, "the preview shows the lit scene",

@@ -69,7 +69,7 @@ class Harness:
 
     def view(self):
         depsgraph = bpy.context.evaluated_depsgraph_get()
-        return self.package.view.View.from_camera(self.scene.camera, depsgraph, 640, 480,
+        return self.package.scene.view.View.from_camera(self.scene.camera, depsgraph, 640, 480,
                                                      self.scene)
 
     def bake(self, objects, method, material, sigma, rays=256):
@@ -83,9 +83,9 @@ class Harness:
 
     def compare(self, case, label, objects, per_pixel=(False,)):
         """GPU against CPU on every object; returns {object name: cpu values}."""
-        drawing = self.package.drawing
+        drawing = self.package.live.drawing
         view = self.view()
-        environment = self.package.environment
+        environment = self.package.scene.environment
         l00 = np.abs(environment.light_coefficients(environment.source(self.scene), 0)[0]).max()
         out = {}
         for obj in objects:
@@ -123,7 +123,7 @@ def world_image(package, scene, mapping, image):
     env = [n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment"][0]
     env.image = image
     mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
-    package.environment.clear_cache()
+    package.scene.environment.clear_cache()
 
 
 def remove_objects(objects):
@@ -174,7 +174,7 @@ def main():
     checks = sdtest.Checks("test_gpu_hard_cases")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    package.gpu_context.ensure()
+    package.live.gpu_context.ensure()
     scene = sdtest.empty_scene()
     _, mapping = sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     forest = [n for n in scene.world.node_tree.nodes
@@ -205,7 +205,7 @@ def main():
     ortho_camera(scene, (0.0, 0.0, 10.0), (0.0, 0.0, -1.0), 4.0)
     h.run("views: v = n, grazing, below horizon", [globe], phong(20.0), bake_objects=[globe, ground],
           per_pixel=(False, True))
-    n_dot_v = package.attributes.read_normals(package.baking.baked_mesh(globe))[:, 2]  # v = +Z
+    n_dot_v = package.store.attributes.read_normals(package.store.baked.baked_mesh(globe))[:, 2]  # v = +Z
     checks.check(n_dot_v.max() > 1.0 - 1e-6 and np.abs(n_dot_v).min() < 1e-6 and n_dot_v.min() < -0.9,
                  "the views include v = n, grazing (n.v = 0) and below the horizon",
                  "n.v in [%.2g, %.7g], min |n.v| %.1e" % (n_dot_v.min(), n_dot_v.max(),
@@ -259,7 +259,7 @@ def main():
     one.pixels = list(c) + [1.0]
     world_image(package, scene, mapping, one)
     plane = sdtest.grid(scene, "Plane", cuts=4, size=2.0)
-    interior = np.all(np.abs(package.attributes.read_positions(plane.data)[:, :2]) < 0.9, axis=1)
+    interior = np.all(np.abs(package.store.attributes.read_positions(plane.data)[:, :2]) < 0.9, axis=1)
     results = h.run("constant 1x1 environment", [plane], LAMBERT + phong(8.0), rays=1024)
     for label, values in results.items():
         b = values["Plane"][interior]
@@ -286,7 +286,7 @@ def main():
     checks.check(zero and len(results) == 10, "V = 0: the CPU's B is exactly 0 for every method")
     results = h.run("narrow cone (deep well)", [deep], LAMBERT[1:] + phong(8.0, GLOSSY[1:]),
                     rays=1024)
-    ao = package.attributes.read(package.baking.baked_mesh(deep))["ambient_occlusion"]
+    ao = package.store.attributes.read(package.store.baked.baked_mesh(deep))["ambient_occlusion"]
     print("deep well: visible rays per vertex (of 1024):", np.round(ao * 1024).astype(int).tolist())
     checks.check(0 < ao.max() * 1024 <= 8, "the well's probe sees a few rays of 1024",
                  str(np.round(ao * 1024).tolist()))

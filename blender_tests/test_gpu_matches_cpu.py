@@ -63,8 +63,8 @@ def main():
     checks = sdtest.Checks("test_gpu_matches_cpu")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    drawing = package.drawing
-    package.gpu_context.ensure()
+    drawing = package.live.drawing
+    package.live.gpu_context.ensure()
 
     scene = sdtest.empty_scene()
     _, mapping = sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
@@ -82,7 +82,7 @@ def main():
     settings.rays = 256
     sdtest.select_only([ball, ground])
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
 
     table = []
     for method, material, sigma, s, sv in CASES:
@@ -96,12 +96,12 @@ def main():
         if not checks.check(result == {'FINISHED'}, "bake " + name):
             continue
         if material == "MATERIAL":
-            bake = package.baking.bake_info(ball)
-            checks.check(bake["lobe"] == "phong" and bake["diffuse_lobe"] and
-                         abs(bake["exponent"] - 19.03) < 0.01, "the material bakes Lambert + Phong: "
-                         + name, "%s sigma %.2f, diffuse lobe %s" % (bake["lobe"], bake["exponent"],
-                                                                      bake["diffuse_lobe"]))
-        textures = (False, True) if package.utils.methods.get(method).band_limited_texture else (False,)
+            record = package.store.baked.record(ball)
+            checks.check(record.lobe == "phong" and record.diffuse_lobe and
+                         abs(record.exponent - 19.03) < 0.01, "the material bakes Lambert + Phong: "
+                         + name, "%s sigma %.2f, diffuse lobe %s" % (record.lobe, record.exponent,
+                                                                      record.diffuse_lobe))
+        textures = (False, True) if package.methods.get(method).band_limited_texture else (False,)
         for texture in textures:
             settings.band_limited_texture = texture
             worst = 0.0
@@ -117,7 +117,7 @@ def main():
                                  "GPU = CPU: " + label,
                                  "max rel %.2e (per-vertex rel %.2e), |B| max %.3g" % (
                                      relative, per_vertex, abs(cpu).max()))
-            table.append((name + (" texture %dx%d" % package.utils.shader_variant.band_limited_texture_size(s)
+            table.append((name + (" texture %dx%d" % package.live.shader_variant.band_limited_texture_size(s)
                                   if texture else ""), worst))
         settings.band_limited_texture = False
     print("\nGPU vs CPU, max |gpu - cpu| / max |cpu| over both objects and both paths:")

@@ -59,7 +59,7 @@ class HeldNative:
 class Context:
     def __init__(self, checks, package, ball, view):
         self.checks, self.package, self.view = checks, package, view
-        self.live = package.live_rebake
+        self.live = package.live.live_rebake
         self.name = ball.name
 
     @property
@@ -71,10 +71,10 @@ class Context:
         return bpy.data.objects[self.name]   # after an undo, the restored object
 
     def baked_count(self):
-        return len(self.package.baking.baked_mesh(self.ball).vertices)
+        return len(self.package.store.baked.baked_mesh(self.ball).vertices)
 
     def bake_id(self):
-        return self.package.baking.bake_info(self.ball)["bake_id"]
+        return self.package.store.baked.record(self.ball).bake_id
 
     def run_timer(self, until=None, timeout=120.0):
         """Runs the add-on's timer as Blender would, until it ends (or until() holds)."""
@@ -101,7 +101,7 @@ class Context:
         evaluated = self.ball.evaluated_get(depsgraph)
         mesh = evaluated.to_mesh()
         try:
-            return self.package.attributes.read_positions(mesh).astype(np.float64)
+            return self.package.store.attributes.read_positions(mesh).astype(np.float64)
         finally:
             evaluated.to_mesh_clear()
 
@@ -109,18 +109,18 @@ class Context:
         """The bake is whole: its baked mesh, attributes and GPU data agree, and the GPU shades it as
         sdnative.shade does; follows: its geometry is the object's evaluated geometry."""
         package, ball = self.package, self.ball
-        mesh = package.baking.baked_mesh(ball)
-        data = package.attributes.read(mesh)
+        mesh = package.store.baked.baked_mesh(ball)
+        data = package.store.attributes.read(mesh)
         n = len(mesh.vertices)
-        whole = package.baking.bake_info(ball)["vertices"] == n and len(data["normals"]) == n
+        whole = package.store.baked.record(ball).vertices == n and len(data["normals"]) == n
         self.checks.check(whole, what + ": baked mesh and attributes agree", "%d vertices" % n)
-        gpu = package.drawing.gpu_vertex_values(self.scene, ball, self.view)
-        cpu = package.drawing.cpu_reference(self.scene, ball, self.view)
+        gpu = package.live.drawing.gpu_vertex_values(self.scene, ball, self.view)
+        cpu = package.live.drawing.cpu_reference(self.scene, ball, self.view)
         relative, _ = sdtest.relative_error(gpu, cpu) if len(gpu) == len(cpu) else (np.inf, None)
         self.checks.check(relative <= TOLERANCE, what + ": the live shading draws this bake (GPU = CPU)",
                           "%d GPU values, %.2e" % (len(gpu), relative))
         if follows:
-            baked = package.attributes.read_positions(mesh).astype(np.float64)
+            baked = package.store.attributes.read_positions(mesh).astype(np.float64)
             geometry = np.unique(np.round(self.evaluated_positions(), 5), axis=0)
             same = (len(np.unique(np.round(baked, 5), axis=0)) == len(geometry) and
                     np.array_equal(np.unique(np.round(baked, 5), axis=0), geometry))
@@ -130,7 +130,7 @@ class Context:
 
 
 def check_edit_mode(c):
-    before = c.package.drawing.cpu_reference(c.scene, c.ball, c.view)
+    before = c.package.live.drawing.cpu_reference(c.scene, c.ball, c.view)
     first, asked = c.bake_id(), recorded(c)
     bpy.ops.object.mode_set(mode='EDIT')
     bm = bmesh.from_edit_mesh(c.ball.data)
@@ -152,7 +152,7 @@ def check_edit_mode(c):
                    "the shading follows the edit", "%d of %d vertices shade differently"
                    % (changed.sum(), len(changed)))
     result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
-    fresh = c.package.drawing.cpu_reference(c.scene, c.ball, c.view)
+    fresh = c.package.live.drawing.cpu_reference(c.scene, c.ball, c.view)
     c.checks.check(result == {'FINISHED'} and np.allclose(fresh, after, rtol=1e-6, atol=1e-9),
                    "the re-bake equals a fresh bake of the edited mesh")
     kept = c.bake_id()
@@ -342,16 +342,16 @@ def check_slow_method(c):
     bm.verts[0].co.z += 0.3
     bmesh.update_edit_mesh(c.ball.data)
     c.run_timer()
-    c.checks.check(c.bake_id() != first and c.package.baking.bake_info(c.ball)["method"] == "msd_visibility",
+    c.checks.check(c.bake_id() != first and c.package.store.baked.record(c.ball).method == "msd_visibility",
                    "an MSD (13) bake re-bakes with its own method", c.live.message)
     c.consistent("MSD (13) re-baked")
     bpy.ops.object.mode_set(mode='OBJECT')
 
 
 def recorded(c):
-    """What the object's bake was asked for (sd_bake without the result's summary)."""
-    return {key: value for key, value in c.package.baking.bake_info(c.ball).items()
-            if key not in c.package.baking.SUMMARY_KEYS and key != "shape"}
+    """What the object's bake was asked for and chose (its record without what the bake found)."""
+    return {key: value for key, value in c.package.store.baked.record(c.ball).settings().items()
+            if key != "shape"}
 
 
 def check_automatic(c):
@@ -372,16 +372,16 @@ def check_automatic(c):
 def check_texture_space(c):
     """A bake with texture-space data re-bakes with new texels in Object Mode; in Edit Mode, whose
     unwrap needs Object Mode, the re-bake says so and the bake stays."""
-    baking = c.package.baking
+    baked = c.package.store.baked
     settings = sdtest.bake_settings(c.scene, "prt_diffuse", "LAMBERT", 2, rays=64, select=[c.ball])
     settings.texture_space, settings.lightmap_size = True, '256'
     c.checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
-                   baking.lightmap_mesh(baking.baked_mesh(c.ball)) is not None, "bake with texture-space data")
+                   baked.lightmap_mesh(baked.baked_mesh(c.ball)) is not None, "bake with texture-space data")
     first = c.bake_id()
     c.ball.modifiers["Subdivision"].levels = 2
     c.run_timer()
-    texels = baking.lightmap_mesh(baking.baked_mesh(c.ball))
-    c.checks.check(c.bake_id() != first and texels is not None and baking.bake_info(c.ball)["lightmap_texels"] > 0
+    texels = baked.lightmap_mesh(baked.baked_mesh(c.ball))
+    c.checks.check(c.bake_id() != first and texels is not None and baked.record(c.ball).lightmap_texels > 0
                    and [m.name for m in bpy.data.meshes if m.name.startswith("SD Lightmap")] == [texels.name],
                    "a modifier change re-bakes the texels; the previous ones go", c.live.message)
     kept = c.bake_id()
@@ -401,7 +401,7 @@ def main():
     checks = sdtest.Checks("test_live_rebake")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    package.gpu_context.ensure()
+    package.live.gpu_context.ensure()
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
     ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.0, 0.0, 1.0))
@@ -410,7 +410,7 @@ def main():
     sdtest.camera(scene)
     settings = sdtest.bake_settings(scene, "prt_gaunt", "LAMBERT", 3, 2, rays=64, select=[ball])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake PRT (10)")
-    view = package.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.live.drawing.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             WIDTH, HEIGHT, scene)
     c = Context(checks, package, ball, view)
     c.consistent("the first bake")

@@ -14,7 +14,7 @@ seam; a flat-shaded icosphere shades flat like Cycles, unlike the same mesh bake
 
 Principled BSDFs (GLOSSY): a red plastic (roughness 0.3), gold (metallic 1, roughness 0.4) and a
 half-metallic blue (roughness 0.3) on a smooth icosphere, baked from the material (Lambert +
-Phong, or Phong alone for the metal, weighted per pixel by utils/lobes.py) and previewed with the
+Phong, or Phong alone for the metal, weighted per pixel by scene/lobes.py) and previewed with the
 unshadowed formula at s = 12, against Cycles from two seeds: relative RMS of block averages and
 bias per channel within GLOSSY's limits; the plastic shown as one Phong lobe of its colour (the
 add-on before the split) is far off.
@@ -76,9 +76,9 @@ def main():
     # Corner data
     sdtest.bake_settings(scene, 'ambient_occlusion', 'LAMBERT', 2, rays=16, select=[cube])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the flat cube")
-    baked = package.baking.baked_mesh(cube)
-    normals = package.attributes.read_normals(baked)
-    positions = package.attributes.read_positions(baked)
+    baked = package.store.baked.baked_mesh(cube)
+    normals = package.store.attributes.read_normals(baked)
+    positions = package.store.attributes.read_positions(baked)
     face_normal = np.sign(positions) * (np.abs(positions) == np.abs(positions).max(axis=1)[:, None])
     checks.check(len(baked.vertices) == 24, "a flat cube bakes one vertex per face corner",
                  "%d vertices (the cube has %d)" % (len(baked.vertices), len(cube.data.vertices)))
@@ -93,14 +93,14 @@ def main():
 
     sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[ball])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the sphere")
-    baked = package.baking.baked_mesh(ball)
+    baked = package.store.baked.baked_mesh(ball)
     rings, segments = 24, 48
     # two poles, 23 rings of 48; the equator ring splits by slot, one meridian by the UV seam
     expected = 2 + (rings - 1) * segments + segments + (rings - 1) + 1 + 2 * segments
     checks.check(len(ball.data.vertices) < len(baked.vertices) <= expected,
                  "the smooth sphere splits only along the material boundary and UV seams",
                  "%d of %d vertices (at most %d)" % (len(baked.vertices), len(ball.data.vertices), expected))
-    slots, uvs = package.attributes.read_surface(baked)
+    slots, uvs = package.store.attributes.read_surface(baked)
     checks.check(slots is not None and uvs is not None and set(np.unique(slots)) == {0.0, 1.0},
                  "the baked sphere keeps its slots and UVs")
 
@@ -168,7 +168,7 @@ def left_out(checks, package):
     """The panel's note names the Principled layers and node-driven inputs the lobes leave out,
     by their names in this Blender version (3.x: Clearcoat, Transmission; 4.x: Coat Weight, ...)."""
     material = sdtest.principled_material("Layered", roughness=0.3)
-    plain = package.materials.albedo(material).note
+    plain = package.scene.materials.albedo(material).note
     checks.check("left out" not in plain and "opaque" not in plain,
                  "a default Principled BSDF leaves nothing out", repr(plain))
     bsdf = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
@@ -177,7 +177,7 @@ def left_out(checks, package):
         bsdf.inputs[next(name for name in names if name in bsdf.inputs)].default_value = value
     value = material.node_tree.nodes.new("ShaderNodeValue")
     material.node_tree.links.new(value.outputs[0], bsdf.inputs["Roughness"])
-    note = package.materials.albedo(material).note
+    note = package.scene.materials.albedo(material).note
     checks.check(all(part in note for part in ("coat left out", "transmission left out", "shown opaque",
                                                 "Roughness from node")),
                  "coat, transmission, alpha and a node-driven roughness are noted", repr(note))
@@ -212,7 +212,7 @@ def glossy(checks, package, scene, preview, out):
                              turned.mean(), b.mean()))
         if metallic == 0.0:
             sdtest.bake_settings(scene, 'unshadowed', 'PHONG', 12,
-                                 phong_exponent=package.utils.lobes.exponent_from_roughness(roughness),
+                                 phong_exponent=package.scene.lobes.exponent_from_roughness(roughness),
                                  select=[ball])
             checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it as one Phong lobe")
             one = sdtest.block_averages(preview(name + "_one_lobe.exr"), mask, BLOCK)

@@ -23,7 +23,7 @@ def render(package, path):
     result = bpy.ops.sd_lighting.render_preview(filepath=path, width=WIDTH, height=HEIGHT)
     assert result == {'FINISHED'}, result
     if path.endswith(".png"):
-        return package.preview.read_png(path)
+        return package.live.preview.read_png(path)
     image = bpy.data.images.load(path)
     pixels = np.empty(WIDTH * HEIGHT * 4, dtype=np.float32)
     image.pixels.foreach_get(pixels)
@@ -45,17 +45,17 @@ def projected(view, obj, mesh_positions):
 def agreement(package, scene, image, obj):
     """Fraction of the object's on-screen, front-facing vertices whose pixel is within 2 % of the
     CPU value, the median relative difference, and how many vertices were compared."""
-    drawing = package.drawing
+    drawing = package.live.drawing
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
-    mesh = package.baking.baked_mesh(obj)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    mesh = package.store.baked.baked_mesh(obj)
     cpu = drawing.cpu_reference(scene, obj, view)
-    x, y = projected(view, obj, package.attributes.read_positions(mesh).astype(np.float64))
+    x, y = projected(view, obj, package.store.attributes.read_positions(mesh).astype(np.float64))
     matrix = np.array(obj.matrix_world)
-    world = package.attributes.read_positions(mesh) @ matrix[:3, :3].T + matrix[:3, 3]
+    world = package.store.attributes.read_positions(mesh) @ matrix[:3, :3].T + matrix[:3, 3]
     to_eye = view.camera[:3] - world
     to_eye /= np.linalg.norm(to_eye, axis=1)[:, None]
-    normals = package.attributes.read_normals(mesh) @ matrix[:3, :3].T
+    normals = package.store.attributes.read_normals(mesh) @ matrix[:3, :3].T
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     facing = (to_eye * normals).sum(axis=1) > 0.3
     inside = (x > 2) & (x < WIDTH - 2) & (y > 2) & (y < HEIGHT - 2) & facing
@@ -115,12 +115,12 @@ def main():
                  "shaded pixels are finite and lit", "max %.3f" % exr[covered][:, :3].max())
 
     # PNG = sRGB(2^exposure B) of the EXR's values (Standard view transform).
-    expected = package.preview.display_rgba8(exr, scene.view_settings.exposure)
+    expected = package.live.preview.display_rgba8(exr, scene.view_settings.exposure)
     difference = np.abs(expected.astype(int) - png.astype(int)).max()
     checks.check(difference <= 1, "PNG holds the sRGB-encoded scene-linear values", "max diff %d" % difference)
     scene.view_settings.exposure = 1.0
     brighter = render(package, os.path.join(args.out, "preview_exposure.png"))
-    expected = package.preview.display_rgba8(exr, 1.0)
+    expected = package.live.preview.display_rgba8(exr, 1.0)
     difference = np.abs(expected.astype(int) - brighter.astype(int)).max()
     checks.check(difference <= 1 and brighter[..., :3].mean() > png[..., :3].mean(),
                  "exposure +1 doubles the radiance before the sRGB curve", "max diff %d" % difference)
@@ -132,11 +132,11 @@ def main():
         checks.check(fraction > 0.95 and median < 0.005,
                      "preview = CPU evaluator at the %s's projected vertices" % label,
                      "%.0f %% of %d within 2 %%, median %.2e" % (100 * fraction, count, median))
-    drawing = package.drawing
+    drawing = package.live.drawing
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     ground_values = drawing.cpu_reference(scene, ground, view).mean(axis=1)
-    co = package.attributes.read_positions(package.baking.baked_mesh(ground))
+    co = package.store.attributes.read_positions(package.store.baked.baked_mesh(ground))
     r = np.hypot(co[:, 0], co[:, 1])
     contact, open_ground = ground_values[r < 0.45].mean(), ground_values[r > 1.5].mean()
     checks.check(contact < 0.6 * open_ground, "contact shadow under the ball",

@@ -23,7 +23,7 @@ def main():
     for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
         checks.check(on[key], "registered: " + key)
     checks.check(on["load_post"] == before["load_post"] + 1, "one load_post handler added")
-    checks.check(package.drawing._handler is not None, "draw handler added")
+    checks.check(package.live.drawing._handler is not None, "draw handler added")
     checks.check(package.native.available(), "sdnative loads from the zip",
                  package.native.error_message())
     sd = package.native.get()
@@ -33,14 +33,14 @@ def main():
     build = native.builds(native.cpu_features(), os.environ.get("SDNATIVE_BUILD"))[0]
     checks.check(os.path.basename(sd.__file__).startswith(build + "."),
                  "sdnative is the build for this CPU (%s)" % build, sd.__file__)
-    checks.check(os.path.isdir(package.gpu_shading.shader_directory()) and
-                 package.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
-                 "shaders are the zip's copy", package.gpu_shading.shader_directory())
+    checks.check(os.path.isdir(package.live.gpu_shading.shader_directory()) and
+                 package.live.gpu_shading.shader_directory().startswith(os.path.dirname(package.__file__)),
+                 "shaders are the zip's copy", package.live.gpu_shading.shader_directory())
     settings = bpy.context.scene.sd_lighting
     checks.check(settings.method == "automatic" and settings.visibility_order == 2,
                  "default settings: the automatic mode, s' = 2 for a chosen method")
-    drawing = package.drawing
-    live = package.live_rebake
+    drawing = package.live.drawing
+    live = package.live.live_rebake
     checks.check(not settings.live_rebake and on["handlers"] == before["handlers"],
                  "Live Re-bake is off by default, without handlers")
     settings.live_rebake = True

@@ -51,7 +51,7 @@ class HeldEnvironment:
 
 def held_environment(package, scene, error=None):
     """Empties the environment caches and puts a HeldEnvironment of the scene's in them."""
-    env = package.environment
+    env = package.scene.environment
     source = env.source(scene)
     held = HeldEnvironment(env.environment(source), error)
     env.clear_cache()
@@ -60,7 +60,7 @@ def held_environment(package, scene, error=None):
 
 
 def check_choice_in_background(checks, package, scene, ball, view):
-    drawing, env = package.drawing, package.environment
+    drawing, env = package.live.drawing, package.scene.environment
     settings = scene.sd_lighting
     settings.ringing_window = 'NONE'
     without = drawing.cpu_reference(scene, ball, view)
@@ -110,8 +110,8 @@ def main():
     checks = sdtest.Checks("test_ringing")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    drawing = package.drawing
-    package.gpu_context.ensure()
+    drawing = package.live.drawing
+    package.live.gpu_context.ensure()
 
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))
@@ -121,12 +121,12 @@ def main():
                                     select=[ball])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
 
     checks.check(settings.ringing_window == 'AUTOMATIC', "the ringing window is Automatic by default")
     check_choice_in_background(checks, package, scene, ball, view)
     choice = drawing.ringing_choice(scene, ball, wait=True)
-    line = package.utils.ringing.describe(choice, "automatic")
+    line = package.scene.ringing.describe(choice, "automatic")
     checks.check(choice["window"] != "none" and choice["error"] < choice["unwindowed_error"] and
                  choice["min_over_max"] > choice["unwindowed_min_over_max"],
                  "Automatic picks a window that lowers the displayed error and lifts the negative part",
@@ -144,7 +144,7 @@ def main():
                          "GPU = CPU, nothing negative: %s %s" % (setting, "per-pixel" if per_pixel else "per-vertex"),
                          "max rel %.2e, min GPU %.3g" % (relative, gpu.min()))
         settings.per_pixel = False
-        image = package.preview.render(scene, depsgraph, bpy.context.view_layer, WIDTH, HEIGHT)
+        image = package.live.preview.render(scene, depsgraph, bpy.context.view_layer, WIDTH, HEIGHT)
         covered = image[..., 3] > 0.5
         checks.check(covered.mean() > 0.05 and np.isfinite(image).all() and image[covered][:, :3].min() >= 0.0,
                      "preview (%s): no negative pixel" % setting,

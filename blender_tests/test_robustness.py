@@ -47,11 +47,11 @@ def clear_bake(objects):
 
 def baked_state(package, obj):
     """(baked mesh name, bake id, AO) of the object's bake, or None."""
-    mesh = package.baking.baked_mesh(obj)
+    mesh = package.store.baked.baked_mesh(obj)
     if mesh is None:
         return None
     return (mesh.name, mesh["sd_bake"]["bake_id"],
-            package.attributes.read(mesh)["ambient_occlusion"].tobytes())
+            package.store.attributes.read(mesh)["ambient_occlusion"].tobytes())
 
 
 def bake_exists(bake_id):
@@ -95,7 +95,7 @@ def check_selection(checks, package, scene, ball):
                          select=[ball, wire, hollow, curve, empty, flat])
     before = sdtest.snapshot()
     result, text = bake()
-    checks.check(result == {'FINISHED'} and package.baking.baked_mesh(ball) is not None,
+    checks.check(result == {'FINISHED'} and package.store.baked.baked_mesh(ball) is not None,
                  "a selection with unbakeable objects bakes the rest", text.strip())
     for name, reason in (("Wire", "has no faces"), ("Hollow", "has no faces"),
                          ("Curve", "is not a mesh (curve)"), ("Empty", "is not a mesh (empty)"),
@@ -117,11 +117,11 @@ def check_environment(checks, package, scene, ball, hdri_path, out):
     settings = sdtest.bake_settings(scene, 'ambient_occlusion', 'LAMBERT', 2, 1, rays=64,
                                     select=[ball])
     world = scene.world
-    env_node = package.environment.world_nodes(world)[0]
+    env_node = package.scene.environment.world_nodes(world)[0]
     image = env_node.image
 
     def refused(what, expected):
-        package.environment.clear_cache()
+        package.scene.environment.clear_cache()
         before = sdtest.snapshot()
         result, text = bake()
         checks.check(result == {'CANCELLED'} and expected in text and sdtest.snapshot() == before,
@@ -164,7 +164,7 @@ def check_environment(checks, package, scene, ball, hdri_path, out):
                  "uniform colour" in text, "a world without an Environment Texture: baked, with a "
                  "warning", text.strip())
     scene.world = world
-    package.environment.clear_cache()
+    package.scene.environment.clear_cache()
     result, text = bake()
     checks.check(result == {'FINISHED'} and "Warning" not in text, "the HDRI world bakes without warnings",
                  text.strip())
@@ -192,17 +192,17 @@ def check_zero_normals(checks, package, scene):
     result, text = bake()
     checks.check(result == {'FINISHED'} and "Bake: 1 vertex of Fan had no usable normal; their "
                  "faces' normal was used" in text, "zero normals: baked, with a warning", text.strip())
-    baked = package.baking.baked_mesh(fan)
-    normals = package.attributes.read_normals(baked) if baked is not None else np.zeros((5, 3))
+    baked = package.store.baked.baked_mesh(fan)
+    normals = package.store.attributes.read_normals(baked) if baked is not None else np.zeros((5, 3))
     checks.check(len(normals) == 5 and np.allclose(normals[0], (1, 0, 0)) and
                  np.allclose(normals[1:5], given[1:5]),
                  "the baked normals are the fallback the bake used (+X), the others Blender's; the "
                  "loose vertex is left out", str(normals.tolist()))
-    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
-    checks.check(baked is not None and np.isfinite(package.drawing.cpu_reference(scene, fan, view)).all(),
+    checks.check(baked is not None and np.isfinite(package.live.drawing.cpu_reference(scene, fan, view)).all(),
                  "the repaired bake shades (finite)")
-    package.baking.clear(fan)
+    package.store.baked.clear(fan)
     remove(fan)
 
 
@@ -308,14 +308,14 @@ def check_library(checks, package, scene, args):
     checks.check(result == {'FINISHED'} and "skipped: LibBall is linked from" in text and
                  "skipped: LibOverride is a library override" in text and
                  "sd_bake" not in lib_ball and "sd_bake" not in override and
-                 package.baking.baked_mesh(local) is not None,
+                 package.store.baked.baked_mesh(local) is not None,
                  "linked object and override skipped with a reason, the local object with a linked "
                  "mesh baked", text.strip())
     scene.collection.objects.link(lib_baked)
     state = baked_state(package, lib_baked)
     before = sdtest.snapshot()
     result, text = clear_bake([lib_baked])
-    checks.check(state is not None and package.baking.baked_mesh(lib_baked).library is not None and
+    checks.check(state is not None and package.store.baked.baked_mesh(lib_baked).library is not None and
                  result == {'CANCELLED'} and "its bake can only be cleared there" in text and
                  sdtest.snapshot() == before and baked_state(package, lib_baked) == state,
                  "a linked object baked in its library: its bake is used, Clear Bake refuses with "
@@ -337,9 +337,9 @@ def check_without_addon(checks, package, scene, ball, args):
     sdtest.bake_settings(scene, 'msd_visibility', 'PHONG', 3, 1, rays=64, phong_exponent=8.0,
                          select=[ball])
     assert bake()[0] == {'FINISHED'}
-    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
-    shaded = package.drawing.cpu_reference(scene, ball, view)
+    shaded = package.live.drawing.cpu_reference(scene, ball, view)
     state = baked_state(package, ball)
     path = os.path.join(args.out, "test_robustness_baked.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
@@ -360,7 +360,7 @@ def check_without_addon(checks, package, scene, ball, args):
     bpy.ops.wm.open_mainfile(filepath=path)
     scene = bpy.context.scene
     ball = bpy.data.objects["Ball"]
-    again = package.drawing.cpu_reference(scene, ball, view)
+    again = package.live.drawing.cpu_reference(scene, ball, view)
     checks.check(baked_state(package, ball) == state and np.array_equal(again, shaded) and
                  scene.sd_lighting.method == 'msd_visibility',
                  "saved without the add-on, reopened with it: the same bake, shading and settings")
@@ -381,15 +381,15 @@ def check_undo(checks, package):
         print("undo: Blender has no undo stack here (a bpy module, or no window): not tested")
         return
     ball = bpy.data.objects["Ball"]
-    checks.check(package.baking.baked_mesh(ball) is None and "sd_bake" not in ball and
+    checks.check(package.store.baked.baked_mesh(ball) is None and "sd_bake" not in ball and
                  not bake_exists(state[1]), "undo of a bake removes it")
     ed("redo")
     ball = bpy.data.objects["Ball"]
     scene = bpy.context.scene
-    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             320, 240, scene)
     checks.check(baked_state(package, ball) == state and
-                 np.isfinite(package.drawing.cpu_reference(scene, ball, view)).all(),
+                 np.isfinite(package.live.drawing.cpu_reference(scene, ball, view)).all(),
                  "redo brings the bake back, and it shades")
     clear_bake([ball])
     ed("undo_push", message="Clear Bake")

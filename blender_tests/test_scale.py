@@ -15,7 +15,7 @@ is turned by 180 degrees against the applied mesh's, so the two bakes trace diff
 directions and differ by the Monte Carlo noise of RAYS rays. Measured (3.4.1, 2048 rays): 0 without
 a mirror (< 1e-6), 0.45 - 1.1 % with one (0 for the unshadowed method, which traces no rays).
 Before the fix the scaled objects were 23 - 114 % off. At a frame where the animated scale is
-not the one baked, baking.scale_changed (the panel's hint to bake again) says so.
+not the one baked, store/baked.scale_changed (the panel's hint to bake again) says so.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_scale.py -- --zip Z --out DIR
 """
 
@@ -77,7 +77,7 @@ def shaded(package, scene, obj, view, method, material, sigma, frame):
                              select=[obj])
         result = bpy.ops.sd_lighting.bake()
         assert result == {'FINISHED'}, result
-        return package.drawing.cpu_reference(scene, obj, view)
+        return package.live.drawing.cpu_reference(scene, obj, view)
     finally:
         scene.collection.objects.unlink(obj)
 
@@ -93,7 +93,7 @@ def main():
     sdtest.grid(scene, cuts=10, size=6.0)
     sdtest.camera(scene, location=(1.5, -6.0, 3.0), target=(0.0, 0.0, 1.2))
     mesh = monkey_mesh()
-    view = package.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
+    view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(),
                                             640, 480, scene)
 
     table = []
@@ -125,9 +125,9 @@ def main():
         if animated:  # the panel's hint that the bake is of another scale
             scene.collection.objects.link(scaled)
             scene.frame_set(10)
-            unchanged = package.baking.scale_changed(scaled)
+            unchanged = package.store.baked.scale_changed(scaled)
             scene.frame_set(1)
-            checks.check(not unchanged and package.baking.scale_changed(scaled),
+            checks.check(not unchanged and package.store.baked.scale_changed(scaled),
                          "the bake tells when the animated scale is not the one baked")
             scene.collection.objects.unlink(scaled)
         for obj in (scaled, reference):

@@ -59,9 +59,9 @@ def _module(package, name):
 
 def variants(package):
     """Every variant the live shading can build at ORDERS."""
-    shader_variant = _module(package, "utils.shader_variant")
+    shader_variant = _module(package, "live.shader_variant")
     sd = package.native.get()
-    for method in _module(package, "utils.methods").METHODS:
+    for method in _module(package, "methods").METHODS:
         for glossy, both in (((False, False),) if method.lambert_only else
                              ((False, False), (True, False), (True, True))):
             for s, sv in ORDERS:
@@ -83,7 +83,7 @@ def variants(package):
                 textures = [()]
                 if method.band_limited_texture:
                     textures.append(shader_variant.band_limited_texture_size(s))
-                if _module(package, "utils.lightmap").applies(method):   # texture-space data
+                if _module(package, "bake.lightmap").applies(method):   # texture-space data
                     yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
                                                  lightmap=LIGHTMAP, **lobes)
                     if (s, sv) == ALBEDO_ORDERS:
@@ -120,7 +120,7 @@ def name(variant):
 # The stage sources as Blender assembles them from the create-info (gpu_shading._compile).
 
 def stage_source(package, variant, stage, dialect):
-    gs = package.gpu_shading
+    gs = package.live.gpu_shading
     lines = []
     if dialect == "es":
         lines += ["#version 320 es", "precision highp float;", "precision highp int;",
@@ -148,7 +148,7 @@ def stage_source(package, variant, stage, dialect):
 def background_stage_source(package, stage, dialect):
     """The world background's stage as gpu_shading._background_shader declares it (its push
     constants as a uniform block)."""
-    gs = package.gpu_shading
+    gs = package.live.gpu_shading
     lines = (["#version 320 es", "precision highp float;", "precision highp int;",
               "precision highp sampler2D;"] if dialect == "es" else ["#version 450"])
     lines += ["#define SD_EQUIRECT_MAP %s" % gs.BACKGROUND_SAMPLER,
@@ -186,7 +186,7 @@ def main():
     checks = sdtest.Checks("test_shader_variants")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    package.gpu_context.ensure()
+    package.live.gpu_context.ensure()
     import gpu
     print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
                                 else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
@@ -197,18 +197,18 @@ def main():
     failed, start = [], time.perf_counter()
     for variant in all_variants:
         try:
-            package.gpu_shading.shader_program(variant)
+            package.live.gpu_shading.shader_program(variant)
         except Exception as exc:  # create_from_info raises with the compiler's log printed
             failed.append("%s: %s" % (name(variant), str(exc).splitlines()[0] if str(exc) else type(exc).__name__))
     checks.check(not failed, "every variant compiles on this Blender's GPU backend (%d programs, %.1f s)"
                  % (len(all_variants), time.perf_counter() - start), "; ".join(failed[:5]))
     try:
-        package.gpu_shading._background_shader()
+        package.live.gpu_shading._background_shader()
         problem = ""
     except Exception as exc:
         problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     checks.check(not problem, "the world background's shader compiles on this Blender's GPU backend", problem)
-    package.gpu_shading.clear_cache()
+    package.live.gpu_shading.clear_cache()
 
     # 2. glslang, strict.
     validator = shutil.which("glslangValidator")

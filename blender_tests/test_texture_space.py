@@ -1,4 +1,4 @@
-"""Texture-space data (issue 8, item 3b; utils/lightmap.py): a ball on a ground of one quad (four
+"""Texture-space data (issue 8, item 3b; bake/lightmap.py): a ball on a ground of one quad (four
 vertices: per vertex the ground cannot show the ball's contact shadow) baked with a lightmap.
 Checks: the baked copy's UV map and the texels' mesh; the preview shows the contact shadow the
 per-vertex bake cannot; the preview at ground pixels equals the CPU evaluation of the texels,
@@ -43,10 +43,10 @@ def ground_pixels(view):
 def lightmap_uv(mesh, package, local_points):
     """The ground's lightmap UV at points of its plane: the UVs of the triangle holding each point,
     blended by its barycentric coordinates there."""
-    positions = package.attributes.read_positions(mesh).astype(np.float64)
-    loops = package.attributes.read_triangle_loops(mesh)
-    corners = package.attributes.read_triangles(mesh)
-    uvs = package.attributes.read_loop_uvs(mesh, "SD Lightmap").astype(np.float64)
+    positions = package.store.attributes.read_positions(mesh).astype(np.float64)
+    loops = package.store.attributes.read_triangle_loops(mesh)
+    corners = package.store.attributes.read_triangles(mesh)
+    uvs = package.store.attributes.read_loop_uvs(mesh, "SD Lightmap").astype(np.float64)
     out = np.full((len(local_points), 2), np.nan)
     for triangle, loop in zip(corners, loops):
         a, b, c = positions[triangle][:, :2]
@@ -94,24 +94,24 @@ def chart_gap(package, mesh):
         for face in faces:
             uvs = [tuple(loop[layer].uv) for loop in face.loops]
             corners += [(uvs[0], uvs[k], uvs[k + 1]) for k in range(1, len(uvs) - 1)]
-        label[package.utils.lightmap.texels(np.array(corners), SIZE, SIZE)[0]] = chart
+        label[package.bake.lightmap.texels(np.array(corners), SIZE, SIZE)[0]] = chart
     bm.free()
     grid = label.reshape(SIZE, SIZE)
-    for distance in range(1, package.utils.lightmap.MARGIN_TEXELS + 1):
+    for distance in range(1, package.bake.lightmap.MARGIN_TEXELS + 1):
         for dy in range(-distance, distance + 1):
             for dx in range(-distance, distance + 1):
                 a = grid[max(dy, 0):SIZE + min(dy, 0), max(dx, 0):SIZE + min(dx, 0)]
                 b = grid[max(-dy, 0):SIZE + min(-dy, 0), max(-dx, 0):SIZE + min(-dx, 0)]
                 if np.any((a >= 0) & (b >= 0) & (a != b)):
                     return distance
-    return package.utils.lightmap.MARGIN_TEXELS + 1
+    return package.bake.lightmap.MARGIN_TEXELS + 1
 
 
 def check_chart_gap(checks, package, obj):
     """Charts MARGIN_TEXELS apart in UV: their texel centres at least one less apart by rows or
     columns (a diagonal neighbour)."""
-    least = package.utils.lightmap.MARGIN_TEXELS - 1
-    gap = chart_gap(package, package.baking.baked_mesh(obj))
+    least = package.bake.lightmap.MARGIN_TEXELS - 1
+    gap = chart_gap(package, package.store.baked.baked_mesh(obj))
     checks.check(gap >= least, "%s: the texels of two charts at least %d texels apart" % (obj.name, least),
                  "nearest %d apart" % gap)
 
@@ -120,7 +120,7 @@ def main():
     checks = sdtest.Checks("test_texture_space")
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
-    baking = package.baking
+    baked = package.store.baked
 
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
@@ -140,30 +140,30 @@ def main():
     settings.lightmap_size = str(SIZE)
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake with texture-space data")
     for obj in (ball, ground):
-        mesh = baking.baked_mesh(obj)
-        texels = baking.lightmap_mesh(mesh)
-        info = baking.bake_info(obj)
-        uv = package.attributes.read_loop_uvs(mesh, "SD Lightmap") if "SD Lightmap" in mesh.uv_layers else None
+        mesh = baked.baked_mesh(obj)
+        texels = baked.lightmap_mesh(mesh)
+        record = baked.record(obj)
+        uv = package.store.attributes.read_loop_uvs(mesh, "SD Lightmap") if "SD Lightmap" in mesh.uv_layers else None
         checks.check(uv is not None and uv.min() >= 0.0 and uv.max() <= 1.0,
                      "%s: the baked copy has the lightmap UV map, inside [0, 1]" % obj.name)
-        entries = package.attributes.read_texels_entries(texels) if texels is not None else np.zeros(0)
+        entries = package.store.attributes.read_texels_entries(texels) if texels is not None else np.zeros(0)
         checks.check(texels is not None and
-                     0 < info.get("lightmap_texels", 0) <= len(texels.vertices) == info.get("lightmap_stored") and
+                     0 < (record.lightmap_texels or 0) <= len(texels.vertices) == record.lightmap_stored and
                      np.all(np.diff(entries) > 0) and 0 <= entries.min() and entries.max() < SIZE * SIZE and
                      {"sd_transfer_000", "sd_ambient_occlusion", "sd_normal"} <= set(texels.attributes.keys()),
                      "%s: a texels' mesh of the texels stored, each with its entry and the method's "
                      "attributes" % obj.name, "%d texels baked, %d stored of %d" % (
-                         info.get("lightmap_texels", 0), len(entries), SIZE * SIZE))
+                         record.lightmap_texels or 0, len(entries), SIZE * SIZE))
         if obj == ball:
             check_chart_gap(checks, package, obj)
-        data = package.attributes.read(texels, info)
+        data = package.store.attributes.read(texels, record)
         checks.check(np.all((data["ambient_occlusion"] >= 0) & (data["ambient_occlusion"] <= 1)) and
                      np.isfinite(data["transfer"]).all(), "%s: texel AO in [0, 1], transfer finite" % obj.name)
 
     # The contact shadow, which the texels carry and the vertices cannot.
     lit = sdtest.preview(os.path.join(args.out, "texture_space.exr"), width=WIDTH, height=HEIGHT)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    view = package.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
+    view = package.scene.view.View.from_camera(scene.camera, depsgraph, WIDTH, HEIGHT, scene)
     rows, columns, points = ground_pixels(view)
     r = np.hypot(points[:, 0], points[:, 1])
     near, open_ground = (r > 0.3) & (r < 0.6), r > 1.5
@@ -176,9 +176,9 @@ def main():
                      % (ratio, near.sum(), open_ground.sum()))
 
     # The shader's texels: the CPU's B at each texel, blended bilinearly at the pixel's UV.
-    mesh = baking.baked_mesh(ground)
-    cpu = package.drawing.cpu_reference(scene, ground, view, texels=True)
-    entries = package.attributes.read_texels_entries(package.baking.lightmap_mesh(mesh))
+    mesh = baked.baked_mesh(ground)
+    cpu = package.live.drawing.cpu_reference(scene, ground, view, texels=True)
+    entries = package.store.attributes.read_texels_entries(package.store.baked.lightmap_mesh(mesh))
     uv = lightmap_uv(mesh, package, points)
     inside = np.isfinite(uv).all(axis=1) & (lit[rows, columns, 3] > 0.5)
     expected = bilinear_texels(cpu, entries, uv[inside])
@@ -195,7 +195,7 @@ def main():
     bpy.ops.wm.open_mainfile(filepath=path)
     ball, ground = bpy.data.objects["Ball"], bpy.data.objects["Ground"]
     reloaded = sdtest.preview(os.path.join(args.out, "texture_space_reloaded.exr"), width=WIDTH, height=HEIGHT)
-    checks.check(baking.lightmap_mesh(baking.baked_mesh(ground)) is not None and
+    checks.check(baked.lightmap_mesh(baked.baked_mesh(ground)) is not None and
                  float(np.abs(reloaded - lit).max()) < 1e-5, "save and reload keep the texels and the picture",
                  "max diff %.2e" % float(np.abs(reloaded - lit).max()))
 
@@ -231,18 +231,18 @@ def main():
     scene.sd_lighting.method = 'msd_visibility'
     scene.sd_lighting.visibility_order = 2
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
-                 baking.lightmap_mesh(baking.baked_mesh(ground)) is None and
+                 baked.lightmap_mesh(baked.baked_mesh(ground)) is None and
                  not any(m.name.startswith("SD Lightmap") for m in bpy.data.meshes),
                  "MSD (13) bakes per vertex: no texels, the previous ones removed")
 
     scene.sd_lighting.method = 'ambient_occlusion'
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and
-                 baking.lightmap_mesh(baking.baked_mesh(ground)) is not None, "AO bakes texels")
+                 baked.lightmap_mesh(baked.baked_mesh(ground)) is not None, "AO bakes texels")
 
     # A flat cube: six charts, which Smart UV Project's default margin packs about a texel apart.
     box = sdtest.flat_cube(scene, "Box", 0.5, (1.5, 1.5, 0.25))
     sdtest.select_only([box])
-    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and baking.lightmap_mesh(baking.baked_mesh(box)),
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and baked.lightmap_mesh(baked.baked_mesh(box)),
                  "Box: bakes texels")
     check_chart_gap(checks, package, box)
 

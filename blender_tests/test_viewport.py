@@ -86,7 +86,7 @@ class Test:
                 buffer = framebuffer.read_color(0, 0, region.width, region.height, 4, 0, 'FLOAT')
                 buffer.dimensions = region.width * region.height * 4
                 self.samples = np.array(buffer, dtype=np.float32).reshape(region.height, region.width, 4)
-                self.view = self.package.view.View.from_region(bpy.context.region_data)
+                self.view = self.package.scene.view.View.from_region(bpy.context.region_data)
         return bpy.types.SpaceView3D.draw_handler_add(grab, (), 'WINDOW', 'POST_PIXEL')
 
     # -- the test, one step per timer tick
@@ -100,15 +100,15 @@ class Test:
             result = bpy.ops.sd_lighting.bake('INVOKE_DEFAULT')
         checks.check(result == {'RUNNING_MODAL'}, "bake starts as a modal operator", str(result))
         ticks_at_start, fractions = self.ticks, []
-        while package.operators.active_job is not None:
-            fractions.append(package.operators.active_job.fraction)
+        while package.ui.operators.active_job is not None:
+            fractions.append(package.ui.operators.active_job.fraction)
             yield
         checks.check(self.ticks - ticks_at_start >= 2, "the UI kept running during the bake",
                      "%d timer ticks" % (self.ticks - ticks_at_start))
         checks.check(fractions == sorted(fractions), "progress only grows",
                      "%s" % [round(f, 2) for f in fractions[:8]])
-        checks.check(package.baking.baked_mesh(self.ball) is not None and
-                     package.baking.baked_mesh(self.ground) is not None, "modal bake stored results")
+        checks.check(package.store.baked.baked_mesh(self.ball) is not None and
+                     package.store.baked.baked_mesh(self.ground) is not None, "modal bake stored results")
 
         # Esc/cancel during a bake: nothing changes.
         bake_id = self.ball["sd_bake"]["bake_id"]
@@ -116,7 +116,7 @@ class Test:
         with self.override():
             bpy.ops.sd_lighting.bake('INVOKE_DEFAULT')
         yield
-        checks.check(package.operators.active_job is not None, "second bake running")
+        checks.check(package.ui.operators.active_job is not None, "second bake running")
         window = self.viewport()[0]
         if getattr(bpy.app, "use_event_simulate", False):
             # Blender started with --enable-event-simulate: press Esc for real.
@@ -127,7 +127,7 @@ class Test:
             with self.override():
                 bpy.ops.sd_lighting.cancel_bake()
             how = "the Cancel button"
-        while package.operators.active_job is not None:
+        while package.ui.operators.active_job is not None:
             yield
         checks.check(self.ball["sd_bake"]["bake_id"] == bake_id and
                      sorted(m.name for m in bpy.data.meshes) == ["Ball", "Ground", "SD Ball", "SD Ground"],
@@ -156,35 +156,35 @@ class Test:
             yield
         bpy.types.SpaceView3D.draw_handler_remove(handler, 'WINDOW')
         checks.check(self.samples is not None, "viewport redrawn")
-        checks.check(package.drawing.last_error == "", "draw handler ran without error",
-                     package.drawing.last_error)
+        checks.check(package.live.drawing.last_error == "", "draw handler ran without error",
+                     package.live.drawing.last_error)
         if self.samples is None:
             return
-        package.preview.write_png(os.path.join(self.args.out, "viewport.png"),
+        package.live.preview.write_png(os.path.join(self.args.out, "viewport.png"),
                                   np.round(255 * np.clip(self.samples[::-1], 0, 1)).astype(np.uint8))
-        drawing = package.drawing
+        drawing = package.live.drawing
         shaded = []     # (x, y) of the vertices compared
         for obj in (self.ball, self.ground):
             cpu = drawing.cpu_reference(scene, obj, self.view)
-            mesh = package.baking.baked_mesh(obj)
+            mesh = package.store.baked.baked_mesh(obj)
             matrix = np.array(obj.matrix_world)
-            world = package.attributes.read_positions(mesh) @ matrix[:3, :3].T + matrix[:3, 3]
+            world = package.store.attributes.read_positions(mesh) @ matrix[:3, :3].T + matrix[:3, 3]
             clip = np.c_[world, np.ones(len(world))] @ self.view.view_projection.T
             ndc = clip[:, :3] / clip[:, 3:4]
             h, w = self.samples.shape[:2]
             x, y = (ndc[:, 0] + 1) * 0.5 * w, (ndc[:, 1] + 1) * 0.5 * h   # rows bottom-first here
             to_eye = self.view.camera[:3] - world
-            normals = package.attributes.read_normals(mesh) @ matrix[:3, :3].T
+            normals = package.store.attributes.read_normals(mesh) @ matrix[:3, :3].T
             facing = (to_eye * normals).sum(axis=1) > 0.3 * np.linalg.norm(to_eye, axis=1)
             inside = facing & (x > 2) & (x < w - 2) & (y > 2) & (y < h - 2)
-            inside &= ~boundary_vertices(package.attributes.read_triangles(mesh), len(world))
+            inside &= ~boundary_vertices(package.store.attributes.read_triangles(mesh), len(world))
             inside &= unoccluded(scene, bpy.context.evaluated_depsgraph_get(), self.view.camera[:3], world)
             # The viewport's buffer holds the display values: sRGB(B) in 8 bits (Standard view
             # transform), read back as they are stored.
             inside &= (cpu.min(axis=1) > 0.02) & (cpu.max(axis=1) < 0.98)
             px = sdtest.bilinear(self.samples, x[inside], y[inside])
             shaded.append((x[inside], y[inside]))
-            expected = package.preview.srgb_encode(cpu[inside])
+            expected = package.live.preview.srgb_encode(cpu[inside])
             error = 255.0 * np.abs(px - expected).max(axis=1)
             checks.check(inside.sum() > 20 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,
                          "viewport shows sRGB(B of the CPU evaluator) on the %s" % obj.name,
@@ -203,8 +203,8 @@ class Test:
             yield
         bpy.types.SpaceView3D.draw_handler_remove(handler, 'WINDOW')
         scene.sd_lighting.world_background = False
-        if not checks.check(self.samples is not None and package.drawing.last_error == "",
-                            "viewport redrawn with the world background", package.drawing.last_error):
+        if not checks.check(self.samples is not None and package.live.drawing.last_error == "",
+                            "viewport redrawn with the world background", package.live.drawing.last_error):
             return
         h, w = empty.shape
         rows, columns = np.nonzero(empty)
@@ -213,21 +213,21 @@ class Test:
         near, far = (np.c_[ndc, np.full(len(ndc), z), np.ones(len(ndc))] @ inverse.T for z in (0.0, 0.5))
         rays = far[:, :3] / far[:, 3:] - near[:, :3] / near[:, 3:]
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)
-        e = rays @ package.environment.rotation_matrix(scene).T
+        e = rays @ package.scene.environment.rotation_matrix(scene).T
         u = 0.5 - np.arctan2(e[:, 1], e[:, 0]) / (2.0 * np.pi)
         v = 1.0 - np.arccos(np.clip(e[:, 2], -1.0, 1.0)) / np.pi
         # The map, bilinear as Blender's Environment Texture (one texel of wrap and pole padding)
-        texels = package.environment.background_texels(package.environment.source(scene))
+        texels = package.scene.environment.background_texels(package.scene.environment.source(scene))
         texels = np.concatenate([texels[:, -1:], texels, texels[:, :1]], axis=1)
         texels = np.concatenate([texels[:1], texels, texels[-1:]], axis=0)
         height, width = texels.shape[0] - 2, texels.shape[1] - 2
         radiance = sdtest.bilinear(texels, u * width + 1.0, v * height + 1.0)
-        error = 255.0 * np.abs(self.samples[rows, columns, :3] - package.preview.srgb_encode(radiance)).max(axis=1)
+        error = 255.0 * np.abs(self.samples[rows, columns, :3] - package.live.preview.srgb_encode(radiance)).max(axis=1)
         checks.check(len(error) > 1000 and np.median(error) < 1.5 and np.mean(error < 4.0) > 0.9,
                      "the world background fills the empty pixels with sRGB(L(g d))",
                      "median %.2f / 255 over %d pixels, %.0f %% within 4 / 255" % (
                          np.median(error), len(error), 100 * np.mean(error < 4.0)))
-        package.preview.write_png(os.path.join(self.args.out, "viewport_background.png"),
+        package.live.preview.write_png(os.path.join(self.args.out, "viewport_background.png"),
                                   np.round(255 * np.clip(self.samples[::-1], 0, 1)).astype(np.uint8))
         x, y = (np.concatenate(c) for c in zip(*shaded))
         moved = 255.0 * np.abs(sdtest.bilinear(self.samples, x, y) - sdtest.bilinear(before, x, y)).max(axis=1)

@@ -256,7 +256,7 @@ def findings(report, averaged, comparison):
         ratios = [p["ratio"] for p in compared]
         front = [p["ratio_front_facing"] for p in compared if p["material"] != "lambert" and np.isfinite(p["ratio_front_facing"])]
         extrapolated = [p["ratio"] for p in report["predictions"] if p["extrapolated"] and not p["noise_limited"]]
-        out.append("- The panel's predicted error (utils/accuracy.py) against the measured one: ratio %.2f-%.2f "
+        out.append("- The panel's predicted error (plan/accuracy.py) against the measured one: ratio %.2f-%.2f "
                    "(median %.2f) over %d settings at the table's own rays; extrapolated to other rays by its "
                    "1/sqrt(rays) noise model %s; glossy against the front-facing error a user sees %s." % (
                        min(ratios), max(ratios), float(np.median(ratios)), len(compared),

@@ -1,5 +1,5 @@
 """Lobe designs (Theorem 2.1, eq. 12): the search from scratch (sdnative.zonal_design) against the
-add-on's builds (utils/lobe_designs.py: continued from the nearest exponent already cached), node
+add-on's builds (live/lobe_designs.py: continued from the nearest exponent already cached), node
 counts and seconds per degree and Phong exponent.
 
     PYTHONPATH=build/native /usr/bin/python3 scripts/lobe_design_benchmark.py [--degrees 10,12,14]
@@ -17,7 +17,7 @@ import time
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "addon"))
 
 from sd_lighting import native  # noqa: E402
-from sd_lighting.utils import lobe_designs  # noqa: E402
+from sd_lighting.live import lobe_designs  # noqa: E402
 
 
 def main():

@@ -9,7 +9,7 @@ several times).
 Layout (one zip for both install paths: Preferences > Add-ons > Install on Blender 3.4 - 4.x via
 bl_info, and Get Extensions > Install from Disk on 4.2+ via blender_manifest.toml):
 
-    sd_lighting/__init__.py, *.py, utils/*.py, blender_manifest.toml
+    sd_lighting/__init__.py, *.py, the sub-packages' */*.py, blender_manifest.toml
     sd_lighting/shaders/*.glsl   (the shading, the world background, the equirect lookup they share)
     sd_lighting/sdnative.cpython-311-x86_64-linux-gnu.so   (Blender 3.4 - 5.0: CPython 3.11)
     sd_lighting/sdnative.cpython-313-x86_64-linux-gnu.so   (Blender 5.1+: CPython 3.13, if built)

@@ -37,7 +37,7 @@ vec2 sd_environment_brdf(float n_dot_v, float roughness)
 #endif
 
 /* The surface's radiance from lobe 0's B and (SD_DIFFUSE_LOBE) the Lambert lobe's: with
- * SD_LOBE_WEIGHTS the slot's Principled split (utils/lobes.py): Phong times the specular layer's
+ * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): Phong times the specular layer's
  * albedo mix(F0, albedo, metallic) A + B, Lambert times (1 - metallic) albedo, less the dielectric
  * layer's F0 A + B where the layer lies over the diffuse (layer 1; 2: added to it; 0: no layer);
  * otherwise the albedo times the one lobe's B, or on the vertex target (no albedos) the two
@@ -85,7 +85,7 @@ void sd_add_entry(float weight, int entry, vec3 normal, vec3 view, inout vec3 rg
 
 #ifdef SD_LIGHTMAP
 /* Adds the B of lightmap texel (x, y), clamped to the map (as a GPU's clamp-to-edge lookup does),
- * when the texture-space data store it (utils/lightmap.py: sd_lightmap_index holds its row, or
+ * when the texture-space data store it (bake/lightmap.py: sd_lightmap_index holds its row, or
  * -1), and its weight to `total`. */
 void sd_add_texel(float weight, vec2 texel, vec3 normal, vec3 view, inout vec3 rgb, inout vec3 diffuse,
                   inout float total)

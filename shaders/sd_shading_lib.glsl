@@ -11,7 +11,7 @@
  * per object).
  *
  * The shader is specialised with defines (addon/sd_lighting/utils/shader_variant.py, from the
- * method table utils/methods.py); exactly one SD_METHOD_* is defined:
+ * method table methods.py); exactly one SD_METHOD_* is defined:
  *   SD_METHOD_UNSHADOWED         sum_l w_l sum_m L_lm y_lm(a)                 (V = 1)
  *   SD_METHOD_AMBIENT_OCCLUSION  AO x unshadowed
  *   SD_METHOD_PRT_DIFFUSE        eq. (2): sum_i L_i T_i
@@ -38,7 +38,7 @@
  *   SD_LIGHTMAP          (with SD_PER_PIXEL) the data are texture-space: one entry per stored texel
  *                        of a SD_LIGHTMAP_WIDTH x SD_LIGHTMAP_HEIGHT lightmap (its row in the R32F
  *                        map sd_lightmap_index, -1 where none is stored), read at the pixel's
- *                        lightmap UV (utils/lightmap.py) instead of at its triangle's vertices
+ *                        lightmap UV (bake/lightmap.py) instead of at its triangle's vertices
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
  *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
  *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it

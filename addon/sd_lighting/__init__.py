@@ -5,8 +5,8 @@ Use: 3D viewport > sidebar (N) > SD Lighting. What a bake stores and where (the 
 attributes, the `sd_bake` settings) is described in the repository's README.md.
 
 Importing this package needs no Blender: the modules that use bpy are imported by register(), so
-the pure logic in utils/ (and the sdnative loader, native.py) is importable and tested with plain
-Python (tests/addon/).
+the pure logic beside them in each sub-package (and the sdnative loader, native.py) is importable
+and tested with plain Python (tests/addon/).
 """
 
 import importlib
@@ -23,15 +23,20 @@ bl_info = {
 }
 
 # Every submodule, dependencies first: F3 > Reload Scripts re-runs this file, which then reloads
-# those already imported, in this order.
-_SUBMODULES = ("utils.bake_data", "utils.cost", "utils.methods", "utils.lobes", "utils.transforms",
-               "utils.limits", "utils.shader_variant", "utils.background", "utils.lobe_designs",
-               "utils.bake_time", "utils.corners", "utils.refine", "utils.least_squares", "utils.lightmap",
-               "utils.ringing",
-               "utils.accuracy", "utils.automatic", "utils.rebake_schedule", "compat", "native", "materials", "environment",
-               "attributes", "view", "analysis", "baking", "prediction", "gpu_context", "gpu_shading", "drawing", "preview",
-               "live_rebake",
-               "properties", "operators", "panels", "registration")
+# those already imported, in this order. The sub-packages follow the pipeline: scene (what the
+# scene gives: environment, materials, view), plan (the automatic mode's error and cost
+# predictions), bake, store (the baked meshes and their records), live (the shading), ui.
+_SUBMODULES = ("background", "compat", "errors", "native",
+               "scene.lobes", "scene.materials", "scene.ringing", "scene.transforms", "scene.environment",
+               "scene.view",
+               "plan.bake_time", "plan.cost", "store.bake_data", "methods", "plan.accuracy",
+               "store.record", "store.attributes",
+               "bake.corners", "bake.least_squares", "plan.automatic", "plan.analysis", "bake.lightmap",
+               "store.baked", "bake.refine", "bake.geometry", "bake.task", "bake.job", "bake.unwrap",
+               "bake.prepare",
+               "live.gpu_context", "live.lobe_designs", "live.rebake_schedule", "live.shader_variant",
+               "live.gpu_shading", "live.drawing", "live.live_rebake", "live.preview",
+               "ui.limits", "ui.prediction", "ui.operators", "ui.panels", "ui.properties", "registration")
 
 if "registration" in locals():
     import sys

@@ -5,8 +5,9 @@ data, environments and re-bakes of the previous file."""
 import bpy
 from bpy.app.handlers import persistent
 
-from . import (drawing, environment, gpu_shading, live_rebake, operators, panels, prediction,
-               properties)
+from .scene import environment
+from .live import drawing, gpu_shading, live_rebake
+from .ui import operators, panels, prediction, properties
 
 
 @persistent

@@ -1,4 +1,4 @@
-"""The automatic mode's measurement and choice (utils/accuracy.py, utils/automatic.py, utils/cost.py)
+"""The automatic mode's measurement and choice (plan/accuracy.py, plan/automatic.py, plan/cost.py)
 on small meshes with sdnative: what it stores, which s it picks, and that its measured errors are
 those of real bakes. Errors are Monte Carlo estimates (the reference's noise removed), so the
 checks compare well separated cases."""
@@ -6,7 +6,8 @@ checks compare well separated cases."""
 import numpy as np
 import pytest
 
-from sd_lighting.utils import accuracy, automatic, cost, methods
+from sd_lighting import methods
+from sd_lighting.plan import accuracy, automatic, cost
 
 HDRI = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
 ALL = [m.id for m in methods.METHODS]

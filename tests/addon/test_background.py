@@ -1,4 +1,4 @@
-"""Results computed off the main thread (utils/background.py): asking never waits, a result is
+"""Results computed off the main thread (background.py): asking never waits, a result is
 computed once and kept, a failure is reported and not raised, waiting callers get the result or
 the failure."""
 
@@ -6,7 +6,7 @@ import threading
 
 import pytest
 
-from sd_lighting.utils.background import Background, Failed
+from sd_lighting.background import Background, Failed
 
 
 class _Held:

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sd_lighting.utils import bake_data
-from sd_lighting.utils.bake_data import (AMBIENT_OCCLUSION, ARRAYS, DESIGN, PRODUCT_MATRIX,
+from sd_lighting.store import bake_data
+from sd_lighting.store.bake_data import (AMBIENT_OCCLUSION, ARRAYS, DESIGN, PRODUCT_MATRIX,
                                          TRANSFER, VISIBILITY)
 
 

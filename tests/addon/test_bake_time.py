@@ -1,4 +1,4 @@
-"""The bake-time prediction (utils/bake_time.py): the sample, the extrapolation, the lower bound
+"""The bake-time prediction (plan/bake_time.py): the sample, the extrapolation, the lower bound
 while sampling, the text and the confirmation threshold."""
 
 import threading
@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from sd_lighting.utils import bake_time
-from sd_lighting.utils.bake_time import BakeTimePredictor, Prediction, SampleJob
+from sd_lighting.plan import bake_time
+from sd_lighting.plan.bake_time import BakeTimePredictor, Prediction, SampleJob
 
 
 def grid(n):

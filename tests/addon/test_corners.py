@@ -1,8 +1,8 @@
-"""Corner data: which face corners share a vertex of the baked copy (utils/corners.py)."""
+"""Corner data: which face corners share a vertex of the baked copy (bake/corners.py)."""
 
 import numpy as np
 
-from sd_lighting.utils import corners
+from sd_lighting.bake import corners
 
 
 def _cube():

@@ -1,10 +1,11 @@
-"""Least-squares vertex values (utils/least_squares.py): the centroid split, the samples' rule,
+"""Least-squares vertex values (bake/least_squares.py): the centroid split, the samples' rule,
 the regulariser's rows, and a fit of real bakes against the signal between the vertices."""
 
 import numpy as np
 import pytest
 
-from sd_lighting.utils import least_squares, methods
+from sd_lighting import methods
+from sd_lighting.bake import least_squares
 
 
 def grid(n=5, size=1.0, height=None):

@@ -1,10 +1,11 @@
-"""Texture-space data (utils/lightmap.py): texel centres in UV triangles, their points on the
+"""Texture-space data (bake/lightmap.py): texel centres in UV triangles, their points on the
 surface, and the dilation around the charts."""
 
 import numpy as np
 import pytest
 
-from sd_lighting.utils import lightmap, methods
+from sd_lighting import methods
+from sd_lighting.bake import lightmap
 
 SQUARE = np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]])
 

@@ -2,7 +2,7 @@
 
 from types import SimpleNamespace
 
-from sd_lighting.utils import limits
+from sd_lighting.ui import limits
 
 
 def test_limits_of_the_built_module(sdnative):

@@ -1,4 +1,4 @@
-"""The lobe designs' cache (utils/lobe_designs.py): keys, versioned files validated on load,
+"""The lobe designs' cache (live/lobe_designs.py): keys, versioned files validated on load,
 builds in a worker thread that never block `get`, continuation from a neighbouring exponent."""
 
 import json
@@ -8,8 +8,8 @@ import threading
 import numpy as np
 import pytest
 
-from sd_lighting.utils import lobe_designs
-from sd_lighting.utils.lobe_designs import Design, DesignFiles, LobeDesigns, design_key
+from sd_lighting.live import lobe_designs
+from sd_lighting.live.lobe_designs import Design, DesignFiles, LobeDesigns, design_key
 
 
 def test_key_per_lobe_exponent_and_degree():

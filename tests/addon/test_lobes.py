@@ -3,7 +3,7 @@ lobes (the shader's colours from the weights: test_material_colour against Cycle
 
 import pytest
 
-from sd_lighting.utils import lobes
+from sd_lighting.scene import lobes
 
 F0 = 0.04   # IOR 1.5
 

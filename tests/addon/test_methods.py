@@ -5,7 +5,7 @@ import re
 import numpy as np
 import pytest
 
-from sd_lighting.utils import methods
+from sd_lighting import methods
 
 
 def uv_sphere(rings=6, segments=10):

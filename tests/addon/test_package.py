@@ -1,13 +1,11 @@
 """The package imports without Blender; only register() needs bpy."""
 
 import importlib
-import pkgutil
 import sys
 
 import pytest
 
 import sd_lighting
-import sd_lighting.utils
 
 
 def test_no_bpy_here():
@@ -21,12 +19,31 @@ def test_bl_info_and_registration_entry_points():
     assert callable(sd_lighting.register) and callable(sd_lighting.unregister)
 
 
-def test_every_utils_module_imports_without_bpy():
-    names = [m.name for m in pkgutil.iter_modules(sd_lighting.utils.__path__)]
-    assert {"bake_data", "methods", "lobes", "transforms", "limits", "shader_variant"} <= set(names)
-    for name in names:
-        importlib.import_module("sd_lighting.utils." + name)
+# The pure logic beside the bpy modules of each sub-package, tested here without Blender.
+PURE = {"background", "errors", "methods", "native",
+        "scene.lobes", "scene.transforms", "scene.ringing", "scene.view",
+        "plan.accuracy", "plan.automatic", "plan.bake_time", "plan.cost",
+        "bake.corners", "bake.least_squares", "bake.lightmap", "bake.refine",
+        "store.bake_data", "store.record",
+        "live.lobe_designs", "live.rebake_schedule", "live.shader_variant",
+        "ui.limits"}
+
+
+def test_the_pure_modules_import_without_bpy():
+    assert PURE <= set(sd_lighting._SUBMODULES)
+    for name in sorted(PURE):
+        importlib.import_module("sd_lighting." + name)
     assert "bpy" not in sys.modules
+
+
+def test_sub_packages_import_nothing():
+    """A sub-package's __init__ imports nothing, so importing one of its pure modules needs no bpy."""
+    import ast
+    import os
+    for name in ("scene", "plan", "bake", "store", "live", "ui"):
+        path = os.path.join(os.path.dirname(sd_lighting.__file__), name, "__init__.py")
+        tree = ast.parse(open(path, encoding="utf-8").read())
+        assert not [node for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom))], name
 
 
 def test_reload_list_names_every_submodule():

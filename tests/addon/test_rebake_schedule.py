@@ -1,9 +1,9 @@
-"""The live re-bake's state machine (utils/rebake_schedule.py): debounced starts, one re-bake in
+"""The live re-bake's state machine (live/rebake_schedule.py): debounced starts, one re-bake in
 flight, a newer change supersedes the running re-bake, a cancel stops it and forgets the rest."""
 
 import pytest
 
-from sd_lighting.utils.rebake_schedule import POLL_INTERVAL, Scheduler
+from sd_lighting.live.rebake_schedule import POLL_INTERVAL, Scheduler
 
 DELAY = 0.25
 

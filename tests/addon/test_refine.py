@@ -1,10 +1,10 @@
-"""utils/refine.py: the conforming split, the rotation-averaged criterion, and refine() on signals
+"""bake/refine.py: the conforming split, the rotation-averaged criterion, and refine() on signals
 with a known answer (a synthetic bake) and on a real one (sdnative's, a box on a floor)."""
 
 import numpy as np
 import pytest
 
-from sd_lighting.utils import refine
+from sd_lighting.bake import refine
 
 
 def _grid(n, size=1.0):

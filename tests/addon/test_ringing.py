@@ -1,4 +1,4 @@
-"""The ringing window's pure logic (utils/ringing.py): windowing coefficients per band, the
+"""The ringing window's pure logic (scene/ringing.py): windowing coefficients per band, the
 choice made off the main thread and cached, and the panel's lines about it."""
 
 import threading
@@ -6,8 +6,8 @@ import threading
 import numpy as np
 import pytest
 
-from sd_lighting.utils import ringing
-from sd_lighting.utils.background import Background, Failed
+from sd_lighting.scene import ringing
+from sd_lighting.background import Background, Failed
 
 
 def test_windowed_multiplies_each_band():

@@ -7,8 +7,10 @@ import re
 import numpy as np
 import pytest
 
-from sd_lighting.utils import lightmap, methods, shader_variant
-from sd_lighting.utils.shader_variant import BlockField, Variant
+from sd_lighting import methods
+from sd_lighting.bake import lightmap
+from sd_lighting.live import shader_variant
+from sd_lighting.live.shader_variant import BlockField, Variant
 
 
 def all_variants():

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from sd_lighting.utils import transforms
+from sd_lighting.scene import transforms
 
 
 def test_euler_xyz_is_rz_ry_rx():

@@ -62,7 +62,7 @@ struct TransferOptions {
   /// Every vertex traces vertex 0's rotation of the ray set (common random numbers): where two
   /// vertices' visibility and normals agree, so do their results, and a difference between
   /// vertices measures how the signal changes, not ray noise. For comparing neighbouring points
-  /// (the add-on's refinement, utils/refine.py); a bake to store keeps independent rotations.
+  /// (the add-on's refinement, bake/refine.py); a bake to store keeps independent rotations.
   bool common_rotation = false;
   /// Refit each vertex's design from an already-built neighbour's (weighted_design's `starts`)
   /// instead of compressing every one from scratch: the same certification at a fraction of the

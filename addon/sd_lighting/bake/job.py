@@ -1,0 +1,111 @@
+"""The bake job: BakeTasks run in a worker thread (or the caller's), with progress and
+cancellation, then stored all or nothing on the main thread (store/baked.py)."""
+
+import threading
+import time
+
+from .. import native
+from ..errors import BakeError
+from ..store import baked
+from .task import share
+
+
+class BakeJob:
+    """Bakes a list of BakeTasks; run() in any thread, apply() on the main thread afterwards."""
+
+    def __init__(self, tasks, warnings=()):
+        self.tasks = tasks
+        self.warnings = list(warnings)   # for the user, with the result (prepare's, run's)
+        self.current = 0              # index of the task being baked
+        self.fraction = 0.0           # overall progress in [0, 1]
+        self.cancel_requested = False
+        self.choosing = False         # the automatic mode is measuring the current object
+        self.refining = False         # the current object's copy is being refined
+        self.cancelled = False
+        self.error = None             # message when the bake failed
+        self.finished = False
+        self.seconds = 0.0
+        self._thread = None
+
+    # -- control
+    def start(self):
+        """Runs the bake in a worker thread."""
+        self._thread = threading.Thread(target=self.run, name="sd_lighting bake", daemon=True)
+        self._thread.start()
+
+    def cancel(self):
+        self.cancel_requested = True
+
+    def join(self, timeout=None):
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    def status_text(self):
+        if not self.tasks:
+            return ""
+        task = self.tasks[min(self.current, len(self.tasks) - 1)]
+        doing = ("choosing the settings of" if self.choosing else
+                 "refining" if self.refining else "baking")
+        return "SD Lighting: %s %s (%d/%d), %d %%  -  Esc to cancel" % (
+            doing, task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
+            int(100 * self.fraction))
+
+    # -- work
+    def run(self):
+        sd = None
+        start = time.perf_counter()
+        try:
+            sd = native.get()
+            count = len(self.tasks)
+            for index, task in enumerate(self.tasks):
+                self.current = index
+                if self.cancel_requested:
+                    raise sd.BakeCancelled("cancelled")
+
+                def task_progress(done, total, index=index):
+                    self.fraction = (index + (done / total if total else 1.0)) / count
+                    return not self.cancel_requested
+
+                if task.automatic:
+                    self.choosing = True
+                    task.choose(lambda: self.cancel_requested)
+                    self.choosing = False
+                # Refinement takes the first half of the task's bar, when it runs.
+                halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else 0.0
+                t0 = time.perf_counter()
+                self.refining = True
+                task.refine(sd, share(task_progress, 0.0, halfway))
+                self.refining = False
+                task.refine_seconds = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                result = task.bake(sd, share(task_progress, halfway, 1.0))
+                result["seconds"] = time.perf_counter() - t0   # the least-squares fit included
+                task.result = result
+                if "least_squares_skipped" in result:
+                    self.warnings.append("%s: least squares skipped, the vertices keep their baked "
+                                         "values (%s)" % (task.object_name, result["least_squares_skipped"]))
+                fallbacks = len(result["fallback_normals"])
+                if fallbacks:
+                    self.warnings.append("%d %s of %s had no usable normal; their faces' normal "
+                                         "was used" % (fallbacks, "vertex" if fallbacks == 1 else "vertices",
+                                                       task.object_name))
+            self.fraction = 1.0
+        except Exception as exc:
+            if sd is not None and isinstance(exc, getattr(sd, "BakeCancelled", ())):
+                self.cancelled = True
+            elif self.cancel_requested:
+                self.cancelled = True
+            else:
+                self.error = "%s: %s" % (type(exc).__name__, exc)
+        finally:
+            self.seconds = time.perf_counter() - start
+            self.finished = True
+
+    # -- step 3
+    def apply(self):
+        """Stores the results (main thread, store/baked.store: all or nothing). Returns the baked
+        objects' names."""
+        if not self.finished or self.cancelled or self.error:
+            raise BakeError("nothing to apply")
+        return baked.store([baked.Bake(task.object_name, task.baked, task.result, task.record())
+                            for task in self.tasks])

@@ -1,0 +1,184 @@
+"""What to bake (main thread): for every selected object that can be baked, its Geometry, its
+occluders and its settings as BakeTasks; nothing in the .blend changes."""
+
+import time
+
+import numpy as np
+
+from .. import methods, native
+from ..errors import BakeError
+from ..plan import analysis, automatic
+from ..scene import environment, materials, transforms
+from ..scene.view import View
+from ..store import baked
+from ..store.record import RecordError
+from . import geometry as geometry_module, lightmap
+from .task import BakeTask
+from .unwrap import lightmap_uvs
+
+
+def bake_settings(scene, obj, env_source):
+    """The settings dict of a bake of `obj` under the scene's panel settings and the object's
+    overrides (properties.ObjectOverrides). The automatic mode's dict says method "automatic":
+    the bake's worker fills in the choice (analysis.choose), with the lines saying why."""
+    settings = scene.sd_lighting
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    method_id = fixed.get("method", settings.method)
+    lobe_set = materials.lobe_for(obj, settings)
+    lobe, exponent = lobe_set.lobe, lobe_set.exponent
+    common = {"lobe": lobe, "exponent": float(exponent), "diffuse_lobe": lobe_set.diffuse,
+              "lobe_weights": lobe_set.weighted, "diffuse_share": lobe_set.diffuse_share,
+              "seed": int(settings.seed),
+              "environment": env_source.description, "refine": bool(settings.refine),
+              "refine_target": float(settings.target_error),
+              "refine_max_vertices": int(settings.refine_max_vertices),
+              "least_squares": bool(settings.least_squares),
+              "lightmap": int(settings.lightmap_size) if settings.texture_space else 0}
+    if method_id == analysis.AUTOMATIC:
+        return dict(common, method=analysis.AUTOMATIC, light_order=0, visibility_order=0,
+                    rays=int(fixed.get("rays", settings.rays)))
+    method = methods.get(method_id)
+    if method.lambert_only and lobe != "lambert":
+        raise BakeError("%s needs a Lambert material; %s is %s"
+                        % (method.label, obj.name, lobe_set.label))
+    if "light_order" in fixed:
+        order = fixed["light_order"]
+    elif settings.automatic_orders:
+        try:
+            order = environment.smallest_order(env_source, lobe, exponent, settings.target_error,
+                                               settings.max_automatic_order)
+        except Exception as exc:
+            raise BakeError("cannot choose s automatically: %s" % exc) from exc
+    else:
+        order = settings.light_order
+    v_order = fixed.get("visibility_order", settings.visibility_order) if method.uses_visibility_order else 0
+    return dict(common, method=method.id, light_order=int(order), visibility_order=int(v_order),
+                rays=int(fixed.get("rays", settings.rays)))
+
+
+def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
+    """What the object's error is measured with (analysis.Inputs), in its bake frame."""
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
+    eye = triangle_pixels = None
+    if scene.camera is not None:
+        eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+        render = scene.render
+        width = render.resolution_x * render.resolution_percentage // 100
+        height = render.resolution_y * render.resolution_percentage // 100
+        if settings["method"] == analysis.AUTOMATIC:   # only its choice reads the mesh on screen
+            view = View.from_camera(scene.camera, depsgraph, width, height, scene)
+            triangle_pixels = automatic.projected_triangle_pixels(
+                transforms.transform_points(matrix, geometry.mesh_positions), geometry.mesh_triangles,
+                view.view_projection, width, height)
+    fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
+    fixed.pop("method", None)
+    panel = scene.sd_lighting
+    return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
+                           panel.target_error, panel.max_automatic_order, fixed,
+                           panel.ringing_window.lower(), triangle_pixels)
+
+
+def recorded_settings(scene, obj, env_source):
+    """The settings the object's bake recorded - what it was asked for and, from the automatic
+    mode, what was chosen - for a re-bake (not the panel's); BakeError without a bake."""
+    try:
+        record = baked.record(obj)
+    except RecordError as exc:
+        raise BakeError("%s: %s" % (obj.name, exc)) from exc
+    if record is None:
+        raise BakeError("%s has no bake" % obj.name)
+    return record.settings()
+
+
+def _refusal(obj):
+    """Why the object cannot be baked (a message for the user), or None."""
+    if obj.type != 'MESH':
+        return "%s is not a mesh (%s)" % (obj.name, obj.type.lower())
+    if obj.library is not None:
+        return ("%s is linked from %s, which keeps no change made here: make it local (Object > "
+                "Relations > Make Local) to bake it" % (obj.name, obj.library.filepath))
+    if obj.override_library is not None:
+        return ("%s is a library override, whose bake Blender would drop when the file is "
+                "reopened: make it local to bake it" % obj.name)
+    return None
+
+
+def _may_bake_lightmap(method_id):
+    """Whether a bake of this method (or the automatic mode's choice) may hold texels."""
+    return method_id == analysis.AUTOMATIC or lightmap.applies(methods.get(method_id))
+
+
+def unwrap_lightmap(context, task):
+    """Gives a task whose settings ask for texture-space data its lightmap UVs (lightmap_uvs;
+    main thread, BakeError as there); nothing for the others."""
+    settings = task.settings
+    if int(settings.get("lightmap", 0)) > 0 and _may_bake_lightmap(settings["method"]):
+        start = time.perf_counter()
+        task.geometry.lightmap_uvs = lightmap_uvs(context, task.geometry, int(settings["lightmap"]))
+        task.geometry.unwrap_seconds = time.perf_counter() - start
+
+
+def prepare(context, objects, settings_of=bake_settings, unwrap=True):
+    """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
+    meshes, without faces, linked from a library) are left out, each with a warning; raises
+    BakeError when none is left or the bake cannot start (no sdnative, no environment).
+    settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
+    panel's; recorded_settings: those of its last bake). unwrap: False leaves texture-space
+    bakes without their UVs (unwrap_lightmap: the bake-time prediction estimates the texels
+    instead; a live re-bake unwraps only what it bakes)."""
+    scene = context.scene
+    depsgraph = context.evaluated_depsgraph_get()
+    view_layer = context.view_layer
+    if not native.available():
+        raise BakeError(native.error_message())
+    try:
+        env_source = environment.source(scene)
+        if env_source.kind != "uniform":
+            environment.environment(env_source)  # an unreadable file fails now, not at every frame
+    except environment.Unavailable as exc:
+        raise BakeError(str(exc)) from exc
+
+    # The other objects' world triangles, each read when first needed: an object baked alone (a
+    # live re-bake) never reads its own.
+    triangles = {}
+
+    def occluders_of(obj):
+        for other in scene.objects:
+            if other != obj:
+                if other.name_full not in triangles:
+                    triangles[other.name_full] = geometry_module.world_triangles(other, depsgraph, view_layer)
+                if triangles[other.name_full] is not None:
+                    yield triangles[other.name_full]
+
+    tasks, skipped = [], []
+    for obj in objects:
+        reason = _refusal(obj)
+        if reason is None:
+            shape, to_frame = transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
+            if np.linalg.matrix_rank(shape) < 3:
+                reason = "%s has a zero scale" % obj.name
+        if reason is None:
+            geometry = geometry_module.evaluated_geometry(obj, depsgraph, shape)
+            if geometry is None or geometry.triangle_count == 0:
+                reason = "%s has no faces" % obj.name
+        if reason is not None:
+            skipped.append(reason)
+            continue
+        occluders = geometry_module.join((transforms.transform_points(to_frame, world), triangles)
+                                         for world, triangles in occluders_of(obj))
+        settings = settings_of(scene, obj, env_source)
+        settings["shape"] = [float(x) for x in shape.ravel()]
+        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
+        tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
+        if unwrap:
+            unwrap_lightmap(context, tasks[-1])
+    if not tasks:
+        raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
+                        "select one or more mesh objects to bake")
+    warnings = ["skipped: " + reason for reason in skipped]
+    if env_source.kind == "uniform":
+        warnings.append("world '%s' has no Environment Texture: lit by its %s"
+                        % (scene.world.name, env_source.description))
+    return tasks, warnings
+

@@ -1,0 +1,255 @@
+"""One object's bake (any thread): its automatic choice, refinement, rays and least-squares fit or
+texels - sdnative.bake_transfer on the arrays prepare.py gathered, never touching bpy."""
+
+import functools
+import hashlib
+import time
+import uuid
+
+import numpy as np
+
+from .. import methods
+from ..errors import BakeError
+from ..plan import analysis, automatic
+from ..scene import lobes
+from ..store.record import BakeRecord
+from . import geometry as geometry_module, least_squares, lightmap, refine
+
+FIT_START = 0.8   # of a least-squares bake's progress: the rays before it, the fit after
+TEXELS_START = 0.1   # of a texture-space bake's progress: the vertices before it, the texels after
+
+
+def share(progress, start, end):
+    """progress(done, total) moving [start, end] of the caller's progress(done, total)."""
+    def shared(done, total):
+        return progress(start + (end - start) * (done / total if total else 1.0), 1.0)
+    return shared
+
+
+
+class BakeTask:
+    """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
+
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs):
+        self.object_name = obj_name
+        self.geometry = geometry
+        self.occluder_vertices, self.occluder_triangles = occluders
+        self.settings = settings      # dict, becomes the `sd_bake` property
+        self.analysis = analysis_inputs   # analysis.Inputs: what its error is measured with
+        self.predicted_error = None   # of a chosen method's settings, once predicted
+        self.baked = None             # the geometry baked: `geometry` or its refinement
+        self.refinement = None        # refine.Refinement, when the settings ask for one
+        self.refine_seconds = 0.0
+        self.result = None
+        self._inputs = None
+
+    def inputs_hash(self):
+        """A digest of everything the bake's result depends on: the arrays read from the mesh
+        (Geometry.inputs) and sdnative.bake_transfer's arguments. Recorded as `inputs`: an equal
+        digest later means that baking again would give the same bake."""
+        if self._inputs is None:
+            digest = hashlib.blake2b(digest_size=16)
+            for value in self.geometry.inputs():
+                digest.update(b"-" if value is None else np.ascontiguousarray(value).tobytes())
+            # The refinement's settings as the types they are asked in (an ID property keeps a
+            # bool as an int): a bake and its recorded settings give one digest.
+            refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
+                          int(self.settings.get("refine_max_vertices", 0)))
+            arguments = dict(self.bake_arguments(), refine=refinement, lightmap=int(self.settings.get("lightmap", 0)))
+            for key, value in sorted(arguments.items()):
+                digest.update(key.encode())
+                digest.update(np.ascontiguousarray(value).tobytes() if isinstance(value, np.ndarray)
+                              else repr(value).encode())
+            self._inputs = digest.hexdigest()
+        return self._inputs
+
+    @property
+    def automatic(self):
+        """Whether the automatic mode chooses its settings (choose(), before the bake)."""
+        return self.settings["method"] == analysis.AUTOMATIC
+
+    def occluders(self):
+        """bake_transfer's occluder keywords ({} without occluders)."""
+        if self.occluder_vertices is None:
+            return {}
+        return {"occluder_vertices": self.occluder_vertices,
+                "occluder_triangles": self.occluder_triangles}
+
+    def occluder_parts(self):
+        """The occluders as a list of (vertices, triangles) for geometry.join: [] without any."""
+        return [] if self.occluder_vertices is None else [(self.occluder_vertices, self.occluder_triangles)]
+
+    def choose(self, stop):
+        """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
+        choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
+                                 lobes.Lobes.of_bake(self.settings), stop,
+                                 fitted=bool(self.settings.get("least_squares")),
+                                 texels=lightmap.expected_texels(int(self.settings.get("lightmap", 0))))
+        per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
+        self.settings.update(
+            per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
+            method=choice.setting.method, light_order=choice.setting.light_order,
+            visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
+            predicted_error=float(choice.error),
+            frame_terms=int(choice.frame_terms))
+        self.predicted_error = float(choice.error)
+
+    def adopt(self, settings, predicted_error):
+        """Takes over an automatic choice already made for this object (the prediction's), with
+        this bake's own shape."""
+        self.settings = dict(settings, shape=self.settings["shape"])
+        self.predicted_error = predicted_error
+
+    def predict(self, stop):
+        """The predicted error of its settings (any thread; the bake-time predictor's)."""
+        self.predicted_error = analysis.predict(self.analysis, self.geometry, self.occluders(),
+                                                self.settings, stop)
+
+    @property
+    def lightmap_size(self):
+        """The side of the texture-space data the bake adds: asked for, and a method whose data
+        texels can hold (once an automatic task has chosen one); 0 for none."""
+        size = int(self.settings.get("lightmap", 0))
+        return size if size > 0 and lightmap.applies(methods.get(self.settings["method"])) else 0
+
+    @property
+    def bakes_lightmap(self):
+        """Whether the bake adds texture-space data (lightmap_size, the copy unwrapped by prepare)."""
+        return self.lightmap_size > 0 and self.geometry.lightmap_uvs is not None
+
+    @property
+    def fits_least_squares(self):
+        """Whether the bake fits its data by least squares: Least Squares on, and a method it fits
+        (once an automatic task has chosen one); not with texture-space data, which the shading
+        reads instead of the vertices'."""
+        return (bool(self.settings.get("least_squares")) and not self.lightmap_size
+                and least_squares.applies(methods.get(self.settings["method"])))
+
+    def bake(self, sd, progress):
+        """sdnative.bake_transfer of the baked copy (any thread), least-squares fitted when the
+        settings ask for it and the method's data can be (bake/least_squares.py), and its texels
+        under "lightmap" (bake_lightmap) when it bakes texture-space data. Returns the result dict."""
+        geometry = self.baked
+        points, normals, triangles = geometry.vertices, geometry.normals, geometry.triangles
+        if self.bakes_lightmap:
+            plan = self.lightmap_texels()   # refused before anything is baked when too large
+            result = dict(sd.bake_transfer(points, normals, triangles, progress=share(progress, 0.0, TEXELS_START),
+                                           **self.bake_arguments()))
+            result["lightmap"] = self.bake_lightmap(sd, plan, share(progress, TEXELS_START, 1.0))
+            return result
+        if not self.fits_least_squares:
+            return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
+        points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
+        result = dict(sd.bake_transfer(points, normals, triangles, progress=share(progress, 0.0, FIT_START),
+                                       **self.bake_arguments()))
+        return least_squares.fit(sd, result, geometry.vertices, geometry.triangles,
+                                 progress=share(progress, FIT_START, 1.0))
+
+    def lightmap_texels(self):
+        """The copy's lightmap texels (bake/lightmap.py): (entries, triangle, barycentric,
+        dilation sources, seconds taken). Raises BakeError when the texels stored would not fit
+        one GPU texture."""
+        start = time.perf_counter()
+        size, method = self.lightmap_size, methods.get(self.settings["method"])
+        entries, triangle, barycentric = lightmap.texels(self.baked.lightmap_corner_uvs, size, size)
+        sources = lightmap.dilation_sources(entries, size, size)
+        count = lightmap.data_entries(method, int(self.settings["light_order"]),
+                                      int(self.settings["visibility_order"]), len(lightmap.stored(sources)))
+        if count > lightmap.MAX_DATA_TEXELS:
+            raise BakeError("a %d x %d lightmap of %s needs %d data texels, more than a GPU texture holds "
+                            "(%d): choose a smaller lightmap" % (size, size, method.label, count,
+                                                                 lightmap.MAX_DATA_TEXELS))
+        return entries, triangle, barycentric, sources, time.perf_counter() - start
+
+    def bake_lightmap(self, sd, texels, progress):
+        """The texels (lightmap_texels) baked as points without faces against the copy's
+        triangles and the occluders, and spread over the texels stored (lightmap.stored: baked, or
+        within the dilation of a chart), in entry order, each with its source's values: {"size",
+        "baked" (the texels baked), "stored" (the entries stored), "positions" (in the local
+        frame), "normals", "values" (the linear arrays of bake_transfer's result),
+        "seconds" (with lightmap_texels')}."""
+        entries, triangle, barycentric, sources, seconds = texels
+        start = time.perf_counter() - seconds
+        size = self.lightmap_size
+        geometry = self.baked
+        points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
+                                                 triangle, barycentric)
+        # the same points in the local frame (what the baked mesh's positions are in)
+        positions = lightmap.blend(geometry.positions, geometry.triangles, triangle, barycentric)
+        arguments = self.bake_arguments()
+        vertices, triangles = geometry_module.join([(geometry.vertices, geometry.triangles)] + self.occluder_parts())
+        arguments.update(occluder_vertices=vertices, occluder_triangles=triangles)
+        result = dict(sd.bake_transfer(points, normals, np.zeros((0, 3), np.int32), progress=progress,
+                                       **arguments))
+        spread = functools.partial(lightmap.spread, entries=entries, sources=sources)
+        return {"size": size, "baked": len(entries), "stored": lightmap.stored(sources),
+                "positions": spread(positions), "normals": spread(result["normals"]),
+                "values": {key: spread(result[key]) for key in least_squares.FITTED if result.get(key) is not None},
+                "seconds": time.perf_counter() - start}
+
+    def refine(self, sd, progress):
+        """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
+        (refine.py, recorded in `refinement`) tested against this task's light and
+        occluders with common rays. progress(done, total) as bake_transfer's, over all levels."""
+        s = self.settings
+        self.baked = self.geometry
+        if not s.get("refine") or self.lightmap_size:
+            return
+        kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
+                  "transfer_order": refine.CRITERION_ORDER, "common_rotation": True}
+        levels = []
+
+        def bake(vertices, normals, triangles, rest_vertices, rest_triangles):
+            level = len(levels)
+            levels.append(level)
+
+            def level_progress(done, total):   # each level a share of one bar
+                return progress(level * total + done, refine.MAX_LEVELS * total)
+
+            others, other_triangles = geometry_module.join([(rest_vertices, rest_triangles)] + self.occluder_parts())
+            extra = {} if others is None else {"occluder_vertices": others, "occluder_triangles": other_triangles}
+            return sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs, **extra,
+                                    progress=level_progress)["transfer"]
+
+        weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
+        self.refinement = refine.refine(self.geometry.surface(), bake, weights,
+                                        float(s["refine_target"]), int(s["refine_max_vertices"]))
+        if self.refinement.levels:
+            self.baked = self.geometry.refined(self.refinement.surface)
+
+    def bake_arguments(self):
+        s = self.settings
+        method = methods.get(s["method"])
+        kwargs = {"rays": int(s["rays"]), "seed": int(s["seed"])}
+        kwargs.update(method.bake_arguments(int(s["light_order"]), int(s["visibility_order"])))
+        kwargs.update(self.occluders())
+        return kwargs
+
+    def record(self):
+        """The BakeRecord of the finished bake: its settings and what it found (the floats per
+        vertex are store.baked's, which writes them)."""
+        result = self.result
+        n = len(self.baked.vertices)
+        summary = {
+            "seconds": float(result.get("seconds", 0.0)) + self.refine_seconds + self.geometry.unwrap_seconds,
+            "vertices": int(n),
+            "bake_id": uuid.uuid4().hex,
+            "inputs": self.inputs_hash(),
+        }
+        refinement = self.refinement
+        if refinement is not None:
+            summary.update(unrefined_vertices=int(len(self.geometry.vertices)),
+                           refine_seconds=float(self.refine_seconds), refine_levels=int(refinement.levels),
+                           refine_worst_left=float(refinement.worst_left),
+                           refine_estimated_left=float(refinement.estimated_left),
+                           refine_budget_reached=bool(refinement.budget_reached))
+        texels = result.get("lightmap")
+        if texels is not None:   # the unwrap (step 1) and the texels' bake
+            summary.update(lightmap_texels=int(texels["baked"]), lightmap_stored=int(len(texels["stored"])),
+                           lightmap_seconds=float(texels["seconds"]) + self.geometry.unwrap_seconds)
+        offsets = result.get("design_offsets")
+        if offsets is not None:
+            counts = np.diff(np.asarray(offsets))
+            summary["design_nodes_max"] = int(counts.max()) if counts.size else 0
+            summary["design_nodes_mean"] = float(counts.mean()) if counts.size else 0.0
+        return BakeRecord.from_dict(dict(self.settings, **summary))

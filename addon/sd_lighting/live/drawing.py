@@ -1,0 +1,320 @@
+"""Live shading: the viewport's POST_VIEW draw handler, and drawing baked objects for any view.
+
+Every baked, visible object is drawn with its baked mesh's geometry times the object's world
+matrix, with the shader variant of its bake (gpu_shading.py), depth-tested against the scene.
+Per frame and object, the environment's coefficients are rotated on the CPU to those of
+x -> L(g R x): g the environment rotation (environment.py), R the rotation of the object's matrix
+(the bake's directions are in the object's bake frame: bake/geometry.py). The eye is the viewport's own
+camera.
+
+What takes longer than a frame is computed in worker threads (background.py): the lobe
+designs of MSD (12) (gpu_shading.lobe_designs; the Gauss rule shades meanwhile) and the choice of
+the ringing window (environment.window_choices; no window meanwhile). The interactive draw never
+waits for them; while one is pending, a timer redraws the viewports when it is done. What is not
+interactive - a preview render, cpu_reference and gpu_vertex_values for the tests - waits for the
+ringing window (wait=True), so that its result does not depend on timing.
+
+Colour: the shader writes scene-linear radiance times 2^exposure (the scene's Film/colour
+management exposure); the viewport shows what a POST_VIEW handler draws with the sRGB curve
+only, i.e. the Standard view transform, whatever the scene's view transform is.
+"""
+
+import logging
+
+import numpy as np
+
+from .. import methods, native
+from ..scene import environment, materials, transforms
+from ..scene.view import View
+from ..store import attributes, baked
+from ..store.record import RecordError
+from . import gpu_shading
+
+log = logging.getLogger(__name__)
+
+DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins over Blender's own draw
+
+_handler = None
+_objects = {}         # object name -> (key, ObjectData)
+_generations = ()     # the background work's generations the viewports last showed
+last_error = ""
+
+
+def clear_cache():
+    _objects.clear()
+
+
+def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False):
+    """The GPU data of the object's bake (cached until the bake or the mode changes), or None."""
+    mesh = baked.baked_mesh(obj)
+    if mesh is None:
+        return None
+    key = (mesh.name, baked.mesh_record(mesh).bake_id, per_pixel, vertex_target, band_limited_texture)
+    cache_key = (obj.name, vertex_target)
+    cached = _objects.get(cache_key)
+    if cached is not None and cached[0] == key:
+        return cached[1]
+    data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target,
+                                  band_limited_texture=band_limited_texture)
+    _objects[cache_key] = (key, data)
+    return data
+
+
+def baked_objects(scene, view_layer=None):
+    """Visible objects with a bake whose record can be read (the panel says to bake the others
+    again)."""
+    out = []
+    for obj in scene.objects:
+        try:
+            visible = obj.visible_get(view_layer=view_layer) if view_layer else obj.visible_get()
+        except (RuntimeError, TypeError):
+            visible = False
+        if visible and _readable(obj):
+            out.append(obj)
+    return out
+
+
+def _readable(obj):
+    try:
+        return baked.record(obj) is not None
+    except RecordError:
+        return False
+
+
+def ringing_setting(scene):
+    """The scene's ringing window setting, as scene/ringing.WINDOWS names it."""
+    settings = getattr(scene, "sd_lighting", None)
+    return settings.ringing_window.lower() if settings is not None else "automatic"
+
+
+def shading_light(scene, source, lobe, exponent, order, wait):
+    """The unrotated L of order s the live shading uses for a bake's lobe: windowed against
+    ringing with the scene's setting (environment.windowed_light; wait=False: without a window
+    until it is chosen). [(s+1)^2, 3] float64."""
+    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene), wait)
+
+
+def ringing_choice(scene, obj, wait=False):
+    """The ringing window the live shading uses for the object's bake (its choice dict), or None
+    without a bake or (wait=False) while it is chosen. Raises environment.Unavailable without an
+    environment."""
+    record = baked.record(obj)
+    if record is None:
+        return None
+    return environment.ringing_window(environment.source(scene), record.lobe, record.exponent,
+                                      record.light_order, ringing_setting(scene), wait)
+
+
+def local_light(scene, obj, data, wait, source=None, rotation=None):
+    """Coefficients of x -> L(g R x) for the object's data (ObjectData), windowed (shading_light):
+    [(s+1)^2, 3] float64; and g R."""
+    source = source or environment.source(scene)
+    g = environment.rotation_matrix(scene) if rotation is None else rotation
+    gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
+    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait)
+    return native.get().rotated_environment_sh(light, gr), gr
+
+
+def use_band_limited_texture(scene):
+    """The scene's option: methods that can look L~ up in the band-limited texture do."""
+    settings = getattr(scene, "sd_lighting", None)
+    return bool(settings is not None and settings.band_limited_texture)
+
+
+def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, **kwargs):
+    """(uniform block, band-limited texture or None) of one draw of the object's data. wait: as
+    shading_light; without waiting, what is still pending is watched (_watch_background)."""
+    light, gr = local_light(scene, obj, data, wait, source, rotation)
+    block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
+                             light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
+    texture = None
+    if data.uses_band_limited_texture:
+        source = source or environment.source(scene)
+        texture = gpu_shading.band_limited_texture(
+            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
+    if not wait:
+        _watch_background()
+    return block, texture
+
+
+def exposure_scale(scene):
+    return 2.0 ** float(scene.view_settings.exposure)
+
+
+def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False):
+    """Draws the baked objects into the bound framebuffer with the current GPU state. per_pixel:
+    every object per pixel (the panel's Per Pixel), else those whose automatic choice says so.
+    wait=False (the interactive draw) shades with no ringing window until it is chosen; True
+    waits for it."""
+    source = environment.source(scene)
+    g = environment.rotation_matrix(scene)
+    band_limited_texture = use_band_limited_texture(scene)
+    for obj in objects:
+        record = baked.record(obj)
+        data = object_data(obj, per_pixel=per_pixel or bool(record and record.per_pixel),
+                           band_limited_texture=band_limited_texture)
+        if data is None:
+            continue
+        block, texture = _frame(scene, obj, data, view, scale, wait, source, g, depth_bias=depth_bias)
+        data.draw(block, texture)
+
+
+def draw_background(scene, view, scale):
+    """The scene's environment behind what is drawn (the World Background option): L(g d) in the
+    direction d of each empty pixel, g the environment rotation, times scale."""
+    gpu_shading.draw_background(environment.source(scene), view, environment.rotation_matrix(scene), scale)
+
+
+def tag_viewports():
+    """Redraws every 3D viewport (and its sidebar)."""
+    import bpy
+    for window in bpy.context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type == 'VIEW_3D':
+                area.tag_redraw()
+
+
+def _background_work():
+    """What the draw asks worker threads for: the lobe designs and the ringing window choices."""
+    return (gpu_shading.lobe_designs(), environment.window_choices())
+
+
+def _poll_background():
+    """Timer while background work is pending: redraws the viewports (and the panel's status)
+    when some of it is done; ends when none is pending."""
+    global _generations
+    work = _background_work()
+    generations = tuple(w.generation for w in work)
+    if generations != _generations:
+        _generations = generations
+        tag_viewports()
+    return 0.25 if any(w.pending() for w in work) else None
+
+
+def _watch_background():
+    import bpy
+    if any(w.pending() for w in _background_work()) and not bpy.app.timers.is_registered(_poll_background):
+        bpy.app.timers.register(_poll_background, first_interval=0.25)
+
+
+def _draw_handler():
+    global last_error
+    import bpy
+    import gpu
+    context = bpy.context
+    scene = context.scene
+    settings = getattr(scene, "sd_lighting", None)
+    if settings is None or not settings.live_shading or context.region_data is None:
+        return
+    try:
+        objects = baked_objects(scene, context.view_layer)
+        if not objects and not settings.world_background:
+            return
+        view = View.from_region(context.region_data)
+        gpu.state.depth_test_set('LESS_EQUAL')
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set('NONE')
+        draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
+        if settings.world_background:
+            draw_background(scene, view, exposure_scale(scene))
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set('NONE')
+        last_error = ""
+    except Exception as exc:  # never raise into Blender's draw loop; the panel shows it
+        message = "%s: %s" % (type(exc).__name__, exc)
+        if message != last_error:
+            log.error("live shading failed: %s", message)
+        last_error = message
+
+
+# --------------------------------------------------------------------------------------------
+# Checks against the CPU evaluator (for the tests)
+
+def cpu_reference(scene, obj, view, texels=False):
+    """B at every vertex of the object's bake by sdnative.shade (float64), for the same view,
+    environment (windowed against ringing: waits for the window's choice) and rotation the live
+    shading uses, clamped at 0 per channel as the shader shows it (displayed radiance is never
+    negative; sdnative.shade itself is the raw formula); with a Lambert lobe besides the Phong one,
+    the sum of the two, as the shader's vertex target shows it; exposure not applied. [N, 3].
+    texels: at every texel its texture-space data store instead (each with its own normal and
+    view), in the order of attributes.read_texels_entries. [K, 3]."""
+    mesh = baked.baked_mesh(obj)
+    record = baked.mesh_record(mesh)
+    method = methods.get(record.method)
+    if texels:
+        mesh = baked.lightmap_mesh(mesh)
+        if mesh is None:
+            raise ValueError("%s's bake has no texture-space data" % obj.name)
+    data = attributes.read(mesh, record)
+    data["visibility_order"] = record.visibility_order
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    world = transforms.transform_points(matrix, attributes.read_positions(mesh))
+    source = environment.source(scene)
+    light = shading_light(scene, source, record.lobe, record.exponent, record.light_order, True)
+    g = environment.rotation_matrix(scene)
+    r = transforms.rotation_part(matrix)
+    kwargs = {key: data[key] for key in method.shade_inputs}
+    return sum(np.maximum(native.get().shade(method.id, light, data["normals"],
+                                             views=view.view_directions(world, r.T), rotation=g @ r,
+                                             lobe=lobe, exponent=exponent, **kwargs), 0.0)
+               for lobe, exponent in record.lobes.shaded())
+
+
+def gpu_vertex_values(scene, obj, view, per_pixel=False, wait=True):
+    """B at every vertex as the shader computes it (exposure not applied): each vertex is drawn
+    as one pixel of an RGBA32F target and read back. wait: as draw_objects (True: with the ringing
+    window cpu_reference uses; False: as the interactive draw). Needs a GPU context. [N, 3]
+    float32."""
+    import gpu
+    data = object_data(obj, per_pixel=per_pixel, vertex_target=True,
+                       band_limited_texture=use_band_limited_texture(scene))
+    n = data.vertex_count
+    width = min(n, 1024)
+    height = (n + width - 1) // width
+    block, texture = _frame(scene, obj, data, view, 1.0, wait, target=(width, height))
+    offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
+    try:
+        values = draw_offscreen(offscreen, lambda: data.draw(block, texture), depth_test=False)
+    finally:
+        offscreen.free()
+    return values.reshape(-1, 4)[:n, :3]
+
+
+def draw_offscreen(offscreen, draw, depth_test=True, region=None):
+    """Clears the offscreen target (colour 0, depth 1), calls draw() into it - depth-tested
+    (LESS_EQUAL, written) or not, no blending, no culling - and reads back the region
+    (x, y, width, height; default: all) as float32 [height, width, 4], rows bottom-first."""
+    import gpu
+    x, y, width, height = region or (0, 0, offscreen.width, offscreen.height)
+    with offscreen.bind():
+        framebuffer = gpu.state.active_framebuffer_get()
+        framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+        gpu.state.depth_test_set('LESS_EQUAL' if depth_test else 'NONE')
+        gpu.state.depth_mask_set(depth_test)
+        gpu.state.blend_set('NONE')
+        gpu.state.face_culling_set('NONE')
+        gpu.state.point_size_set(1.0)
+        draw()
+        pixels = framebuffer.read_color(x, y, width, height, 4, 0, 'FLOAT')
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set('NONE')
+    pixels.dimensions = width * height * 4
+    return np.array(pixels, dtype=np.float32).reshape(height, width, 4)
+
+
+def register():
+    global _handler
+    import bpy
+    if _handler is None:
+        _handler = bpy.types.SpaceView3D.draw_handler_add(_draw_handler, (), 'WINDOW', 'POST_VIEW')
+
+
+def unregister():
+    global _handler
+    import bpy
+    if _handler is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_handler, 'WINDOW')
+        _handler = None
+    if bpy.app.timers.is_registered(_poll_background):
+        bpy.app.timers.unregister(_poll_background)
+    clear_cache()

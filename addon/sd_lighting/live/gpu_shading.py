@@ -1,0 +1,472 @@
+"""The GPU side of the live shading: compiled shader variants (live/shader_variant.py), and the
+per-object data they read.
+
+What a draw reads:
+- vertex attributes `pos` (the baked mesh's positions, in the object's local frame) and `nrm`
+  (the `sd_normal` it was baked with, in its bake frame: bake/geometry.py); per-pixel variants also
+  `corners` (the triangle's three vertex indices, as floats: exact below 2^24 vertices) and
+  `bary` (the corner's barycentric coordinates);
+- per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
+  [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
+  gl_VertexID (the index of an indexed batch) - the method's stored array (store/bake_data.py);
+- texture-space data (a bake with a lightmap, bake/lightmap.py): the same texels, one entry per
+  stored lightmap texel (the texels' mesh's attributes), found through the R32F index map
+  `sd_lightmap_index` and read per pixel at the vertex attribute `lightmap_uv` (the baked mesh's
+  UV map "SD Lightmap") instead of `corners` and `bary`;
+- the uniform block `sd` (Variant.frame_fields), rebuilt every frame; for MSD (12) it holds the
+  lobes' designs (live/lobe_designs.py: the Gauss product rule until the small design, built in a
+  worker thread, is there; then the variant is swapped);
+- for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
+- with the band-limited texture option (methods that can read it), the band-limited environment
+  L~ (unrotated) as an equirect RGBA32F texture `sd_band_limited_texture`, looked up at g R x
+  instead of summing (s+1)^2 SH terms per direction;
+- the albedo B is multiplied by (materials.py), read from the object's materials at every draw:
+  one colour per material slot in the block, a vertex attribute `material_slot` where the bake
+  kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`; for
+  lobes from Principled BSDFs, each slot's lobe weights (scene/lobes.py). An object with neither
+  weights nor a colour other than white gets a variant without any of it.
+Variants are compiled on first use and cached.
+"""
+
+import dataclasses
+import os
+
+import numpy as np
+
+from .. import compat, methods, native
+from ..scene import environment, lobes, materials, transforms
+from ..store import attributes, baked
+from ..bake import lightmap
+from . import lobe_designs as lobe_design_cache
+from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
+from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
+                             LIGHTMAP_INDEX_SAMPLER, Variant, band_limited_texture_size)
+
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
+EQUIRECT_FILE = "sd_equirect.glsl"
+SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.glsl")
+BACKGROUND_FILES = ("sd_background_vert.glsl", "sd_background_frag.glsl")
+ALL_FILES = (EQUIRECT_FILE,) + SHADER_FILES + BACKGROUND_FILES
+BACKGROUND_SAMPLER = "sd_environment"
+
+_shaders = {}                 # Variant -> (GPUShader, interface, create-info)
+_gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
+_lobe_designs = None          # LobeDesigns, made on first use
+_band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
+_background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
+
+
+def shader_directory():
+    """shaders/ inside the add-on (the zip), else the repository's shaders/."""
+    for directory in (os.path.join(_PACKAGE, "shaders"), os.path.join(_PACKAGE, "..", "..", "shaders")):
+        if all(os.path.isfile(os.path.join(directory, f)) for f in ALL_FILES):
+            return os.path.normpath(directory)
+    raise FileNotFoundError("the add-on's GLSL files (%s) are missing" % ", ".join(ALL_FILES))
+
+
+def _read_shader(name):
+    with open(os.path.join(shader_directory(), name), encoding="utf-8") as f:
+        return f.read()
+
+
+def stage_sources(files):
+    """(vertex, fragment) source of a program of `files` (library, vertex, fragment; or vertex,
+    fragment), each after sd_equirect.glsl, as create-infos take them (after their declarations)."""
+    *library, vert, frag = (_read_shader(name) for name in (EQUIRECT_FILE,) + tuple(files))
+    prefix = "\n".join(library) + "\n"
+    return prefix + vert, prefix + frag
+
+
+def clear_cache():
+    global _lobe_designs
+    _shaders.clear()
+    _gaunt_textures.clear()
+    if _lobe_designs is not None:
+        _lobe_designs.close()
+        _lobe_designs = None
+    _band_limited_textures.clear()
+    _background.clear()
+
+
+def shader_program(variant):
+    """The compiled GPUShader of a variant (cached)."""
+    return _compile(variant)[0]
+
+
+def _compile(variant):
+    compiled = _shaders.get(variant)
+    if compiled is not None:
+        return compiled
+    import gpu
+    info = gpu.types.GPUShaderCreateInfo()
+    for name, value in variant.defines(native.get().sh_recurrence_constants).items():
+        info.define(name, value)
+    info.typedef_source(variant.frame_struct())
+    info.uniform_buf(0, "SdFrameData", "sd")
+    for slot, name in variant.samplers():
+        info.sampler(slot, 'FLOAT_2D', name)
+    for location, (glsl_type, name) in enumerate(variant.vertex_inputs()):
+        info.vertex_in(location, glsl_type.upper(), name)
+    interface = gpu.types.GPUStageInterfaceInfo("sd_interface")
+    for qualifier, glsl_type, name in variant.interface():
+        getattr(interface, qualifier)(glsl_type.upper(), name)
+    program = _create(info, interface, SHADER_FILES)
+    _shaders[variant] = (program, interface, info)  # keep the create-infos alive with the shader
+    return _shaders[variant]
+
+
+def _create(info, interface, files):
+    """Compiles a create-info given its declarations, with the stage interface, one fragment
+    output fragColor and the sources of `files` (stage_sources)."""
+    import gpu
+    info.vertex_out(interface)
+    info.fragment_out(0, 'VEC4', "fragColor")
+    vert, frag = stage_sources(files)
+    info.vertex_source(vert)
+    info.fragment_source(frag)
+    return gpu.shader.create_from_info(info)
+
+
+def bind(program):
+    """Binds one of this module's programs for a draw. Blender skips a bind when the context's
+    last bound shader is at the same address (GPU_shader_bind compares pointers, and unbinding is
+    a no-op in release builds), and a program compiled after clear_cache freed the others can get
+    a freed one's address: on OpenGL the draw then ran whatever program GL had in use - after a
+    file reload, test_default_scene's Ground drew with its own white variant's program (bpy 5.0.1;
+    blender_tests/test_shader_rebind.py). A built-in shader lives as long as Blender, so binding
+    one first makes the comparison fail."""
+    compat.uniform_color_shader().bind()
+    program.bind()
+
+
+def _texture(width, height, texels, format='RGBA32F'):
+    import gpu
+    texels = np.ascontiguousarray(texels, dtype=np.float32).ravel()
+    buffer = gpu.types.Buffer('FLOAT', texels.size, texels)
+    return gpu.types.GPUTexture((width, height), format=format, data=buffer)
+
+
+def float_texture(texels):
+    """An RGBA32F texture holding float32 [M, 4] texels row-major, TEXTURE_WIDTH wide."""
+    import gpu
+    texels = np.ascontiguousarray(texels, dtype=np.float32).reshape(-1, 4)
+    count = max(len(texels), 1)
+    width = TEXTURE_WIDTH
+    height = (count + width - 1) // width
+    limit = gpu.capabilities.max_texture_size_get()
+    if height > limit:
+        raise ValueError("per-vertex data too large for one texture (%d texels)" % count)
+    padded = np.zeros((width * height, 4), dtype=np.float32)
+    padded[:len(texels)] = texels
+    return _texture(width, height, padded)
+
+
+def band_limited_texture(source, light):
+    """The band-limited environment L~ of the unrotated coefficients `light` ([(s+1)^2, 3]: the
+    source's, strength and ringing window applied, drawing.shading_light) as an RGBA32F equirect
+    texture of band_limited_texture_size(s), Blender's orientation, rows bottom-first as GPU
+    textures hold them (v = 0 at the south pole) (cached per source and coefficients)."""
+    light = np.ascontiguousarray(light, dtype=np.float64)
+    order = int(round(np.sqrt(light.shape[0]))) - 1
+    width, height = band_limited_texture_size(order)
+    key = (source.key, light.tobytes(), width, height)
+    texture = _band_limited_textures.get(key)
+    if texture is None:
+        image = np.asarray(native.get().band_limited_texture(light, width, height),
+                           dtype=np.float32).reshape(height, width, 3)
+        texels = np.zeros((height, width, 4), dtype=np.float32)
+        texels[..., :3] = image[::-1]     # sdnative's rows are top-first
+        texels[..., 3] = 1.0
+        texture = _texture(width, height, texels)
+        _band_limited_textures[key] = texture
+    return texture
+
+
+def _background_shader():
+    """(GPUShader, batch of its screen-covering triangle) of the world background (compiled once)."""
+    compiled = _background.get("shader")
+    if compiled is None:
+        import gpu
+        info = gpu.types.GPUShaderCreateInfo()
+        info.define("SD_EQUIRECT_MAP", BACKGROUND_SAMPLER)
+        info.push_constant('MAT4', "sd_inverse_view_projection")
+        info.push_constant('MAT4', "sd_to_environment")
+        info.push_constant('FLOAT', "sd_scale")
+        info.sampler(0, 'FLOAT_2D', BACKGROUND_SAMPLER)
+        info.vertex_in(0, 'VEC2', "pos")
+        interface = gpu.types.GPUStageInterfaceInfo("sd_background_interface")
+        interface.smooth('VEC2', "sd_ndc")
+        shader = _create(info, interface, BACKGROUND_FILES)
+        batch = make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
+        compiled = _background["shader"] = (shader, interface, info, batch)   # infos kept alive
+    return compiled[0], compiled[3]
+
+
+def draw_background(source, view, to_environment, scale):
+    """Draws the environment of `source` (environment.Source) behind everything drawn so far:
+    in each pixel L(g d), d its ray (view: view.View), g = to_environment, times `scale` (the
+    exposure), at the far plane - with the depth test LESS_EQUAL it fills only what is empty."""
+    import gpu
+    from mathutils import Matrix
+    shader, batch = _background_shader()
+    texture = _background.get(source.key)
+    if texture is None:
+        texels = environment.background_texels(source)
+        height, width, _ = texels.shape
+        rgba = np.ones((height, width, 4), dtype=np.float32)
+        rgba[..., :3] = texels
+        texture = _background[source.key] = _texture(width, height, rgba)
+    rotation = np.eye(4)
+    rotation[:3, :3] = to_environment
+    bind(shader)
+    shader.uniform_float("sd_inverse_view_projection", Matrix(np.linalg.inv(view.view_projection).tolist()))
+    shader.uniform_float("sd_to_environment", Matrix(rotation.tolist()))
+    shader.uniform_float("sd_scale", float(scale))
+    shader.uniform_sampler(BACKGROUND_SAMPLER, texture)
+    gpu.state.depth_mask_set(False)
+    batch.draw(shader)
+
+
+def gaunt_texture(light_order, visibility_order):
+    """Texels (a, b, c, G) of every non-zero real Gaunt coefficient for eq. (10) (cached)."""
+    key = (light_order, visibility_order)
+    if key not in _gaunt_textures:
+        indices, values = native.get().gaunt_coefficients(light_order, visibility_order,
+                                                           light_order + visibility_order)
+        texels = np.empty((len(values), 4), dtype=np.float32)
+        texels[:, :3] = indices
+        texels[:, 3] = values
+        _gaunt_textures[key] = (float_texture(texels), len(values))
+    return _gaunt_textures[key]
+
+
+def lobe_designs():
+    """The session's lobe designs (live/lobe_designs.py), cached in the user's cache folder."""
+    global _lobe_designs
+    if _lobe_designs is None:
+        _lobe_designs = lobe_design_cache.LobeDesigns(native.get(), lobe_design_cache.default_directory())
+    return _lobe_designs
+
+
+def lobe_design(lobe, exponent, degree):
+    """The lobe's design of the degree for eq. (12): a lobe_designs.Design, final or the Gauss
+    rule standing in while the final one builds; never waits for a build."""
+    return lobe_designs().get(lobe, exponent, degree)
+
+
+def lobe_design_status():
+    """Lines for the panel: the lobe designs being built or whose build failed."""
+    if _lobe_designs is None:
+        return []
+    lines = []
+    for key in _lobe_designs.pending():
+        lines.append("Building the lobe design of %s, degree %d (Gauss rule meanwhile)"
+                     % (lobes.label(key.lobe, key.exponent), key.degree))
+    for key, why in _lobe_designs.failures().items():
+        lines.append("Lobe design of %s, degree %d failed: %s"
+                     % (lobes.label(key.lobe, key.exponent), key.degree, why))
+    return lines
+
+
+def make_batch(primitive, content, indices=None):
+    """A GPUBatch of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
+    here: gpu_extras' batch_for_shader asks the shader for its attributes, which Blender 3.4
+    reports wrongly for some programs (names and types out of order). Only F32 x 1-4 with fetch
+    mode FLOAT: 4.5 deprecates formats that are not 4-byte aligned, wider than 4 components or
+    INT_TO_FLOAT, and 5.0 rejects the last two."""
+    import gpu
+    vertex_format = gpu.types.GPUVertFormat()
+    arrays = {}
+    for name, values in content.items():
+        values = np.ascontiguousarray(values, dtype=np.float32)
+        values = values.reshape(len(values), -1)
+        if not 1 <= values.shape[1] <= 4:
+            raise ValueError("vertex attribute %s has %d components (1-4 allowed)" % (name, values.shape[1]))
+        arrays[name] = values
+        vertex_format.attr_add(id=name, comp_type='F32', len=values.shape[1], fetch_mode='FLOAT')
+    count = len(next(iter(arrays.values())))
+    vertex_buffer = gpu.types.GPUVertBuf(vertex_format, count)
+    for name, values in arrays.items():
+        vertex_buffer.attr_fill(name, values)
+    if indices is None:
+        return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer)
+    index_buffer = gpu.types.GPUIndexBuf(type=primitive, seq=np.ascontiguousarray(indices, dtype=np.int32))
+    return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer, elem=index_buffer)
+
+
+class ObjectData:
+    """GPU data of one baked mesh: batch, per-vertex texture, shader variant, lobe constants."""
+
+    def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False):
+        record = baked.mesh_record(mesh)
+        self.method = methods.get(record.method)
+        self.lobes = record.lobes
+        self.lobe, self.exponent = self.lobes.lobe, self.lobes.exponent
+        self.light_order, self.visibility_order = record.light_order, record.visibility_order
+        self.vertex_count = len(mesh.vertices)
+        s, sv = self.light_order, self.visibility_order
+
+        # Texture-space data, where the bake has them (the vertex target reads the vertices')
+        texels_mesh = None if vertex_target else mesh.get(LIGHTMAP)
+        if texels_mesh is None or LIGHTMAP_UV not in mesh.uv_layers or self.method.data is None:
+            texels_mesh = None
+        self.lightmap = (record.lightmap,) * 2 if texels_mesh is not None else ()
+        per_pixel = per_pixel or bool(self.lightmap)
+        self.lightmap_index = None
+        if self.lightmap:
+            index = lightmap.index_map(attributes.read_texels_entries(texels_mesh), *self.lightmap)
+            self.lightmap_index = _texture(self.lightmap[0], self.lightmap[1], index, 'R32F')
+        self.data_texture, stride = None, 0
+        if self.method.data is not None:
+            texels = attributes.read_texels(mesh if texels_mesh is None else texels_mesh, self.method.data)
+            stride = texels.shape[1]
+            self.data_texture = float_texture(texels.reshape(-1, 4))
+        self.gaunt_texture, gaunt_count = (None, 0)
+        if self.method.gaunt_table:
+            self.gaunt_texture, gaunt_count = gaunt_texture(s, sv)
+        self.designs = self._designs()
+        self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
+        design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
+        self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
+                               gaunt_count, per_pixel, vertex_target,
+                               band_limited_texture_size(s) if self.uses_band_limited_texture else (),
+                               lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
+                               diffuse_design_size=design_sizes[1], lightmap=self.lightmap)
+        self.shader = shader_program(self.variant)
+        per_lobe = 4 * self.variant.lobe_vec4s
+        self.lobe_factors = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
+        for k, (lobe, exponent) in enumerate(self.lobes.shaded()):
+            factors = native.get().zonal_coefficients(lobe, exponent, self.variant.lobe_order)
+            self.lobe_factors[k * per_lobe:k * per_lobe + len(factors)] = factors
+
+        positions = attributes.read_positions(mesh)
+        normals = attributes.read_normals(mesh)
+        slots, uvs = attributes.read_surface(mesh)
+        self.slot_count = int(slots.max()) + 1 if slots is not None and len(slots) else 1
+        self.has_uvs = uvs is not None
+        self.albedo_image = None
+        surface = {}    # per-vertex albedo inputs; the test target reads B alone
+        if slots is not None and not vertex_target:
+            surface["material_slot"] = slots
+        if uvs is not None and not vertex_target:
+            surface["uv"] = uvs
+        if vertex_target:
+            content = {"pos": positions, "nrm": normals}
+            if per_pixel:
+                index = np.arange(self.vertex_count, dtype=np.float32)
+                content["corners"] = np.repeat(index[:, None], 3, axis=1)
+                content["bary"] = np.tile(np.array([[1.0, 0.0, 0.0]], dtype=np.float32),
+                                          (self.vertex_count, 1))
+            self.batch = make_batch('POINTS', content)
+        else:
+            triangles = attributes.read_triangles(mesh)
+            if per_pixel:
+                corners = triangles.reshape(-1)
+                content = {"pos": positions[corners], "nrm": normals[corners]}
+                if self.lightmap:
+                    loops = attributes.read_triangle_loops(mesh).reshape(-1)
+                    content["lightmap_uv"] = attributes.read_loop_uvs(mesh, LIGHTMAP_UV)[loops]
+                else:
+                    content.update(corners=np.repeat(triangles.astype(np.float32), 3, axis=0),
+                                   bary=np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1)))
+                content.update({name: values[corners] for name, values in surface.items()})
+                self.batch = make_batch('TRIS', content)
+            else:
+                self.batch = make_batch('TRIS', dict({"pos": positions, "nrm": normals}, **surface),
+                                        indices=triangles)
+        self.ubo = None
+
+    def _designs(self):
+        """The lobes' designs for eq. (12) (methods with lobe_design), else []."""
+        if not self.method.lobe_design:
+            return []
+        degree = self.light_order + self.visibility_order
+        return [lobe_design(lobe, exponent, degree) for lobe, exponent in self.lobes.shaded()]
+
+    def _use_albedos(self, albedos):
+        """The block's albedo and lobe weight rows for the materials' current albedos
+        (materials.object_albedos), switching to the variant they need: none for a lobe without
+        weights whose albedos are all white. Returns {field: rows}."""
+        if self.variant.vertex_target:
+            return {}
+        rows = np.zeros((self.slot_count, 4))
+        rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
+        weights = np.tile(lobes.DIFFUSE_ONLY, (self.slot_count, 1))
+        image = None
+        for slot, albedo in enumerate(albedos[:self.slot_count]):
+            rows[slot, :3] = albedo.colour
+            weights[slot] = albedo.weights
+            if albedo.image is not None and self.has_uvs:
+                rows[slot, 3] = 1.0
+                image = albedo.image
+        white = not self.lobes.weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
+        variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
+                                      material_slots=not white and self.slot_count > 1,
+                                      albedo_texture=image is not None)
+        if variant != self.variant:
+            self.variant = variant
+            self.shader = shader_program(variant)
+            self.ubo = None
+        self.albedo_image = image
+        if white:
+            return {}
+        return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.weighted else {}))
+
+    def frame_block(self, model, view_projection, camera, light, local_to_environment,
+                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=()):
+        """The uniform block's bytes for one draw.
+
+        model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
+        w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
+        [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
+        for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
+        the object's materials.object_albedos (a slot without one: the 0.8 default surface). The
+        shader gets the eye relative to the object's origin, differenced here in float64 (far from
+        the world origin float32 world positions would round the view away)."""
+        self.refresh_design()
+        surface_rows = self._use_albedos(list(albedos))
+        camera = np.array(camera, dtype=np.float64)
+        if camera[3] > 0.5:
+            camera[:3] -= np.asarray(model, dtype=np.float64)[:3, 3]
+        values = {"model": model, "view_projection": view_projection,
+                  "world_to_local": transforms.rotation_part(model).T, "camera": camera,
+                  "params": (exposure_scale, target[0], target[1], depth_bias),
+                  "light": light, "lobe": self.lobe_factors}
+        if self.variant.band_limited_texture:
+            values["local_to_environment"] = local_to_environment
+        if self.designs:
+            values["design"] = np.concatenate([d.texels() for d in self.designs])
+        values.update(surface_rows)
+        return self.variant.frame_block(values)
+
+    def draw(self, block, band_limited_texture=None):
+        import gpu
+        buffer = gpu.types.Buffer('FLOAT', block.size, block)
+        if self.ubo is None:
+            self.ubo = gpu.types.GPUUniformBuf(buffer)
+        else:
+            self.ubo.update(buffer)
+        bind(self.shader)
+        self.shader.uniform_block("sd", self.ubo)
+        textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
+                    BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture,
+                    LIGHTMAP_INDEX_SAMPLER[1]: self.lightmap_index}
+        if self.variant.albedo_texture:
+            textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
+        for _, name in self.variant.samplers():
+            self.shader.uniform_sampler(name, textures[name])
+        self.batch.draw(self.shader)
+
+    def refresh_design(self):
+        """Swaps the final lobe designs in for the Gauss rules standing in, once they are built: a
+        variant of the new sizes and a new uniform buffer."""
+        if all(d.final for d in self.designs):
+            return
+        designs = self._designs()
+        if any(new is not old for new, old in zip(designs, self.designs)):
+            self.designs = designs
+            sizes = [len(d.weights) for d in designs] + [0]
+            self.variant = dataclasses.replace(self.variant, lobe_design_size=sizes[0],
+                                               diffuse_design_size=sizes[1])
+            self.shader = shader_program(self.variant)
+            self.ubo = None

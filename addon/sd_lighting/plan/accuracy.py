@@ -1,0 +1,202 @@
+"""The error each shading setting would have on an object, measured before its bake on a sample of
+its vertices against the Monte Carlo reference of eq. (1) (sdnative.reference): what the
+automatic mode chooses from (plan/automatic.py) and what the panel predicts.
+
+The sample is a few triangles drawn at random (plan/bake_time.sample_mesh) baked against the
+whole object and its occluders, so each sampled vertex sees what it sees in the bake. One bake at
+the largest orders serves every order: the baked arrays of order s, s' are prefixes of those of
+a higher order (the same rays project onto the same basis), so each setting is the shading of
+truncated arrays, no further rays. A method's error at its own orders mixes two parts, told
+apart by a second bake with another seed:
+- the truncation of L, V and the lobe at s, s' (and the missing shadows of the methods without V),
+  which more rays do not lower;
+- the bake's ray noise, which falls as 1/sqrt(rays) (the difference of the two seeds' results is
+  sqrt(2) times it).
+The reference's own noise is removed from the squared error (its variance is known), so a
+reference noisier than the target still measures it without bias.
+
+MSD (13) equals PRT (8) and MSD (12) equals PRT (10) for the same rays and orders (Theorems 2.2
+and 2.1), so their errors are those of the PRT forms, which need no designs.
+
+Nothing here needs Blender; the sdnative module is passed in.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import methods as method_table
+from . import bake_time
+
+SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
+REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
+REFERENCE_TRIANGLES = 16     # sampled triangles per reference call (cancel granularity)
+MAX_VISIBILITY_ORDER = 4     # the largest s' measured
+SAME_AS = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}   # equal results (see above)
+
+
+def relative_error(values, reference, reference_variance=None):
+    """Relative RMS error of `values` against `reference` over points and channels ([N, 3]), with
+    the reference's own variance (its squared standard error, [N, 3]) removed from the square."""
+    difference = np.mean(np.sum((np.asarray(values) - reference) ** 2, axis=1))
+    if reference_variance is not None:
+        difference = max(difference - np.mean(np.sum(reference_variance, axis=1)), 0.0)
+    energy = np.mean(np.sum(np.asarray(reference) ** 2, axis=1))
+    return float(np.sqrt(difference / energy)) if energy > 0.0 else 0.0
+
+
+@dataclass(frozen=True)
+class Setting:
+    """What a bake and its live shading are set to (methods.py ids)."""
+    method: str
+    light_order: int
+    visibility_order: int
+    rays: int
+
+
+@dataclass(frozen=True)
+class Measured:
+    """A setting's error on the sample at the rays it was measured with, split into its parts."""
+    truncation: float        # what more rays do not lower
+    noise: float             # the ray noise at `rays`
+    rays: int
+
+    def at(self, rays):
+        """The relative RMS error with `rays` rays per vertex."""
+        return float(np.hypot(self.truncation, self.noise * np.sqrt(self.rays / rays)))
+
+
+@dataclass
+class Sample:
+    """An object's sampled vertices and what they see: vertices, normals [n, 3], triangles [t, 3]
+    of the sample; views [n, 3] (unit, to the eye) or None; occluders: the whole object and every
+    other object (bake_transfer's keywords occluder_vertices, occluder_triangles) or {}."""
+    vertices: np.ndarray
+    normals: np.ndarray
+    triangles: np.ndarray
+    views: object
+    occluders: dict
+
+    @classmethod
+    def of_mesh(cls, vertices, normals, triangles, occluders=None, views=None, seed=0,
+                count=SAMPLE_TRIANGLES):
+        """A sample of `count` triangles of a mesh; the mesh itself joins `occluders` (the other
+        objects', bake_transfer's keywords). views: a function of the sampled vertices giving
+        their view directions, or None."""
+        sample_vertices, sample_normals, sample_triangles = bake_time.sample_mesh(
+            vertices, normals, triangles, count, seed)
+        blockers = [(np.asarray(vertices, dtype=np.float64), np.asarray(triangles).reshape(-1, 3))]
+        if occluders:
+            blockers.append((occluders["occluder_vertices"], occluders["occluder_triangles"]))
+        base = np.cumsum([0] + [len(v) for v, _ in blockers])
+        joined = {"occluder_vertices": np.concatenate([v for v, _ in blockers]),
+                  "occluder_triangles": np.concatenate(
+                      [t + b for (_, t), b in zip(blockers, base)]).astype(np.int32)}
+        return cls(sample_vertices, sample_normals, sample_triangles,
+                   None if views is None else views(sample_vertices), joined)
+
+
+class ErrorTable:
+    """Every setting's measured error on one sample under one environment and lobe.
+
+    sdnative: the module; environment: its Environment (the reference reads the full-resolution
+    map); light: order -> the unrotated L of that order the live shading uses ([(s+1)^2, 3]);
+    rotation: g R, the environment's rotation into the bake frame (as shade's `rotation`);
+    methods: the ids (methods.py) to measure; orders s up to max_order and s' up to
+    MAX_VISIBILITY_ORDER; rays: the bake's rays per vertex; stop: returns True to cancel (the
+    measurement then raises InterruptedError); diffuse_share: with a Phong lobe, the share of a
+    Lambert lobe shaded besides it (scene/lobes.Lobes): B and its reference are then the two
+    lobes' sum with these weights."""
+
+    def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
+                 max_order, rays, seed=0, stop=None, diffuse_share=0.0):
+        self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
+        self.max_order = int(max_order)
+        self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
+        if diffuse_share > 0.0:
+            self._lobes.append(("lambert", 1.0, float(diffuse_share)))
+        self.methods = tuple(m for m in methods
+                             if lobe == "lambert" or not method_table.get(m).lambert_only)
+        self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
+        self._views = sample.views if sample.views is not None else sample.normals
+        self.reference, error = self._reference(environment, seed, stop)
+        self.reference_variance = error ** 2
+        self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
+                                              self.reference)   # its own, over the sample
+        measured = [method_table.get(m) for m in sorted({SAME_AS.get(m, m) for m in self.methods})]
+        bakes = [self._bake(measured, seed + k, stop) for k in (0, 1)]
+        # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
+        # T_00 of the same rays with nothing in their way (the vertices as probes).
+        free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
+                                      rays=self.rays, seed=seed, transfer_order=0)
+        self.lit_fraction = np.asarray(bakes[0]["transfer"])[:, 0] / np.asarray(free["transfer"])[:, 0]
+        self.measured = {}
+        for method in measured:
+            for s in range(self.max_order + 1):
+                for sv in range(MAX_VISIBILITY_ORDER + 1) if method.uses_visibility_order else (0,):
+                    if stop is not None and stop():
+                        raise InterruptedError("cancelled")
+                    first, second = (self._shade(method, s, sv, bake) for bake in bakes)
+                    noise = relative_error(first, second) / np.sqrt(2.0)
+                    total = relative_error(first, self.reference, self.reference_variance)
+                    self.measured[(method.id, s, sv)] = Measured(
+                        float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays)
+    def _reference(self, environment, seed, stop):
+        """sdnative.reference on the sample, a few triangles at a time so that a cancel (stop)
+        takes effect within about a second."""
+        sample = self._sample
+        radiance, error = np.zeros((len(sample.vertices), 3)), np.zeros((len(sample.vertices), 3))
+        for first in range(0, len(sample.triangles), REFERENCE_TRIANGLES):
+            if stop is not None and stop():
+                raise InterruptedError("cancelled")
+            used, local = np.unique(sample.triangles[first:first + REFERENCE_TRIANGLES],
+                                    return_inverse=True)
+            # a vertex shared with an earlier group is computed again, to the same values
+            parts = [(weight, self._sd.reference(
+                environment, sample.vertices[used], sample.normals[used],
+                local.reshape(-1, 3).astype(np.int32), views=self._lobe_views(lobe, used),
+                rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
+                seed=seed, **sample.occluders)) for lobe, exponent, weight in self._lobes]
+            radiance[used] = sum(weight * np.asarray(value) for weight, (value, _) in parts)
+            error[used] = np.sqrt(sum((weight * np.asarray(e)) ** 2 for weight, (_, e) in parts))
+        return radiance, error
+
+    def _lobe_views(self, lobe, used=slice(None)):
+        """The sampled views a lobe reads (Lambert: none)."""
+        return self._views[used] if lobe != "lambert" else None
+
+    def _bake(self, methods, seed, stop):
+        arguments = {}
+        for method in methods:
+            arguments.update(method.bake_arguments(self.max_order, MAX_VISIBILITY_ORDER))
+        arguments.setdefault("transfer_order", 0)     # for lit_fraction
+        progress = None if stop is None else (lambda done, total: not stop())
+        return dict(self._sd.bake_transfer(self._sample.vertices, self._sample.normals,
+                                           self._sample.triangles, rays=self.rays, seed=seed,
+                                           progress=progress, **arguments, **self._sample.occluders))
+
+    def _shade(self, method, s, sv, bake):
+        data = {}
+        if method.data is not None:   # the arrays of order s, s': prefixes of the baked ones
+            shape = method.data.shape(s, sv) if method.data.shape else ()
+            for key in method.data.keys:
+                data[key] = np.ascontiguousarray(bake[key][(slice(None),) + tuple(slice(0, n) for n in shape)])
+        if method.uses_visibility_order:
+            data["visibility_order"] = sv
+        # displayed radiance is never negative, lobe by lobe (the shader's sd_surface)
+        return sum(weight * np.maximum(self._sd.shade(
+            method.id, self._light(s), self._sample.normals, views=self._lobe_views(lobe),
+            rotation=self._rotation, lobe=lobe, exponent=exponent, **data), 0.0)
+            for lobe, exponent, weight in self._lobes)
+
+    def error(self, setting):
+        """The predicted relative RMS error of a setting (KeyError for one not measured)."""
+        method = method_table.get(setting.method)
+        key = (SAME_AS.get(method.id, method.id), setting.light_order,
+               setting.visibility_order if method.uses_visibility_order else 0)
+        return self.measured[key].at(setting.rays)
+
+    def shadowing(self):
+        """The sampled vertices' mean blocked fraction of the hemisphere, cosine-weighted: 0 when
+        V = 1 over every sampled vertex's hemisphere, where any lobe reaches."""
+        return float(1.0 - np.mean(self.lit_fraction))

@@ -1,0 +1,91 @@
+"""The automatic mode in a bake: what `bake/prepare.py` gathers on the main thread for each object's
+measurement (plan/accuracy.ErrorTable), and the choice (plan/automatic.choose) made in the bake's
+worker before the object is baked with it. The worker touches no bpy: the environment is read and
+cached by prepare, and the light of each order comes from environment.py's caches."""
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import methods, native
+from ..scene import environment, lobes
+from . import accuracy, automatic, bake_time, cost
+
+AUTOMATIC = "automatic"     # the scene's and an object's method setting for the automatic mode
+MEASURED_RAYS = 256         # rays per vertex of the measurement (the error at others follows)
+
+
+@dataclass
+class Inputs:
+    """One object's measurement inputs (main thread), in its bake frame."""
+    environment: object          # sdnative.Environment
+    light: object                # order -> unrotated L of that order, as the live shading uses it
+    rotation: np.ndarray         # g R
+    eye: object                  # the camera's position in the bake frame, or None
+    target_error: float
+    max_order: int
+    fixed: dict = field(default_factory=dict)   # the object's overrides (automatic.choose)
+    triangle_pixels: object = None   # its triangles' mean area on screen (None: no camera)
+
+
+def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
+           triangle_pixels):
+    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake frame."""
+    if src.kind == "uniform":
+        pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
+        env = native.get().environment_from_pixels(pixels)
+
+        def light(order):
+            return np.asarray(env.sh(order), dtype=np.float64).reshape(-1, 3)
+    else:
+        env = environment.environment(src)
+        scale = 1.0 / src.strength if src.strength > 0.0 else 0.0
+
+        def light(order):   # the reference reads the map without the strength: so does this
+            return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True)
+    max_order = max(int(max_order), int(fixed.get("light_order", 0)))
+    return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
+                  triangle_pixels)
+
+
+def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop):
+    eye = inputs.eye
+
+    def views(points):
+        if eye is None:
+            return None
+        towards = eye[None, :] - points
+        return towards / np.maximum(np.linalg.norm(towards, axis=1, keepdims=True), 1e-300)
+
+    sample = accuracy.Sample.of_mesh(geometry.vertices, geometry.normals, geometry.triangles,
+                                     occluders, views)
+    return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
+                               lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
+                               stop=stop, diffuse_share=lobe_set.diffuse_share)
+
+
+def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0):
+    """The automatic.Choice for one object (any thread): geometry a bake/geometry.Geometry, occluders
+    bake_transfer's occluder keywords (or {}), lobe_set its scene/lobes.Lobes, fitted: whether the
+    bake fits least squares (its rays then start at the face centres too); texels: the texels a
+    texture-space bake adds for the methods they hold (which then fit no least squares); stop()
+    True cancels (InterruptedError)."""
+    sd = native.get()
+    table = _table(inputs, geometry, occluders, lobe_set, [m.id for m in methods.METHODS],
+                   inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop)
+    return automatic.choose(table, inputs.target_error, lambda s, sv: cost.gaunt_terms(sd, s, sv),
+                            len(geometry.vertices), os.cpu_count() or 1, bake_time.CONFIRM_SECONDS,
+                            inputs.fixed,
+                            len(geometry.vertices) + texels if texels else
+                            len(geometry.vertices) + len(geometry.triangles) if fitted else None)
+
+
+def predict(inputs, geometry, occluders, settings, stop):
+    """The predicted relative RMS error of a bake's chosen settings (its `sd_bake` dict; any
+    thread), measured as the automatic mode measures every setting."""
+    setting = accuracy.Setting(settings["method"], int(settings["light_order"]),
+                               int(settings["visibility_order"]), int(settings["rays"]))
+    table = _table(inputs, geometry, occluders, lobes.Lobes.of_bake(settings), [setting.method],
+                   setting.light_order, setting.rays, stop)
+    return table.error(setting)

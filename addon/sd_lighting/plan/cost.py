@@ -1,0 +1,60 @@
+"""What a setting costs per vertex: the floats its bake stores and the seconds of its bake (the
+multiply-adds of one frame are each method's `frame_terms`, methods.py) - the cost side of
+the automatic mode (plan/automatic.py) and of the panel's prediction; the accuracy side is
+plan/accuracy.py.
+
+Design node counts are the generic count of a design of degree t, ((t+1)^2 + 2) / 3 rounded up
+(a node is 3 unknowns for (t+1)^2 moments), which both builders' designs meet on average
+(docs/msd-notes.md: 17.2 nodes at degree 6; 41 for a zonal lobe at degree 10).
+"""
+
+import math
+
+# Design build time per vertex per core by degree s+s' (ms; build/native/design_benchmarks 1024
+# 9 3 8, refitted designs): MSD (13)'s bake is dominated by it. Beyond the table: x4 per degree.
+DESIGN_MS = {0: 0.01, 1: 0.02, 2: 0.05, 3: 0.1, 4: 0.31, 5: 2.5, 6: 4.0, 7: 16.8, 8: 65.5,
+             9: 154.0}
+RAY_SECONDS = 1.5e-7         # per ray per core: Embree's occlusion rays with the projections
+# The CPU evaluator's (sdnative.shade) time per frame term per vertex: the accuracy report's fits
+# of ns per vertex against frame_terms run from 1.3 to 4.5 ns per term over the methods and lobes
+# (docs/report/cost_model.json, "frame_ns_per_vertex"); this is their middle.
+CPU_NS_PER_TERM = 2.0
+
+
+def design_nodes(degree):
+    """The generic node count of a weighted design of degree `degree`."""
+    return math.ceil(((degree + 1) ** 2 + 2) / 3)
+
+
+def gaunt_terms(sdnative, s, sv):
+    """The non-zero real Gaunt coefficients eq. (10) sums over at orders s, s'."""
+    return len(sdnative.gaunt_coefficients(s, sv, s + sv)[1])
+
+
+def stored_floats(method, s, sv):
+    """Floats per vertex the method's bake stores (methods.Method) as the bake counts them
+    (`floats_per_vertex`; its normal excluded): the ambient occlusion, which every bake keeps, and
+    the method's array in vec4 groups. Designs are padded to the largest one, which reaches the
+    moment count (t+1)^2 (Caratheodory's bound; the report measured 49 nodes at degree 6)."""
+    data = method.data
+    if data is None or data.packing == "scalar":
+        return 1
+    if data.packing == "design":
+        return 1 + 4 * (s + sv + 1) ** 2
+    return 1 + 4 * math.ceil(math.prod(data.shape(s, sv)) / 4)
+
+
+def frame_milliseconds(frame_terms, vertices):
+    """The predicted CPU evaluator time of one frame of `vertices` vertices (the GPU's is measured
+    in the report, not modelled)."""
+    return 1e-6 * CPU_NS_PER_TERM * frame_terms * vertices
+
+
+def bake_seconds(method, s, sv, rays, vertices, threads):
+    """The predicted seconds of the method's bake of `vertices` vertices on `threads` cores."""
+    per_vertex = rays * RAY_SECONDS
+    if method.data is not None and method.data.packing == "design":
+        degree = s + sv
+        top = max(DESIGN_MS)
+        per_vertex += 1e-3 * (DESIGN_MS[degree] if degree <= top else DESIGN_MS[top] * 4.0 ** (degree - top))
+    return per_vertex * vertices / max(threads, 1)

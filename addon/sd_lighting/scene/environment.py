@@ -1,0 +1,276 @@
+"""The environment L that lights the scene, and its rotation g (eq. 1).
+
+Source (the scene's settings, `environment_source`):
+- 'WORLD' (default): the image of the world's Environment Texture node (the one feeding the
+  active World Output through a Background node, else any), times the Background's Strength.
+  A world without an Environment Texture lights with its uniform Background colour.
+- 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
+What is missing or cannot be read - the world, the texture's image, its file - raises
+Unavailable, whose message names it (the bake refuses, the panel and the live shading show it).
+
+Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
+environment (scene/transforms.mapping_rotation; location and scale are ignored). Without a Mapping
+node (or for 'FILE'), g is the settings' own `environment_rotation`. The panel's rotation slider
+writes the Mapping node when there is one.
+
+SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
+draw handler asks for them every frame. Every method shades with L windowed against ringing
+(windowed_light; scene/ringing.py): the window of the scene's `ringing_window` setting for the
+bake's lobe and order, chosen once per (source, lobe, exponent, order, setting) in a worker thread
+(`window_choices`) and cached; the draw does not wait for it (no window until it is there).
+"""
+
+import os
+
+import numpy as np
+
+from .. import background, compat, native
+from . import ringing, transforms
+
+_cache = {}          # source key -> sdnative.Environment
+_sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
+_window_choices = None   # background.Background of ringing window choices, made on first use
+
+
+def clear_cache():
+    global _window_choices
+    _cache.clear()
+    _sh_cache.clear()
+    if _window_choices is not None:
+        _window_choices.close()
+        _window_choices = None
+
+
+# --------------------------------------------------------------------------------------------
+# World nodes
+
+def _active_output(tree):
+    outputs = [n for n in tree.nodes if n.type == 'OUTPUT_WORLD']
+    for node in outputs:
+        if getattr(node, "is_active_output", False):
+            return node
+    return outputs[0] if outputs else None
+
+
+def _linked_node(socket):
+    if socket is None or not socket.is_linked:
+        return None
+    return socket.links[0].from_node
+
+
+def world_nodes(world):
+    """(environment texture node, background node, mapping node), each None when absent."""
+    if not compat.uses_nodes(world):
+        return None, None, None
+    tree = world.node_tree
+    background = None
+    output = _active_output(tree)
+    if output is not None:
+        node = _linked_node(output.inputs.get("Surface"))
+        if node is not None and node.type == 'BACKGROUND':
+            background = node
+    env = None
+    if background is not None:
+        node = _linked_node(background.inputs.get("Color"))
+        if node is not None and node.type == 'TEX_ENVIRONMENT':
+            env = node
+    if env is None:
+        env = next((n for n in tree.nodes if n.type == 'TEX_ENVIRONMENT'), None)
+    mapping = None
+    if env is not None:
+        node = _linked_node(env.inputs.get("Vector"))
+        if node is not None and node.type == 'MAPPING':
+            mapping = node
+    return env, background, mapping
+
+
+def mapping_node(scene):
+    """The Mapping node that turns the world's environment, or None."""
+    settings = scene.sd_lighting
+    if settings.environment_source != 'WORLD':
+        return None
+    return world_nodes(scene.world)[2]
+
+
+def rotation_matrix(scene):
+    """g as a float64 [3, 3] numpy array (eq. 1: the scene is lit by L(g x))."""
+    mapping = mapping_node(scene)
+    if mapping is not None:
+        return transforms.mapping_rotation(mapping.inputs["Rotation"].default_value,
+                                          mapping.vector_type)
+    return transforms.euler_xyz(scene.sd_lighting.environment_rotation)
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+
+class Source:
+    """Where L comes from: a file, an image's pixels, or a uniform colour."""
+
+    def __init__(self, kind, key, description, strength=1.0, path=None, image=None, colour=None):
+        self.kind = kind              # "file", "pixels" or "uniform"
+        self.key = key                # cache key
+        self.description = description
+        self.strength = strength
+        self.path = path
+        self.image = image
+        self.colour = colour
+
+
+def _file_key(path):
+    try:
+        st = os.stat(path)
+        return ("file", path, st.st_mtime_ns, st.st_size)
+    except OSError:
+        return ("file", path, 0, 0)
+
+
+class Unavailable(Exception):
+    """The scene's environment cannot be read; the message names what is missing."""
+
+
+def source(scene):
+    """The environment Source of the scene's settings. Raises Unavailable when what they name is
+    missing: no world, an Environment Texture without an image, an image without its file."""
+    import bpy
+    settings = scene.sd_lighting
+    if settings.environment_source == 'FILE':
+        if not settings.environment_path:
+            raise Unavailable("no HDRI file chosen (Environment: File)")
+        path = bpy.path.abspath(settings.environment_path)
+        if not os.path.isfile(path):
+            raise Unavailable("the HDRI file %s is missing" % path)
+        return Source("file", _file_key(path), path, path=path)
+    if scene.world is None:
+        raise Unavailable("the scene has no world: add one (Properties > World) or choose an "
+                          "HDRI file (Environment: File)")
+    env, background, _ = world_nodes(scene.world)
+    strength = 1.0
+    if background is not None:
+        socket = background.inputs.get("Strength")
+        if socket is not None and not socket.is_linked:
+            strength = float(socket.default_value)
+    if env is not None:
+        image = env.image
+        if image is None:
+            raise Unavailable("the Environment Texture of world '%s' has no image" % scene.world.name)
+        path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
+        if image.source == 'FILE' and image.packed_file is None:
+            if path and os.path.isfile(path):
+                return Source("file", _file_key(path), path, strength=strength, path=path)
+            raise Unavailable("the image '%s' of world '%s' is missing: %s" % (
+                image.name, scene.world.name, "file %s not found" % path if path else "no file path"))
+        if 0 in tuple(image.size):  # reading the size loads the pixels
+            raise Unavailable("the image '%s' of world '%s' has no pixels" % (image.name, scene.world.name))
+        return Source("pixels", ("pixels", image.name, tuple(image.size)), "image " + image.name,
+                      strength=strength, image=image)
+    colour = (0.05, 0.05, 0.05)
+    if background is None:
+        colour = tuple(scene.world.color)
+    else:
+        socket = background.inputs.get("Color")
+        if socket is not None and not socket.is_linked:
+            colour = tuple(socket.default_value)[:3]
+    return Source("uniform", ("uniform",) + tuple(round(c, 9) for c in colour),
+                  "uniform colour (%.3g, %.3g, %.3g)" % colour, strength=strength, colour=colour)
+
+
+def _image_pixels(image):
+    """The image's RGB as float32 [H, W, 3], rows top-first, scene-linear."""
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    rgb = pixels.reshape(height, width, 4)[::-1, :, :3].copy()
+    if not image.is_float and image.colorspace_settings.name.lower().startswith("srgb"):
+        rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4).astype(np.float32)
+    return rgb
+
+
+def environment(src):
+    """The sdnative.Environment of a file or pixel Source (cached)."""
+    env = _cache.get(src.key)
+    if env is None:
+        sd = native.get()
+        try:
+            if src.kind == "file":
+                env = sd.load_environment(src.path)
+            else:
+                env = sd.environment_from_pixels(_image_pixels(src.image))
+        except (OSError, ValueError) as exc:
+            raise Unavailable("cannot read the environment (%s): %s" % (src.description, exc)) from exc
+        _cache[src.key] = env
+    return env
+
+
+BACKGROUND_MAX_WIDTH = 2048   # the world background's texture: finer maps are sampled down
+
+
+def background_texels(src):
+    """The environment as the world background draws it: L times the strength at the texel
+    centres of an equirect map (scene/transforms.equirect_directions: Blender's orientation, rows
+    bottom-first), nearest texel of the source, at most BACKGROUND_MAX_WIDTH wide (a cube map: 2 x
+    its face size); a uniform colour as 2 x 1. float32 [H, W, 3]."""
+    if src.kind == "uniform":
+        return np.broadcast_to(np.asarray(src.colour, dtype=np.float32) * src.strength, (1, 2, 3)).copy()
+    env = environment(src)
+    width = int(min(BACKGROUND_MAX_WIDTH, max(2 * env.height, 2)))
+    directions = transforms.equirect_directions(width, width // 2)
+    radiance = np.asarray(env.radiance(directions.reshape(-1, 3)), dtype=np.float32)
+    return (radiance * src.strength).reshape(width // 2, width, 3)
+
+
+def light_coefficients(src, order):
+    """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied."""
+    if src.kind == "uniform":
+        light = np.zeros(((order + 1) ** 2, 3))
+        light[0] = np.asarray(src.colour, dtype=np.float64)
+    else:
+        key = (src.key, order)
+        light = _sh_cache.get(key)
+        if light is None:
+            light = np.asarray(environment(src).sh(order), dtype=np.float64).reshape(-1, 3)
+            _sh_cache[key] = light
+    return light * src.strength
+
+
+def smallest_order(src, lobe, exponent, target_error, max_order):
+    """Automatic s: the smallest order whose lobe-filtered relative error is within the target
+    (max_order when none up to it is)."""
+    if src.kind == "uniform":
+        return 0
+    order = environment(src).smallest_order(lobe, float(exponent), float(target_error), int(max_order))
+    return int(max_order) if order is None else int(order)
+
+
+def window_choices():
+    """The session's ringing window choices (scene/ringing.choice: made in a worker thread)."""
+    global _window_choices
+    if _window_choices is None:
+        _window_choices = background.Background("sd_lighting ringing windows")
+    return _window_choices
+
+
+def ringing_window_status():
+    """Lines for the panel: the ringing windows being chosen or whose choice failed."""
+    return ringing.status(_window_choices) if _window_choices is not None else []
+
+
+def ringing_window(src, lobe, exponent, order, setting, wait):
+    """The window against ringing of L for the lobe and order s: sdnative's
+    Environment.ringing_window dict (setting: one of scene/ringing.WINDOWS), chosen in a worker
+    thread and cached. wait=False (the interactive draw, the panel): None until it is there or when
+    its choice failed; wait=True: waits for it (raises background.Failed when it failed). The choice
+    does not depend on the strength. A uniform environment (L_00 alone, which no window changes):
+    none."""
+    if src.kind == "uniform":
+        return ringing.unwindowed(order)
+    return ringing.choice(window_choices(), src.key, environment(src), lobe, exponent, order, setting, wait)
+
+
+def windowed_light(src, lobe, exponent, order, setting, wait):
+    """light_coefficients with the ringing window's sigma_l on band l: the L every method shades
+    with and the band-limited texture holds; without a window while its choice is not there
+    (wait=False, ringing_window)."""
+    light = light_coefficients(src, order)
+    choice = ringing_window(src, lobe, exponent, order, setting, wait)
+    return light if choice is None else ringing.windowed(light, choice["factors"])

@@ -1,0 +1,118 @@
+"""The BRDF lobes of a material: Lambert, Phong with exponent sigma, or both (msd-notes, "The
+problem"), and the weights that give each lobe its colour for a Principled BSDF.
+
+- A rough dielectric (roughness >= 0.5, metallic 0) is Lambert alone, with its base colour: the
+  Principled BSDF's broad specular layer adds a few percent of the light in nearly the diffuse
+  lobe's shape, so the diffuse alone stands for both.
+- A metal (metallic 1) is Phong alone; anything else - a smooth dielectric, a partly metallic
+  surface - is Lambert and Phong, both read from the same per-vertex data.
+- The lobes' colours, per pixel, as the Principled BSDF splits its energy: Phong times the
+  specular layer's directional albedo E = F0' A + B, with F0' = mix(F0, base colour, metallic) and
+  (A, B) the split-sum scale and bias of a GGX lobe with Schlick's Fresnel at the view's n.v and
+  the roughness (Karis' analytic fit, "Physically Based Shading on Mobile", 2014), scaled to
+  A + B = 1 as multiple scattering makes it (measured against Cycles: gold's bias -22 % without
+  the scaling, within 4 % with it); Lambert times
+  (1 - metallic) x base colour, less the dielectric layer's E where the layer lies over the
+  diffuse and takes its energy from it (the Principled BSDF of Blender 4.0 and later; before 4.0
+  the layer adds to the diffuse) (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is
+  `principled_weights`: (metallic, F0, roughness, layer), layer 0 for a slot without a specular
+  layer (Diffuse BSDF, rough dielectric), LAYER_OVER or LAYER_ADDED.
+- The Phong exponent is sigma = 1 / (2 alpha^2) - 1/2, alpha = roughness^2 (Blender's GGX alpha):
+  the Beckmann-equivalent Blinn-Phong exponent 2/alpha^2 - 2 divided by 4, the usual factor
+  between a half-vector lobe and a lobe around the mirrored view; clamped to [1, 1000]
+  (roughness 0.5 -> 7.5, 0.3 -> 61, 0.2 -> 312).
+"""
+
+from dataclasses import dataclass
+
+LUMINANCE = (0.2126, 0.7152, 0.0722)   # of linear Rec. 709 RGB (Blender's default scene-linear)
+MIN_EXPONENT = 1.0
+MAX_EXPONENT = 1000.0
+LAMBERT_MIN_ROUGHNESS = 0.5
+LAYER_OVER = 1.0     # the specular layer takes its energy from the diffuse under it (4.0+)
+LAYER_ADDED = 2.0    # the specular layer adds to the diffuse (before 4.0)
+DIFFUSE_ONLY = (0.0, 0.0, 1.0, 0.0)   # principled_weights of a slot without a specular layer
+
+
+@dataclass(frozen=True)
+class Lobes:
+    """The lobes an object is baked and shaded with: `lobe` ("lambert" or "phong") with its
+    exponent; for "phong", whether a Lambert lobe is shaded besides it (`diffuse`) and whether the
+    slots' Principled weights colour the lobes (`weighted`; else the albedo alone does);
+    `diffuse_share`: the Lambert lobe's share of the light the surface reflects, which weighs the
+    two lobes' errors when the automatic mode measures them (plan/accuracy.py)."""
+    lobe: str = "lambert"
+    exponent: float = 1.0
+    diffuse: bool = False
+    weighted: bool = False
+    diffuse_share: float = 0.0
+
+    @classmethod
+    def of_bake(cls, bake):
+        """The Lobes a bake's record (sd_bake) names; records made before the two-lobe shading
+        have neither "diffuse_lobe" nor "lobe_weights"."""
+        return cls(str(bake["lobe"]), float(bake["exponent"]), bool(bake.get("diffuse_lobe", False)),
+                   bool(bake.get("lobe_weights", False)), float(bake.get("diffuse_share", 0.0)))
+
+    def shaded(self):
+        """(lobe, exponent) of lobe 0 and, with a Lambert lobe besides it, of lobe 1 (the
+        shader's order)."""
+        return [(self.lobe, self.exponent)] + ([("lambert", 1.0)] if self.diffuse else [])
+
+    @property
+    def label(self):
+        return ("Lambert + " if self.diffuse else "") + label(self.lobe, self.exponent)
+
+
+def exponent_from_roughness(roughness):
+    """Phong sigma for a Principled roughness."""
+    alpha = max(float(roughness), 1e-3) ** 2
+    sigma = 1.0 / (2.0 * alpha * alpha) - 0.5
+    return min(max(sigma, MIN_EXPONENT), MAX_EXPONENT)
+
+
+def dielectric_reflectance(ior=1.5, ior_level=None, specular=None):
+    """F0 of a Principled BSDF's dielectric layer: ((ior - 1) / (ior + 1))^2 times 2 x Specular
+    IOR Level (Blender 4.0 and later), or 0.08 x Specular (before 4.0: `specular` given)."""
+    if specular is not None:
+        return min(max(0.08 * float(specular), 0.0), 1.0)
+    f0 = ((float(ior) - 1.0) / (float(ior) + 1.0)) ** 2
+    return min(max(f0 * 2.0 * (0.5 if ior_level is None else float(ior_level)), 0.0), 1.0)
+
+
+def principled_weights(roughness, metallic, f0, layer_over=True):
+    """A Principled BSDF's weights for the shader (see the module's doc): (metallic, F0,
+    roughness, layer); layer_over: the BSDF's specular layer takes its energy from the diffuse
+    (Blender 4.0 and later)."""
+    metallic = min(max(float(metallic), 0.0), 1.0)
+    roughness = min(max(float(roughness), 0.0), 1.0)
+    if roughness >= LAMBERT_MIN_ROUGHNESS and metallic == 0.0:
+        return DIFFUSE_ONLY
+    return (metallic, float(f0), roughness, LAYER_OVER if layer_over else LAYER_ADDED)
+
+
+def reflected(colour, weights):
+    """(specular, diffuse): the luminance a slot of this linear RGB colour and principled_weights
+    reflects in each lobe at normal incidence (F0 for the specular layer)."""
+    metal, f0, _, layer = weights
+    luminance = sum(w * c for w, c in zip(LUMINANCE, colour))
+    if layer == 0.0:
+        return 0.0, luminance
+    over = f0 if layer == LAYER_OVER else 0.0
+    return f0 + metal * (luminance - f0), (1.0 - metal) * (1.0 - over) * luminance
+
+
+def lobes_from_principled(roughness, metallic, f0):
+    """The Lobes of a Principled BSDF's inputs, and why (a line for the panel)."""
+    metal, _, _, layer = principled_weights(roughness, metallic, f0)
+    if layer == 0.0:
+        return Lobes(), "rough dielectric -> Lambert"
+    sigma = exponent_from_roughness(roughness)
+    both = metal < 1.0
+    return Lobes("phong", sigma, both, True), "%sroughness %.2f -> %sPhong sigma %.1f" % (
+        "metallic %.2f, " % metal if metal > 0.0 else "", roughness, "Lambert + " if both else "", sigma)
+
+
+def label(lobe, exponent):
+    """The lobe as the panel names it: "Lambert" or "Phong sigma 61"."""
+    return "Lambert" if lobe == "lambert" else "Phong sigma %.3g" % exponent

@@ -1,0 +1,199 @@
+"""The predicted bake time of the panel's settings and selection (plan/bake_time.py), for the
+panel and the bake operator's confirmation.
+
+A prediction is kept per settings key (the panel's bake settings, the environment and the selected
+meshes with their sizes). The panel only asks for it: the bake's inputs are gathered by
+bake/prepare.py in a timer (never in a draw), and the sample bakes run in a worker thread.
+"""
+
+import os
+import time
+
+from .. import native
+from ..bake import geometry as geometry_module, least_squares, lightmap, prepare
+from ..errors import BakeError
+from ..plan import bake_time
+from ..store.record import BakeRecord
+
+_predictors = {}          # settings key -> BakeTimePredictor (the latest few)
+_KEPT = 8
+_requested = None         # the key a timer will start, if any
+
+
+def settings_key(context):
+    """What the bake's time depends on: the bake settings, the environment (automatic s) and the
+    selected meshes (names, sizes and overrides); None without a selected mesh."""
+    scene = context.scene
+    settings = scene.sd_lighting
+    meshes = tuple(sorted((o.name, len(o.data.vertices), len(o.data.polygons), len(o.modifiers),
+                           tuple(sorted(o.sd_lighting.fixed().items())))
+                          for o in context.selected_objects if o.type == 'MESH'))
+    if not meshes:
+        return None
+    names = ("method", "material_source", "phong_exponent", "automatic_orders", "target_error",
+             "max_automatic_order", "light_order", "visibility_order", "rays", "environment_source",
+             "environment_path", "least_squares", "texture_space", "lightmap_size")
+    world = scene.world.name if scene.world is not None else ""
+    return tuple(getattr(settings, name) for name in names) + (world, meshes)
+
+
+def sample_jobs(tasks):
+    """The sampling jobs of prepare.prepare's tasks: each object's own mesh joins its occluders,
+    so that a sampled triangle's vertices see the rest of the object. First, in the predictor's
+    worker, an automatic task chooses its settings (its reasons are then in task.settings) and
+    a chosen method's are measured: either way task.predicted_error, for the panel. Texels are
+    baked like vertices: a texture-space bake counts its expected texels as vertices."""
+    def arguments(task, stop):
+        if task.automatic:
+            task.choose(stop)
+        else:
+            task.predict(stop)
+        kwargs = task.bake_arguments()
+        kwargs["occluder_vertices"], kwargs["occluder_triangles"] = geometry_module.join(
+            [(task.geometry.vertices, task.geometry.triangles)] + task.occluder_parts())
+        return kwargs
+
+    def traced(task):
+        """The mesh the bake traces (computed in the worker: the corner split, and with Least
+        Squares on a method it fits, each triangle split at its centroid: bake/least_squares.py)."""
+        geometry = task.geometry
+        mesh = (geometry.vertices, geometry.normals, geometry.triangles)
+        return least_squares.centroid_split(*mesh) if task.fits_least_squares else mesh
+
+    def fit_seconds(task, sd, result):
+        if not task.fits_least_squares:
+            return 0.0
+        return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
+
+    return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
+                                lambda sd, result, task=task: fit_seconds(task, sd, result),
+                                lambda task=task: lightmap.expected_texels(task.lightmap_size))
+            for task in tasks]
+
+
+def start(context):
+    """Starts predicting the bake of the selection under the scene's settings (main thread);
+    returns the predictor, or None when the bake could not start (the bake says why)."""
+    key = settings_key(context)
+    if key is None:
+        return None
+    predictor = _predictors.get(key)
+    if predictor is not None:
+        return predictor
+    try:
+        # skipped objects: the bake warns; texels: estimated, not unwrapped in a timer
+        tasks, _ = prepare.prepare(context, context.selected_objects, unwrap=False)
+    except BakeError:
+        return None
+    predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1)
+    for old in list(_predictors)[:max(len(_predictors) - _KEPT + 1, 0)]:
+        _predictors.pop(old).cancel()
+    _predictors[key] = predictor
+    predictor.start()
+    return predictor
+
+
+def for_confirmation(context, wait=3.0):
+    """The prediction the bake operator asks with (main thread): waits up to `wait` seconds for
+    the sample, less once it is clear that the bake takes over a minute; None when unknown."""
+    predictor = start(context)
+    if predictor is None:
+        return None
+    deadline = time.perf_counter() + wait
+    while _sampling(predictor) and time.perf_counter() < deadline:
+        predicted = predictor.prediction()
+        if predicted is not None and predicted.needs_confirmation:
+            break
+        predictor.join(0.05)
+    return predictor.prediction()
+
+
+def current(context):
+    """The prediction for the panel's settings and selection, or None while unknown; asks a timer
+    to start one when there is none (a panel's draw must not evaluate the depsgraph)."""
+    global _requested
+    import bpy
+    key = settings_key(context)
+    predictor = _predictors.get(key) if key is not None else None
+    if predictor is None:
+        if key is not None and _requested != key:
+            _requested = key
+            bpy.app.timers.register(_start_requested, first_interval=0.0)
+        return None
+    if _sampling(predictor) and not bpy.app.timers.is_registered(_redraw_while_sampling):
+        bpy.app.timers.register(_redraw_while_sampling, first_interval=0.5)
+    return predictor.prediction()
+
+
+def predicted_errors(context):
+    """[(object name, its task's settings as a BakeRecord, predicted error)] for the panel's
+    selection, as the predictor has measured them (empty before)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return []
+    return [(job.task.object_name, BakeRecord.from_dict(job.task.settings), job.task.predicted_error)
+            for job in predictor.jobs if job.task.predicted_error is not None]
+
+
+def automatic_choices(context):
+    """{object name: (settings dict, predicted error)} of the automatic choices the prediction for
+    the panel's settings and selection has made, for the bake to take over (the
+    environment's rotation and the camera they were measured at may have changed since: what
+    they change is small next to a second measurement's seconds)."""
+    predictor = _predictors.get(settings_key(context))
+    if predictor is None:
+        return {}
+    return {job.task.object_name: (dict(job.task.settings), job.task.predicted_error)
+            for job in predictor.jobs if "automatic" in job.task.settings}
+
+
+def _start_requested():
+    global _requested
+    import bpy
+    _requested = None
+    start(bpy.context)
+    _redraw_panels()
+
+
+def _redraw_panels():
+    import bpy
+    for window in bpy.context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type == 'VIEW_3D':
+                for region in area.regions:
+                    if region.type == 'UI':
+                        region.tag_redraw()
+
+
+def _sampling(predictor):
+    return not predictor.finished and predictor.error is None
+
+
+def _redraw_while_sampling():
+    _redraw_panels()
+    return 0.5 if any(_sampling(p) for p in _predictors.values()) else None
+
+
+def error(context):
+    """Why the prediction for the panel's settings failed, or None."""
+    predictor = _predictors.get(settings_key(context))
+    return predictor.error if predictor is not None else None
+
+
+def stop_sampling():
+    """Cancels and forgets the predictions still sampling: a bake about to start needs the cores."""
+    for key in [k for k, p in _predictors.items() if _sampling(p)]:
+        _predictors.pop(key).cancel()
+
+
+def clear():
+    """Cancels and forgets every prediction (unregister, a new file)."""
+    import bpy
+    global _requested
+    for predictor in _predictors.values():
+        predictor.cancel()
+    _predictors.clear()
+    _requested = None
+    for timer in (_start_requested, _redraw_while_sampling):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)

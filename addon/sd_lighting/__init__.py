@@ -26,7 +26,7 @@ bl_info = {
 # those already imported, in this order. The sub-packages follow the pipeline: scene (what the
 # scene gives: environment, materials, view), plan (the automatic mode's error and cost
 # predictions), bake, store (the baked meshes and their records), live (the shading), ui.
-_SUBMODULES = ("background", "compat", "errors", "native",
+_SUBMODULES = ("background", "compat", "errors", "native", "redraw",
                "scene.lobes", "scene.materials", "scene.ringing", "scene.transforms", "scene.environment",
                "scene.view",
                "plan.bake_time", "plan.cost", "store.bake_data", "methods", "plan.accuracy",

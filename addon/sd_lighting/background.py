@@ -1,4 +1,5 @@
-"""Results computed off the main thread, for the draw: asking never waits.
+"""Work off the main thread: a Worker runs one job in a thread of its own (a bake, the bake-time
+prediction); a Background computes results for the draw, where asking never waits.
 
 Some of what the live shading needs takes longer than a frame - the lobe designs of MSD (12)
 (live/lobe_designs.py), the choice of the ringing window (scene/ringing.py). A Background keeps
@@ -15,6 +16,32 @@ import logging
 import threading
 
 log = logging.getLogger(__name__)
+
+
+class Worker:
+    """Work of its own (`run`, defined by the subclass) in one daemon thread, cancellable: `run`
+    reads `cancel_requested`, which `cancel` sets; `join` waits for the thread."""
+
+    thread_name = "sd_lighting"
+
+    def __init__(self):
+        self.cancel_requested = False
+        self._thread = None
+
+    def start(self):
+        """Runs `run` in a new thread."""
+        self._thread = threading.Thread(target=self.run, name=self.thread_name, daemon=True)
+        self._thread.start()
+
+    def cancel(self):
+        self.cancel_requested = True
+
+    def join(self, timeout=None):
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    def run(self):
+        raise NotImplementedError
 
 
 class Failed(Exception):

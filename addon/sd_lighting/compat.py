@@ -12,6 +12,9 @@ blender_tests/bpy_versions.txt:
 | MeshPolygon.loop_total read-only  | 4.0+         | set_polygon_loops()                         |
 | built-in shader '3D_UNIFORM_COLOR'| 'UNIFORM_COLOR' since 3.5, the 3D_ name gone in 4.0: uniform_color_shader() |
 | World/Material.use_nodes          | deprecated in 5.0 (node trees always used, gone in 6.0): uses_nodes() |
+| Principled BSDF                   | 4.0+ layers its specular over the diffuse, and renames its inputs: principled_layered(), PRINCIPLED_LAYERS |
+| GPUVertFormat                     | 4.5 deprecates, 5.0 rejects non-F32 fetch modes; 3.4's batch_for_shader misreads some programs: make_batch() |
+| bpy.props on IDs                  | 5.0 keeps them apart from id["..."]: properties.py reads and writes them as attributes |
 """
 
 import numpy as np
@@ -77,3 +80,43 @@ def uses_nodes(idblock):
     if version() >= (5, 0, 0):
         return True
     return bool(idblock.use_nodes)
+
+
+def principled_layered(node):
+    """Whether the Principled BSDF is Blender 4.0's, whose specular layer lies over the diffuse
+    and takes its energy from it (it has Specular IOR Level where the earlier one had Specular)."""
+    return node.inputs.get("Specular IOR Level") is not None
+
+
+# The Principled BSDF's layers that Lambert + Phong leave out, by the input that turns each on
+# (Blender 4.x's name first, then 3.x's).
+PRINCIPLED_LAYERS = (("transmission", ("Transmission Weight", "Transmission")),
+                     ("coat", ("Coat Weight", "Clearcoat")),
+                     ("sheen", ("Sheen Weight", "Sheen")),
+                     ("subsurface", ("Subsurface Weight", "Subsurface")))
+
+
+def make_batch(primitive, content, indices=None):
+    """A GPUBatch of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
+    here: gpu_extras' batch_for_shader asks the shader for its attributes, which Blender 3.4
+    reports wrongly for some programs (names and types out of order). Only F32 x 1-4 with fetch
+    mode FLOAT: 4.5 deprecates formats that are not 4-byte aligned, wider than 4 components or
+    INT_TO_FLOAT, and 5.0 rejects the last two."""
+    import gpu
+    vertex_format = gpu.types.GPUVertFormat()
+    arrays = {}
+    for name, values in content.items():
+        values = np.ascontiguousarray(values, dtype=np.float32)
+        values = values.reshape(len(values), -1)
+        if not 1 <= values.shape[1] <= 4:
+            raise ValueError("vertex attribute %s has %d components (1-4 allowed)" % (name, values.shape[1]))
+        arrays[name] = values
+        vertex_format.attr_add(id=name, comp_type='F32', len=values.shape[1], fetch_mode='FLOAT')
+    count = len(next(iter(arrays.values())))
+    vertex_buffer = gpu.types.GPUVertBuf(vertex_format, count)
+    for name, values in arrays.items():
+        vertex_buffer.attr_fill(name, values)
+    if indices is None:
+        return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer)
+    index_buffer = gpu.types.GPUIndexBuf(type=primitive, seq=np.ascontiguousarray(indices, dtype=np.int32))
+    return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer, elem=index_buffer)

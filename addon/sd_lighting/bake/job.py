@@ -1,44 +1,33 @@
 """The bake job: BakeTasks run in a worker thread (or the caller's), with progress and
 cancellation, then stored all or nothing on the main thread (store/baked.py)."""
 
-import threading
 import time
 
 from .. import native
+from ..background import Worker
 from ..errors import BakeError
 from ..store import baked
 from .task import share
 
 
-class BakeJob:
-    """Bakes a list of BakeTasks; run() in any thread, apply() on the main thread afterwards."""
+class BakeJob(Worker):
+    """Bakes a list of BakeTasks; run() in any thread (start(): a worker thread), apply() on the
+    main thread afterwards."""
+
+    thread_name = "sd_lighting bake"
 
     def __init__(self, tasks, warnings=()):
+        super().__init__()
         self.tasks = tasks
         self.warnings = list(warnings)   # for the user, with the result (prepare's, run's)
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
-        self.cancel_requested = False
         self.choosing = False         # the automatic mode is measuring the current object
         self.refining = False         # the current object's copy is being refined
         self.cancelled = False
         self.error = None             # message when the bake failed
         self.finished = False
         self.seconds = 0.0
-        self._thread = None
-
-    # -- control
-    def start(self):
-        """Runs the bake in a worker thread."""
-        self._thread = threading.Thread(target=self.run, name="sd_lighting bake", daemon=True)
-        self._thread.start()
-
-    def cancel(self):
-        self.cancel_requested = True
-
-    def join(self, timeout=None):
-        if self._thread is not None:
-            self._thread.join(timeout)
 
     def status_text(self):
         if not self.tasks:

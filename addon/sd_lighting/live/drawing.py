@@ -23,7 +23,7 @@ import logging
 
 import numpy as np
 
-from .. import methods, native
+from .. import methods, native, redraw
 from ..scene import environment, materials, transforms
 from ..scene.view import View
 from ..store import attributes, baked
@@ -165,15 +165,6 @@ def draw_background(scene, view, scale):
     gpu_shading.draw_background(environment.source(scene), view, environment.rotation_matrix(scene), scale)
 
 
-def tag_viewports():
-    """Redraws every 3D viewport (and its sidebar)."""
-    import bpy
-    for window in bpy.context.window_manager.windows:
-        for area in window.screen.areas:
-            if area.type == 'VIEW_3D':
-                area.tag_redraw()
-
-
 def _background_work():
     """What the draw asks worker threads for: the lobe designs and the ringing window choices."""
     return (gpu_shading.lobe_designs(), environment.window_choices())
@@ -187,7 +178,7 @@ def _poll_background():
     generations = tuple(w.generation for w in work)
     if generations != _generations:
         _generations = generations
-        tag_viewports()
+        redraw.viewports()
     return 0.25 if any(w.pending() for w in work) else None
 
 

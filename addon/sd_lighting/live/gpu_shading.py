@@ -34,11 +34,11 @@ import os
 import numpy as np
 
 from .. import compat, methods, native
+from ..bake import lightmap
 from ..scene import environment, lobes, materials, transforms
 from ..store import attributes, baked
-from ..bake import lightmap
-from . import lobe_designs as lobe_design_cache
 from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
+from . import lobe_designs as lobe_design_cache
 from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
                              LIGHTMAP_INDEX_SAMPLER, Variant, band_limited_texture_size)
 
@@ -197,7 +197,7 @@ def _background_shader():
         interface = gpu.types.GPUStageInterfaceInfo("sd_background_interface")
         interface.smooth('VEC2', "sd_ndc")
         shader = _create(info, interface, BACKGROUND_FILES)
-        batch = make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
+        batch = compat.make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
         compiled = _background["shader"] = (shader, interface, info, batch)   # infos kept alive
     return compiled[0], compiled[3]
 
@@ -268,32 +268,6 @@ def lobe_design_status():
     return lines
 
 
-def make_batch(primitive, content, indices=None):
-    """A GPUBatch of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
-    here: gpu_extras' batch_for_shader asks the shader for its attributes, which Blender 3.4
-    reports wrongly for some programs (names and types out of order). Only F32 x 1-4 with fetch
-    mode FLOAT: 4.5 deprecates formats that are not 4-byte aligned, wider than 4 components or
-    INT_TO_FLOAT, and 5.0 rejects the last two."""
-    import gpu
-    vertex_format = gpu.types.GPUVertFormat()
-    arrays = {}
-    for name, values in content.items():
-        values = np.ascontiguousarray(values, dtype=np.float32)
-        values = values.reshape(len(values), -1)
-        if not 1 <= values.shape[1] <= 4:
-            raise ValueError("vertex attribute %s has %d components (1-4 allowed)" % (name, values.shape[1]))
-        arrays[name] = values
-        vertex_format.attr_add(id=name, comp_type='F32', len=values.shape[1], fetch_mode='FLOAT')
-    count = len(next(iter(arrays.values())))
-    vertex_buffer = gpu.types.GPUVertBuf(vertex_format, count)
-    for name, values in arrays.items():
-        vertex_buffer.attr_fill(name, values)
-    if indices is None:
-        return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer)
-    index_buffer = gpu.types.GPUIndexBuf(type=primitive, seq=np.ascontiguousarray(indices, dtype=np.int32))
-    return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer, elem=index_buffer)
-
-
 class ObjectData:
     """GPU data of one baked mesh: batch, per-vertex texture, shader variant, lobe constants."""
 
@@ -357,7 +331,7 @@ class ObjectData:
                 content["corners"] = np.repeat(index[:, None], 3, axis=1)
                 content["bary"] = np.tile(np.array([[1.0, 0.0, 0.0]], dtype=np.float32),
                                           (self.vertex_count, 1))
-            self.batch = make_batch('POINTS', content)
+            self.batch = compat.make_batch('POINTS', content)
         else:
             triangles = attributes.read_triangles(mesh)
             if per_pixel:
@@ -370,9 +344,9 @@ class ObjectData:
                     content.update(corners=np.repeat(triangles.astype(np.float32), 3, axis=0),
                                    bary=np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1)))
                 content.update({name: values[corners] for name, values in surface.items()})
-                self.batch = make_batch('TRIS', content)
+                self.batch = compat.make_batch('TRIS', content)
             else:
-                self.batch = make_batch('TRIS', dict({"pos": positions, "nrm": normals}, **surface),
+                self.batch = compat.make_batch('TRIS', dict({"pos": positions, "nrm": normals}, **surface),
                                         indices=triangles)
         self.ubo = None
 

@@ -31,6 +31,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
+from .. import redraw
 from ..bake import job, prepare
 from ..errors import BakeError
 from ..store import baked
@@ -163,7 +164,7 @@ def _show_progress():
     """The running re-bake's progress, in the status bar and the panel."""
     name, job = _scheduler.running
     _status("SD Lighting: re-baking %s, %d %%" % (name, int(100 * job.fraction)))
-    drawing.tag_viewports()
+    redraw.viewports()
 
 
 def _finish(name, job):
@@ -184,7 +185,7 @@ def _finish(name, job):
                 logging.WARNING)
         return
     drawing.clear_cache()
-    drawing.tag_viewports()
+    redraw.viewports()
     _report("re-baked %s (%d vertices) in %.2f s" % (
         name, baked.record(obj).vertices, time.perf_counter() - job.started))
 
@@ -208,7 +209,7 @@ def _tick():
                 _scheduler.started(action.name, job)
         elif action.kind == "finished":
             _finish(action.name, action.job)
-        drawing.tag_viewports()
+        redraw.viewports()
 
 
 # --------------------------------------------------------------------------------------------

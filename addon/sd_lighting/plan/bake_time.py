@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..background import Worker
+
 CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
 ROUNDS = (2, 16)             # triangles per sample round (about 3 vertices each)
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
@@ -111,31 +113,25 @@ class SampleJob:
         return self.mesh() if callable(self.mesh) else self.mesh
 
 
-class BakeTimePredictor:
-    """Times sample bakes of every job in a worker thread; `prediction()` at any time."""
+class BakeTimePredictor(Worker):
+    """Times sample bakes of every job in a worker thread (start()); `prediction()` at any time."""
+
+    thread_name = "sd_lighting bake time"
 
     def __init__(self, sdnative, jobs, threads):
+        super().__init__()
         self._sd = sdnative
         self._jobs = jobs
         self._threads = max(int(threads), 1)
         self._lock = threading.Lock()
         self._estimates = [None] * len(jobs)   # per job: seconds from its finished rounds
         self._running = None                   # (job index, vertices, round start, done, round vertices)
-        self._cancelled = False
-        self._thread = None
         self.finished = False
         self.error = None
 
-    def start(self):
-        self._thread = threading.Thread(target=self._run, name="sd_lighting bake time", daemon=True)
-        self._thread.start()
-
-    def cancel(self):
-        self._cancelled = True
-
     def join(self, timeout=None):
-        if self._thread is not None:
-            self._thread.join(timeout)
+        """Waits for the sampling; whether it finished."""
+        super().join(timeout)
         return self.finished
 
     def prediction(self):
@@ -152,24 +148,24 @@ class BakeTimePredictor:
             return None
         return Prediction(total, self.finished, bound)
 
-    def _run(self):
+    def run(self):
         try:
             for index, job in enumerate(self._jobs):
                 self._sample(index, job)
         except Exception as exc:  # the panel shows it; the bake itself reports its own errors
-            if not self._cancelled:
+            if not self.cancel_requested:
                 self.error = "%s: %s" % (type(exc).__name__, exc)
         finally:
             with self._lock:
                 self._running = None
-            self.finished = not self._cancelled and self.error is None
+            self.finished = not self.cancel_requested and self.error is None
 
     @property
     def jobs(self):
         return self._jobs
 
     def _sample(self, index, job):
-        arguments = job.arguments(lambda: self._cancelled)
+        arguments = job.arguments(lambda: self.cancel_requested)
         mesh = job.traced_mesh()
         count = len(mesh[0]) + job.points()
         rounds = []
@@ -184,7 +180,7 @@ class BakeTimePredictor:
             def progress(done, total, start=start):
                 with self._lock:
                     self._running = (index, count, start, done, total)
-                return not self._cancelled
+                return not self.cancel_requested
 
             result = self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
                                             **arguments)

@@ -74,25 +74,11 @@ def _uv_map(image_node):
     return ""
 
 
-def _layered(node):
-    """Whether the Principled BSDF is Blender 4.0's, whose specular layer lies over the diffuse
-    and takes its energy from it (it has Specular IOR Level where the earlier one had Specular)."""
-    return node.inputs.get("Specular IOR Level") is not None
-
-
 def _dielectric_reflectance(node):
-    if _layered(node):
+    if compat.principled_layered(node):
         return lobes.dielectric_reflectance(_input_value(node, "IOR", 1.5),
                                             _input_value(node, "Specular IOR Level", 0.5))
     return lobes.dielectric_reflectance(specular=_input_value(node, "Specular", 0.5))
-
-
-# The Principled BSDF's layers that Lambert + Phong leave out, by the input that turns each on
-# (Blender 4.x's name first, then 3.x's).
-_LEFT_OUT = (("transmission", ("Transmission Weight", "Transmission")),
-             ("coat", ("Coat Weight", "Clearcoat")),
-             ("sheen", ("Sheen Weight", "Sheen")),
-             ("subsurface", ("Subsurface Weight", "Subsurface")))
 
 
 def _first_input(node, names):
@@ -104,7 +90,7 @@ def _left_out(node):
     driven by nodes), emission, alpha below 1, and lobe inputs driven by nodes (their default
     values are used)."""
     notes = []
-    for layer, names in _LEFT_OUT:
+    for layer, names in compat.PRINCIPLED_LAYERS:
         socket = _first_input(node, names)
         if socket is not None and (socket.is_linked or socket.default_value > 0.0):
             notes.append("%s left out" % layer)
@@ -118,7 +104,7 @@ def _left_out(node):
     if alpha is not None and (alpha.is_linked or alpha.default_value < 1.0):
         notes.append("shown opaque")
     # Before 4.0, IOR reaches only the transmission (noted above); F0 came from Specular.
-    for name in ("Metallic", "Roughness") + (("IOR", "Specular IOR Level") if _layered(node) else ("Specular",)):
+    for name in ("Metallic", "Roughness") + (("IOR", "Specular IOR Level") if compat.principled_layered(node) else ("Specular",)):
         socket = node.inputs.get(name)
         if socket is not None and socket.is_linked:
             notes.append("%s from node %s shown as the input's default" % (name, socket.links[0].from_node.name))
@@ -129,7 +115,7 @@ def _principled(node):
     """(weights, Lobes, why, note) of a Principled BSDF."""
     roughness, metallic = _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0)
     f0 = _dielectric_reflectance(node)
-    weights = lobes.principled_weights(roughness, metallic, f0, _layered(node))
+    weights = lobes.principled_weights(roughness, metallic, f0, compat.principled_layered(node))
     found, why = lobes.lobes_from_principled(roughness, metallic, f0)
     notes = []
     if found.lobe == "lambert" and f0 > 0.0:

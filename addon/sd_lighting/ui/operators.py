@@ -3,6 +3,7 @@
 import bpy
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
+from .. import redraw
 from ..bake import prepare
 from ..bake.job import BakeJob
 from ..errors import BakeError
@@ -11,15 +12,6 @@ from ..store import baked
 from . import prediction
 
 active_job = None     # the BakeJob running in the UI, for the panel and poll()
-
-
-def _tag_redraw(context, region_type):
-    screen = getattr(context, "screen", None)
-    for area in screen.areas if screen is not None else ():
-        if area.type == 'VIEW_3D':
-            for region in area.regions:
-                if region.type == region_type:
-                    region.tag_redraw()
 
 
 class SD_OT_bake(bpy.types.Operator):
@@ -78,7 +70,7 @@ class SD_OT_bake(bpy.types.Operator):
         for warning in job.warnings:
             self.report({'WARNING'}, "Bake: %s" % warning)
         self.report({'INFO'}, "Baked %s in %.1f s" % (", ".join(names), job.seconds))
-        _tag_redraw(context, 'WINDOW')
+        redraw.viewports('WINDOW')
         return {'FINISHED'}
 
     def execute(self, context):
@@ -139,7 +131,7 @@ class SD_OT_bake(bpy.types.Operator):
             context.window_manager.progress_update(int(100 * job.fraction))
             if not job.cancel_requested:
                 self._status(context, job.status_text())
-            _tag_redraw(context, 'UI')
+            redraw.viewports('UI')
             if job.finished:
                 wm = context.window_manager
                 wm.event_timer_remove(self._timer)

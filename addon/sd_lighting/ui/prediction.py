@@ -9,7 +9,7 @@ bake/prepare.py in a timer (never in a draw), and the sample bakes run in a work
 import os
 import time
 
-from .. import native
+from .. import native, redraw
 from ..bake import geometry as geometry_module, least_squares, lightmap, prepare
 from ..errors import BakeError
 from ..plan import bake_time
@@ -152,17 +152,7 @@ def _start_requested():
     import bpy
     _requested = None
     start(bpy.context)
-    _redraw_panels()
-
-
-def _redraw_panels():
-    import bpy
-    for window in bpy.context.window_manager.windows:
-        for area in window.screen.areas:
-            if area.type == 'VIEW_3D':
-                for region in area.regions:
-                    if region.type == 'UI':
-                        region.tag_redraw()
+    redraw.viewports('UI')
 
 
 def _sampling(predictor):
@@ -170,7 +160,7 @@ def _sampling(predictor):
 
 
 def _redraw_while_sampling():
-    _redraw_panels()
+    redraw.viewports('UI')
     return 0.5 if any(_sampling(p) for p in _predictors.values()) else None
 
 

@@ -9,7 +9,7 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        IntProperty, PointerProperty, StringProperty)
 
-from .. import methods, native
+from .. import methods, native, redraw
 from ..live import live_rebake
 from ..plan import analysis
 from ..scene import environment, ringing
@@ -31,10 +31,7 @@ LIMITS = _limits()
 
 
 def _redraw(self, context):
-    for window in getattr(context.window_manager, "windows", ()):
-        for area in window.screen.areas:
-            if area.type == 'VIEW_3D':
-                area.tag_redraw()
+    redraw.viewports()
 
 
 # The rotation's getter and setter keep the value in the hidden property `stored_rotation` when

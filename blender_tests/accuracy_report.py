@@ -136,7 +136,7 @@ def design_subset(offsets, nodes, weights, index):
 
 
 class SceneData:
-    """The measured object of one scene in its bake frame (bake/prepare.py's arrays), its probes,
+    """The measured object of one scene in its bake space (bake/prepare.py's arrays), its probes,
     views and g R."""
 
     def __init__(self, package, name, scene, objects, camera, config):
@@ -158,9 +158,9 @@ class SceneData:
         obj = objects[0]
         matrix = np.array(obj.matrix_world, dtype=np.float64)
         transforms = package.scene.transforms
-        _, to_frame = transforms.bake_frame(matrix)
+        _, to_bake_space = transforms.bake_space(matrix)
         self.rotation = transforms.rotation_part(matrix)
-        self.world = transforms.transform_points(np.linalg.inv(to_frame), self.vertices)
+        self.world = transforms.transform_points(np.linalg.inv(to_bake_space), self.vertices)
         self.g = package.scene.environment.rotation_matrix(scene) @ self.rotation
         depsgraph = bpy.context.evaluated_depsgraph_get()
         view = package.live.drawing.View.from_camera(camera, depsgraph, 64, 64, scene)
@@ -173,7 +173,7 @@ class SceneData:
             turned = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1], offset[2]])
             eyes.append(package.live.drawing.View(view.view_projection, tuple(centre + turned) + (1.0,)))
         self.views = [v.view_directions(self.world, self.rotation.T) for v in eyes]
-        self.eye, self.to_world = eyes[0], np.linalg.inv(to_frame)
+        self.eye, self.to_world = eyes[0], np.linalg.inv(to_bake_space)
         self.view_projection = view.view_projection
         rng = np.random.default_rng(11)
         n = len(self.vertices)
@@ -228,12 +228,14 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
         bake_records.append({"scene": data.name, "kind": "grid", "rays": rays, "vertices": n,
                              "light_order": s_max, "visibility_order": sv, "seconds": seconds})
         progress.step("%s: bake %d rays (AO, V~, T, M)" % (data.name, rays), 2.0)
-    # Timed bakes of one kind of data each (the cost model's constants).
+    # Timed bakes of one kind of data each (the cost model's constants; the designs are timed
+    # per order below).
     timing_orders = (4, 2)
-    for kind, kwargs in (("ambient_occlusion", {}), ("visibility", {"visibility_order": 2}),
-                         ("transfer", {"transfer_order": 4}), ("product_matrix", {"product_orders": timing_orders})):
-        _, seconds = bake(sdnative, data, full_rays, **kwargs)
-        bake_records.append({"scene": data.name, "kind": kind, "rays": full_rays, "vertices": n,
+    for array in importlib.import_module(package.__name__ + ".store.bake_data").ARRAYS:
+        if array.packing == "design":
+            continue
+        _, seconds = bake(sdnative, data, full_rays, **array.bake_arguments(*timing_orders))
+        bake_records.append({"scene": data.name, "kind": array.name, "rays": full_rays, "vertices": n,
                              "light_order": 4, "visibility_order": 2, "seconds": seconds})
     designs = {}
     for s, sv in designs_for(config, data.name):
@@ -581,11 +583,6 @@ def predictions(package, sdnative, data, hdris, config, rows, progress):
 # ----------------------------------------------------------------------------------------------
 # Costs: per row, and the fitted cost model
 
-BAKE_KIND = {"unshadowed": "ambient_occlusion", "ambient_occlusion": "ambient_occlusion",
-             "prt_diffuse": "transfer", "prt_matrix": "product_matrix", "prt_gaunt": "visibility",
-             "msd_lobe": "visibility", "msd_visibility": "design"}
-
-
 def fit_line(x, y):
     """Least-squares y = a + b x: (a, b); b only through the origin for a single x."""
     x, y = np.asarray(x, float), np.asarray(y, float)
@@ -629,7 +626,7 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
             row["bake_seconds"] = record["seconds"]
             row["design_nodes_mean"], row["design_nodes_max"] = record["design_nodes_mean"], record["design_nodes_max"]
         else:
-            row["bake_seconds"] = per_ray[scene, BAKE_KIND[method]] * n * (row["rays"] or 16)
+            row["bake_seconds"] = per_ray[scene, methods.get(method).baked_kind] * n * (row["rays"] or 16)
         row["bake_seconds_kind"] = "timed" if method == "msd_visibility" else "per ray of its kind, timed at s = 4, s' = 2"
         row["vertices"] = n
         row["bytes_per_vertex"] = 4 * costs["floats"][scene, method, s, sv]

@@ -140,7 +140,7 @@ def main():
     obj, mesh_name = load_mesh(scene, args)
     bpy.context.view_layer.update()
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    shape, _ = package.scene.transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
+    shape, _ = package.scene.transforms.bake_space(obj.evaluated_get(depsgraph).matrix_world)
     geometry = package.bake.geometry.evaluated_geometry(obj, depsgraph, shape)
     n = len(geometry.vertices)
     rays = args.rays

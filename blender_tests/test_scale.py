@@ -10,7 +10,7 @@ test_gpu_matches_cpu), seen from the same camera, must agree: relative RMS of B 
 and channels within TOLERANCE, or MIRROR_TOLERANCE where the scale mirrors.
 
 Without a mirror the two bakes get the same input (the bake applies the scale as Apply Scale
-does), so they agree to float rounding. A mirror is no rotation: the mirrored object's bake frame
+does), so they agree to float rounding. A mirror is no rotation: the mirrored object's bake space
 is turned by 180 degrees against the applied mesh's, so the two bakes trace different ray
 directions and differ by the Monte Carlo noise of RAYS rays. Measured (3.4.1, 2048 rays): 0 without
 a mirror (< 1e-6), 0.45 - 1.1 % with one (0 for the unshadowed method, which traces no rays).

@@ -24,12 +24,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-LABELS = {"unshadowed": "unshadowed", "ambient_occlusion": "AO", "prt_diffuse": "PRT (2)",
-          "prt_matrix": "PRT (8)", "prt_gaunt": "PRT (10)", "msd_lobe": "MSD (12)",
-          "msd_visibility": "MSD (13)"}
-COLOURS = {"unshadowed": "#999999", "ambient_occlusion": "#8c564b", "prt_diffuse": "#2ca02c",
-           "prt_matrix": "#1f77b4", "prt_gaunt": "#17becf", "msd_lobe": "#ff7f0e",
-           "msd_visibility": "#d62728"}
+# The method table (the add-on's methods.py, which needs no Blender) names the methods.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "addon"))
+from sd_lighting.methods import METHODS  # noqa: E402
+
+LABELS = {method.id: method.short_label for method in METHODS}
+PALETTE = ("#d62728", "#ff7f0e", "#17becf", "#1f77b4", "#2ca02c", "#8c564b", "#999999", "#9467bd", "#e377c2")
+COLOURS = {method.id: PALETTE[k % len(PALETTE)] for k, method in enumerate(METHODS)}
 MATERIALS = ["lambert", "phong4", "phong16", "phong64", "mix"]
 
 

@@ -4,7 +4,7 @@
  * follows the CPU evaluator step by step, so that the viewport agrees with it to float32 rounding.
  * Equation numbers are the seed's (msd-notes.md).
  *
- * Everything happens in the baked object's bake frame (its local frame with its scale applied:
+ * Everything happens in the baked object's bake space (its local space with its scale applied:
  * baking.py): the per-vertex data (normals, visibility, designs) were baked there, and the
  * environment coefficients in sd.light[] are those of x -> L(g R x), with g the environment
  * rotation and R the rotation part of the object's matrix (rotated on the CPU once per frame and
@@ -284,7 +284,7 @@ vec3 sd_lobe_design_sum(float v[SD_VIS_COUNT], vec3 a, int lobe)
 }
 #endif
 
-/* B of lobe 0 (axis a0, local frame) and, with SD_DIFFUSE_LOBE, of the Lambert lobe 1 (axis a1)
+/* B of lobe 0 (axis a0, local space) and, with SD_DIFFUSE_LOBE, of the Lambert lobe 1 (axis a1)
  * for vertex p; b1 stays zero without it. Where a method's work per vertex does not depend on the
  * lobe it is done once for both: PRT (8)'s row of M, PRT (10)'s L_a V~_b G_abc, MSD (13)'s L~ at
  * each node. */
@@ -373,13 +373,13 @@ void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
 
 /* B of lobe 0 (b0) and, with SD_DIFFUSE_LOBE, of the Lambert lobe (b1; zero without it) for vertex
  * p seen along `view` (unit, from the surface to the eye) with surface normal `normal`, both in
- * the object's local frame. */
+ * the object's local space. */
 void sd_shade_lobes(int p, vec3 normal, vec3 view, out vec3 b0, out vec3 b1)
 {
   sd_shade_pair(p, sd_lobe_axis(normal, view), normalize(normal), b0, b1);
 }
 
-/* Unit direction to the eye, in the object's local frame, from the point `offset` away from the
+/* Unit direction to the eye, in the object's local space, from the point `offset` away from the
  * object's origin (in world axes: mat3(sd.model) * pos). sd.camera holds the eye relative to that
  * origin, differenced in float64 on the CPU (gpu_shading.py): the eye minus a float32 world
  * position lost the view to rounding far from the world origin (a translation of 1e6 rounds

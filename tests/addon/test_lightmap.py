@@ -68,7 +68,7 @@ def test_sample_points_blend_corners_and_fall_back_to_the_face_normal():
     np.testing.assert_allclose(points, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     np.testing.assert_allclose(unit[0], np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0))
     np.testing.assert_allclose(unit[1], [0.0, 0.0, 1.0])   # +z and -z cancel: the winding's normal
-    # other per-vertex values (the local frame's positions) blend the same way
+    # other per-vertex values (the local space's positions) blend the same way
     np.testing.assert_allclose(lightmap.blend(vertices + 1.0, np.array([[0, 1, 2]]), np.array([0, 0]),
                                               np.array([[0.5, 0.5, 0.0], [0.5, 0.0, 0.5]])), points + 1.0)
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from sd_lighting import methods
+from sd_lighting.store import bake_data
 
 
 def uv_sphere(rings=6, segments=10):
@@ -35,7 +36,9 @@ GROUND = (np.array([[-3, -3, -1.1], [3, -3, -1.1], [3, 3, -1.1], [-3, 3, -1.1]],
 def test_ids_labels_and_enum():
     ids = [m.id for m in methods.METHODS]
     assert len(set(ids)) == len(ids) == 7
-    assert len({m.label for m in methods.METHODS}) == 7
+    assert len({m.label for m in methods.METHODS}) == len({m.short_label for m in methods.METHODS}) == 7
+    assert all(methods.get(m.equal_to).equal_to is None for m in methods.METHODS if m.equal_to)
+    assert {m.baked_kind for m in methods.METHODS} == {a.name for a in bake_data.ARRAYS}
     assert [item[0] for item in methods.enum_items()] == ids
     assert methods.get("prt_diffuse").lambert_only
     assert [m.id for m in methods.METHODS if m.lambert_only] == ["prt_diffuse"]

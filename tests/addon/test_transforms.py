@@ -60,16 +60,16 @@ def test_bake_frame_applies_scale_but_not_rotation_or_translation():
     matrix = np.eye(4)
     matrix[:3, :3] = transforms.euler_xyz((0.3, -0.2, 0.5)) @ np.diag([0.7, -1.3, 0.9])
     matrix[:3, 3] = (1.0, -2.0, 3.0)
-    shape, to_frame = transforms.bake_frame(matrix)
+    shape, to_bake_space = transforms.bake_space(matrix)
     points = np.array([[0.1, 0.2, 0.3], [-1.0, 0.5, 2.0], [0.0, 0.0, 0.0]])
     world = transforms.transform_points(matrix, points)
     # the local points with K applied are where the world points are in the frame
-    assert np.allclose(transforms.transform_points(to_frame, world), points @ shape.T, atol=1e-12)
+    assert np.allclose(transforms.transform_points(to_bake_space, world), points @ shape.T, atol=1e-12)
     # a rigid frame: distances and angles of the world are kept
-    assert np.allclose(to_frame[:3, :3] @ to_frame[:3, :3].T, np.eye(3), atol=1e-12)
+    assert np.allclose(to_bake_space[:3, :3] @ to_bake_space[:3, :3].T, np.eye(3), atol=1e-12)
     assert np.allclose(shape, shape.T, atol=1e-12) and np.linalg.det(shape) < 0
     uniform = np.diag([2.0, 2.0, 2.0, 1.0])
-    assert np.allclose(transforms.bake_frame(uniform)[0], 2.0 * np.eye(3))
+    assert np.allclose(transforms.bake_space(uniform)[0], 2.0 * np.eye(3))
 
 
 def test_transform_points_rotates_scales_and_translates():

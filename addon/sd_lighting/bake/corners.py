@@ -47,7 +47,7 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
 
     Each vertex's loops are taken in loop order: the first one not yet grouped leads a new copy,
     which takes every loop that agrees with it. So the copies and their order depend only on the
-    topology and on which corners agree - not on the frame the normals are in, nor on rounding
+    topology and on which corners agree - not on the space the normals are in, nor on rounding
     (a mirrored object and the same mesh with Apply Scale split alike)."""
     loop_vertices = np.asarray(loop_vertices, dtype=np.int64)
     normals = np.asarray(corner_normals, dtype=np.float64).reshape(-1, 3)

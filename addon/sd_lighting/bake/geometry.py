@@ -1,8 +1,8 @@
-"""The baked copy's geometry: the evaluated mesh as arrays in the object's bake frame, split
+"""The baked copy's geometry: the evaluated mesh as arrays in the object's bake space, split
 where its corners shade differently (corners.py) and optionally refined (refine.py), and the
 other objects' triangles that occlude it, joined into one mesh.
 
-The bake frame is the object's local frame with its scale K applied (scene/transforms.bake_frame):
+The bake space is the object's local space with its scale K applied (scene/transforms.bake_space):
 the rays of a non-uniformly scaled object are traced in the shape it is shown with.
 """
 
@@ -28,9 +28,9 @@ def _unit_or_zero(vectors):
 
 
 class Geometry:
-    """A mesh as arrays: its positions and polygons in the object's local frame (to rebuild it as
-    the baked mesh), and the vertices, normals and triangles that are baked, in the bake frame
-    (transforms.bake_frame: the local frame with the object's scale K applied).
+    """A mesh as arrays: its positions and polygons in the object's local space (to rebuild it as
+    the baked mesh), and the vertices, normals and triangles that are baked, in the bake space
+    (transforms.bake_space: the local space with the object's scale K applied).
 
     The vertices are the mesh's split where its corners shade differently (bake/corners.py): each
     carries the corner normal Blender and Cycles shade with, its material slot and, when a material
@@ -73,7 +73,7 @@ class Geometry:
 
     @property
     def mesh_positions(self):
-        """The mesh's own vertex positions in the local frame (before the split)."""
+        """The mesh's own vertex positions in the local space (before the split)."""
         return self._local_positions
 
     @property
@@ -127,7 +127,7 @@ class Geometry:
         return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
 
     def build_mesh(self, name):
-        """A new mesh datablock with this geometry in the local frame, vertices in the same order."""
+        """A new mesh datablock with this geometry in the local space, vertices in the same order."""
         return attributes.new_mesh(name, self.positions, self.loop_vertices, self.loop_starts,
                                    self.loop_totals)
 
@@ -153,7 +153,7 @@ class RefinedGeometry:
         self._mirrored = mirrored
 
     def build_mesh(self, name):
-        """A new mesh datablock of these triangles in the local frame (the object's winding)."""
+        """A new mesh datablock of these triangles in the local space (the object's winding)."""
         faces = self.triangles[:, ::-1] if self._mirrored else self.triangles
         count = len(faces)
         return attributes.new_mesh(name, self.positions, faces.ravel(), 3 * np.arange(count),

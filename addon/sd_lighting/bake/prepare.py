@@ -56,13 +56,13 @@ def bake_settings(scene, obj, env_source):
                 rays=int(fixed.get("rays", settings.rays)))
 
 
-def _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph):
-    """What the object's error is measured with (analysis.Inputs), in its bake frame."""
+def _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph):
+    """What the object's error is measured with (analysis.Inputs), in its bake space."""
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     rotation = environment.rotation_matrix(scene) @ transforms.rotation_part(matrix)
     eye = triangle_pixels = None
     if scene.camera is not None:
-        eye = transforms.transform_points(to_frame, np.array([scene.camera.matrix_world.translation]))[0]
+        eye = transforms.transform_points(to_bake_space, np.array([scene.camera.matrix_world.translation]))[0]
         render = scene.render
         width = render.resolution_x * render.resolution_percentage // 100
         height = render.resolution_y * render.resolution_percentage // 100
@@ -155,7 +155,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     for obj in objects:
         reason = _refusal(obj)
         if reason is None:
-            shape, to_frame = transforms.bake_frame(obj.evaluated_get(depsgraph).matrix_world)
+            shape, to_bake_space = transforms.bake_space(obj.evaluated_get(depsgraph).matrix_world)
             if np.linalg.matrix_rank(shape) < 3:
                 reason = "%s has a zero scale" % obj.name
         if reason is None:
@@ -165,11 +165,11 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         if reason is not None:
             skipped.append(reason)
             continue
-        occluders = geometry_module.join((transforms.transform_points(to_frame, world), triangles)
+        occluders = geometry_module.join((transforms.transform_points(to_bake_space, world), triangles)
                                          for world, triangles in occluders_of(obj))
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_frame, depsgraph)
+        inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
         if unwrap:
             unwrap_lightmap(context, tasks[-1])

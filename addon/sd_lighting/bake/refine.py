@@ -53,8 +53,8 @@ DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity
 
 @dataclass
 class Surface:
-    """A triangle mesh as the bake and the baked copy see it; per vertex: `vertices` (bake frame),
-    `normals` (unit or zero), `positions` (the object's local frame), `weld` (vertices at the same
+    """A triangle mesh as the bake and the baked copy see it; per vertex: `vertices` (bake space),
+    `normals` (unit or zero), `positions` (the object's local space), `weld` (vertices at the same
     place share it), `slots` and `uvs` (or None); `triangles` [T, 3] in the bake's winding."""
     vertices: np.ndarray
     normals: np.ndarray

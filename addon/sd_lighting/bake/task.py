@@ -166,7 +166,7 @@ class BakeTask:
         triangles and the occluders, and spread over the texels stored (lightmap.stored: baked, or
         within the dilation of a chart), in entry order, each with its source's values: {"size",
         "baked" (the texels baked), "stored" (the entries stored), "positions" (in the local
-        frame), "normals", "values" (the linear arrays of bake_transfer's result),
+        space), "normals", "values" (the linear arrays of bake_transfer's result),
         "seconds" (with lightmap_texels')}."""
         entries, triangle, barycentric, sources, seconds = texels
         start = time.perf_counter() - seconds
@@ -174,7 +174,7 @@ class BakeTask:
         geometry = self.baked
         points, normals = lightmap.sample_points(geometry.vertices, geometry.normals, geometry.triangles,
                                                  triangle, barycentric)
-        # the same points in the local frame (what the baked mesh's positions are in)
+        # the same points in the local space (what the baked mesh's positions are in)
         positions = lightmap.blend(geometry.positions, geometry.triangles, triangle, barycentric)
         arguments = self.bake_arguments()
         vertices, triangles = geometry_module.join([(geometry.vertices, geometry.triangles)] + self.occluder_parts())

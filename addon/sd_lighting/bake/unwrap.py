@@ -10,7 +10,7 @@ from . import lightmap
 
 def lightmap_uvs(context, geometry, size):
     """Each loop's lightmap UV of the geometry (float32 [L, 2]): Blender's Smart UV Project of a
-    copy in the bake frame scaled to unit area (texel density follows the scaled surface), its
+    copy in the bake space scaled to unit area (texel density follows the scaled surface), its
     charts at least lightmap.MARGIN_TEXELS texels of a size x size map apart. The margin is
     'ADD'ed in the copy's units around each chart before the charts are scaled into the map, so it
     is chosen from the scale they get (lightmap.add_margin; at unit area it stays far below the

@@ -4,7 +4,7 @@ Every baked, visible object is drawn with its baked mesh's geometry times the ob
 matrix, with the shader variant of its bake (gpu_shading.py), depth-tested against the scene.
 Per frame and object, the environment's coefficients are rotated on the CPU to those of
 x -> L(g R x): g the environment rotation (environment.py), R the rotation of the object's matrix
-(the bake's directions are in the object's bake frame: bake/geometry.py). The eye is the viewport's own
+(the bake's directions are in the object's bake space: bake/geometry.py). The eye is the viewport's own
 camera.
 
 What takes longer than a frame is computed in worker threads (background.py): the lobe

@@ -2,8 +2,8 @@
 per-object data they read.
 
 What a draw reads:
-- vertex attributes `pos` (the baked mesh's positions, in the object's local frame) and `nrm`
-  (the `sd_normal` it was baked with, in its bake frame: bake/geometry.py); per-pixel variants also
+- vertex attributes `pos` (the baked mesh's positions, in the object's local space) and `nrm`
+  (the `sd_normal` it was baked with, in its bake space: bake/geometry.py); per-pixel variants also
   `corners` (the triangle's three vertex indices, as floats: exact below 2^24 vertices) and
   `bary` (the corner's barycentric coordinates);
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are

@@ -16,7 +16,7 @@ The reference's own noise is removed from the squared error (its variance is kno
 reference noisier than the target still measures it without bias.
 
 MSD (13) equals PRT (8) and MSD (12) equals PRT (10) for the same rays and orders (Theorems 2.2
-and 2.1), so their errors are those of the PRT forms, which need no designs.
+and 2.1), so their errors are those of the PRT forms, which need no designs (methods.Method.equal_to).
 
 Nothing here needs Blender; the sdnative module is passed in.
 """
@@ -32,7 +32,6 @@ SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
 REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
 REFERENCE_TRIANGLES = 16     # sampled triangles per reference call (cancel granularity)
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
-SAME_AS = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}   # equal results (see above)
 
 
 def relative_error(values, reference, reference_variance=None):
@@ -101,7 +100,7 @@ class ErrorTable:
 
     sdnative: the module; environment: its Environment (the reference reads the full-resolution
     map); light: order -> the unrotated L of that order the live shading uses ([(s+1)^2, 3]);
-    rotation: g R, the environment's rotation into the bake frame (as shade's `rotation`);
+    rotation: g R, the environment's rotation into the bake space (as shade's `rotation`);
     methods: the ids (methods.py) to measure; orders s up to max_order and s' up to
     MAX_VISIBILITY_ORDER; rays: the bake's rays per vertex; stop: returns True to cancel (the
     measurement then raises InterruptedError); diffuse_share: with a Phong lobe, the share of a
@@ -123,7 +122,7 @@ class ErrorTable:
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
-        measured = [method_table.get(m) for m in sorted({SAME_AS.get(m, m) for m in self.methods})]
+        measured = [method_table.get(m) for m in sorted({method_table.get(m).measured_as for m in self.methods})]
         bakes = [self._bake(measured, seed + k, stop) for k in (0, 1)]
         # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
         # T_00 of the same rays with nothing in their way (the vertices as probes).
@@ -192,7 +191,7 @@ class ErrorTable:
     def error(self, setting):
         """The predicted relative RMS error of a setting (KeyError for one not measured)."""
         method = method_table.get(setting.method)
-        key = (SAME_AS.get(method.id, method.id), setting.light_order,
+        key = (method.measured_as, setting.light_order,
                setting.visibility_order if method.uses_visibility_order else 0)
         return self.measured[key].at(setting.rays)
 

@@ -18,11 +18,11 @@ MEASURED_RAYS = 256         # rays per vertex of the measurement (the error at o
 
 @dataclass
 class Inputs:
-    """One object's measurement inputs (main thread), in its bake frame."""
+    """One object's measurement inputs (main thread), in its bake space."""
     environment: object          # sdnative.Environment
     light: object                # order -> unrotated L of that order, as the live shading uses it
     rotation: np.ndarray         # g R
-    eye: object                  # the camera's position in the bake frame, or None
+    eye: object                  # the camera's position in the bake space, or None
     target_error: float
     max_order: int
     fixed: dict = field(default_factory=dict)   # the object's overrides (automatic.choose)
@@ -31,7 +31,7 @@ class Inputs:
 
 def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
            triangle_pixels):
-    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake frame."""
+    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake space."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
         env = native.get().environment_from_pixels(pixels)

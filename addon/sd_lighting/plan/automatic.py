@@ -154,7 +154,7 @@ def _reasons(table, best, candidates, target, met, fixed):
     if method.uses_visibility_order:
         lines.append("s' = %d: visibility's order (predicted above)" % setting.visibility_order)
     if method.data is not None:
-        measured = table.measured[(accuracy.SAME_AS.get(method.id, method.id), setting.light_order,
+        measured = table.measured[(method.measured_as, setting.light_order,
                                    setting.visibility_order if method.uses_visibility_order else 0)]
         lines.append("Rays: %d - ray noise %.1f %% (measured %.1f %% at %d)" % (
             setting.rays, 100 * measured.noise * (measured.rays / setting.rays) ** 0.5,

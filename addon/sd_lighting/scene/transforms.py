@@ -1,5 +1,5 @@
 """Rotations and affine transforms in float64 numpy: Blender's Euler angles, the world Mapping
-node's g, the rotation of an object's matrix and the frame it is baked in, points through a
+node's g, the rotation of an object's matrix and the space it is baked in, points through a
 matrix. mathutils works in float32, not orthogonal enough for the SH rotation's 1e-9 check.
 """
 
@@ -29,23 +29,23 @@ def rotation_part(matrix):
     scale, shear and mirror). R is the orthogonal factor of A's polar decomposition, negated when
     A mirrors - the same choice as Blender's Matrix.decompose(), which reports a mirror as a
     negative scale on every axis. It is unique and turns with the object (the rotation of Q A is
-    Q R), so directions baked in the frame R^T (world) stay attached to it."""
+    Q R), so directions baked in the space R^T (world) stay attached to it."""
     u, _, vt = np.linalg.svd(np.asarray(matrix, dtype=np.float64)[:3, :3])
     r = u @ vt
     return -r if np.linalg.det(r) < 0 else r
 
 
-def bake_frame(matrix):
-    """The frame an object is baked in: its local frame with the scale applied and the rotation
-    and translation not. Returns (K, to_frame): K [3, 3] takes the object's local coordinates
-    into it (p -> K p), to_frame [4, 4] world coordinates (w -> R^T (w - t)); R, K as in
+def bake_space(matrix):
+    """The space an object is baked in: its local space with the scale applied and the rotation
+    and translation not. Returns (K, to_bake_space): K [3, 3] takes the object's local coordinates
+    into it (p -> K p), to_bake_space [4, 4] world coordinates (w -> R^T (w - t)); R, K as in
     rotation_part."""
     matrix = np.asarray(matrix, dtype=np.float64)
     r = rotation_part(matrix)
-    to_frame = np.eye(4)
-    to_frame[:3, :3] = r.T
-    to_frame[:3, 3] = -r.T @ matrix[:3, 3]
-    return r.T @ matrix[:3, :3], to_frame
+    to_bake_space = np.eye(4)
+    to_bake_space[:3, :3] = r.T
+    to_bake_space[:3, 3] = -r.T @ matrix[:3, 3]
+    return r.T @ matrix[:3, :3], to_bake_space
 
 
 def transform_points(matrix, points):

@@ -36,7 +36,7 @@ class View:
         return cls(projection @ view, camera)
 
     def view_directions(self, world_positions, world_to_local):
-        """Unit directions to the eye, per point, in a local frame (float64, as the CPU does)."""
+        """Unit directions to the eye, per point, in a local space (float64, as the CPU does)."""
         if self.camera[3] > 0.5:
             to_eye = self.camera[:3] - world_positions
         else:

@@ -80,7 +80,7 @@ def store(bakes):
 
 def _lightmap_mesh(name, texels):
     """The texels' mesh of a bake's "lightmap" (BakeTask.bake_lightmap): one point per texel
-    stored, in entry order, at its point in the local frame, with its values of the bake's
+    stored, in entry order, at its point in the local space, with its values of the bake's
     attributes and its entry (attributes.write_texels)."""
     import bpy
     mesh = bpy.data.meshes.new(name)
@@ -125,7 +125,7 @@ def scale_changed(obj):
     if baked is None or not baked.shape:
         return False
     shape = np.array(baked.shape, dtype=np.float64).reshape(3, 3)
-    current = transforms.bake_frame(obj.matrix_world)[0]
+    current = transforms.bake_space(obj.matrix_world)[0]
     return not np.allclose(current, shape, rtol=0.0, atol=1e-5 * np.abs(shape).max())
 
 

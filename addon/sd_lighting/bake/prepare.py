@@ -165,8 +165,8 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         if reason is not None:
             skipped.append(reason)
             continue
-        occluders = geometry_module.join((transforms.transform_points(to_bake_space, world), triangles)
-                                         for world, triangles in occluders_of(obj))
+        occluders = geometry_module.join((transforms.transform_points(to_bake_space, world), faces)
+                                         for world, faces in occluders_of(obj))
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph)

@@ -4,7 +4,7 @@ and with it, the plain relative RMS of the clamped B, and min B / max B before a
 
     PYTHONPATH=build/native /usr/bin/python3 scripts/ringing_table.py [--orders 4,8,16]
 
-The displayed error and min/max are those of environment.h's Environment::displayed_error
+The displayed error and min/max are those of ringing.h's displayed_error
 (unshadowed B over a 256 x 128 grid of lobe axes, against the order-64 B).
 """
 

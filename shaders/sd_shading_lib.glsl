@@ -193,9 +193,10 @@ float sd_vertex_coefficient(int p, int first, int i)
 #endif
 
 #ifdef SD_METHOD_MSD_LOBE
-/* Two tangents completing a to an orthonormal frame: any rotation g_a taking e3 to a (Duff et
- * al. 2017, as the CPU evaluator); the twist does not matter for a zonal lobe (Theorem 2.1). */
-void sd_frame_around(vec3 a, out vec3 t1, out vec3 t2)
+/* Two tangents completing a to an orthonormal basis: any rotation g_a taking e3 to a (Duff et
+ * al. 2017; the CPU evaluator's orthonormal_basis has another twist, which does not matter for a
+ * zonal lobe: Theorem 2.1). */
+void sd_orthonormal_basis(vec3 a, out vec3 t1, out vec3 t2)
 {
   float sign_z = (a.z >= 0.0) ? 1.0 : -1.0;
   float c = -1.0 / (sign_z + a.z);
@@ -257,7 +258,7 @@ vec3 sd_unshadowed(vec3 a, int lobe)
 vec3 sd_lobe_design_sum(float v[SD_VIS_COUNT], vec3 a, int lobe)
 {
   vec3 t1, t2;
-  sd_frame_around(a, t1, t2);
+  sd_orthonormal_basis(a, t1, t2);
   int first = (lobe == 0) ? 0 : SD_LOBE_DESIGN_SIZE;
 #  ifdef SD_DIFFUSE_LOBE
   int end = (lobe == 0) ? SD_LOBE_DESIGN_SIZE : SD_LOBE_DESIGN_SIZE + SD_DIFFUSE_DESIGN_SIZE;

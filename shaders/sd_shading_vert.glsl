@@ -2,9 +2,9 @@
  *
  * Per-vertex shading (the seed's way, default): B is evaluated here for the vertex whose index is
  * gl_VertexID (an indexed batch: gl_VertexID is the index) and interpolated over the triangle.
- * SD_PER_PIXEL: the vertex only passes its frame on; the fragment shader evaluates B with the
- * pixel's normal and view for each of the triangle's three vertices' data (non-indexed batch with
- * the triangle's vertex indices in `corners` and the barycentric corner in `bary`).
+ * SD_PER_PIXEL: the vertex passes position, normal and corner on; the fragment shader evaluates B
+ * with the pixel's normal and view for each of the triangle's three vertices' data (non-indexed
+ * batch with the triangle's vertex indices in `corners` and the barycentric corner in `bary`).
  * SD_LIGHTMAP (with SD_PER_PIXEL): instead of `corners` and `bary`, the corner's `lightmap_uv`, at
  * which the fragment shader reads the texture-space data.
  * SD_VERTEX_TARGET (tests): vertex p is drawn as a point at pixel (p % width, p / width) of a

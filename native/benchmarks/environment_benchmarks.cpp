@@ -1,11 +1,14 @@
-// Times of the environment-map precompute (sdlighting/environment.h): SH projection of a
-// 2048 × 1024 equirect map at orders 4, 8 and 16 on 1 and 2 threads, a 512 × 256 band-limited
-// texture at order 8 (with the projection of the 2048 × 1024 map, and from coefficients alone),
-// the order-64 band energies of a 1024 × 512 map (Blender's HDRI size), and
-// the sampler's tables. After the Google Benchmark table, prints the 1 → 2 thread speedup of the
-// projection (median of 7 runs each).
+// Times of the environment-map precompute (sdlighting/sh_projection.h, environment_error.h,
+// ringing.h): SH projection of a 2048 × 1024 equirect map at orders 4, 8 and 16 on 1 and 2
+// threads, a 512 × 256 band-limited texture at order 8 (with the projection of the 2048 × 1024
+// map, and from coefficients alone), the order-64 band energies of a 1024 × 512 map (Blender's
+// HDRI size), and the sampler's tables. After the Google Benchmark table, prints the 1 → 2 thread
+// speedup of the projection (median of 7 runs each).
 #include "sdlighting/environment.h"
+#include "sdlighting/environment_error.h"
 #include "sdlighting/environment_sampler.h"
+#include "sdlighting/ringing.h"
+#include "sdlighting/sh_projection.h"
 
 #include <benchmark/benchmark.h>
 
@@ -34,7 +37,7 @@ const sd::Environment& test_map(int width, int height) {
 void BM_Projection2048x1024(benchmark::State& state) {
   const int order = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
   const sd::Environment& env = test_map(2048, 1024);
-  for (auto _ : state) benchmark::DoNotOptimize(env.sh(order, threads));
+  for (auto _ : state) benchmark::DoNotOptimize(sd::sh(env, order, threads));
   state.SetLabel("order " + std::to_string(order) + ", " + std::to_string(threads) + " thread(s)");
 }
 BENCHMARK(BM_Projection2048x1024)
@@ -46,14 +49,14 @@ void BM_BandLimited512x256(benchmark::State& state) {
   const sd::Environment& env = test_map(2048, 1024);
   for (auto _ : state) {
     sd::BandLimitedReport report;
-    benchmark::DoNotOptimize(env.band_limited(order, 512, 256, sd::RingingWindow::Hanning, &report));
+    benchmark::DoNotOptimize(sd::band_limited(env, order, 512, 256, sd::RingingWindow::Hanning, &report));
   }
 }
 BENCHMARK(BM_BandLimited512x256)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_BandLimitedTextureFromCoefficients512x256(benchmark::State& state) {
   const int order = static_cast<int>(state.range(0));
-  const std::vector<double> coefficients = test_map(2048, 1024).sh(order);
+  const std::vector<double> coefficients = sd::sh(test_map(2048, 1024), order);
   for (auto _ : state) {
     sd::BandLimitedReport report;
     benchmark::DoNotOptimize(sd::band_limited_texture(coefficients, order, 512, 256, sd::RingingWindow::Hanning, &report));
@@ -65,7 +68,7 @@ void BM_BandEnergiesOrder64_1024x512(benchmark::State& state) {
   const sd::Environment& base = test_map(1024, 512);
   for (auto _ : state) {
     sd::Environment fresh = base.area_averaged(1024, 512);  // a copy with an empty energy cache
-    benchmark::DoNotOptimize(fresh.lobe_filtered_error(sd::ZonalLobe::phong(32.0), 4));
+    benchmark::DoNotOptimize(sd::lobe_filtered_error(fresh, sd::ZonalLobe::phong(32.0), 4));
   }
 }
 BENCHMARK(BM_BandEnergiesOrder64_1024x512)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -80,7 +83,7 @@ double median_seconds(const sd::Environment& env, int order, int threads) {
   std::vector<double> times;
   for (int k = 0; k < 7; ++k) {
     const auto start = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(env.sh(order, threads));
+    benchmark::DoNotOptimize(sd::sh(env, order, threads));
     times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   std::sort(times.begin(), times.end());

@@ -106,23 +106,23 @@ int main(int argc, char** argv) {
     row("unshadowed", ns_per_vertex(n, repeats, [&] { sd::shade_unshadowed(in, out.data()); }), k);
     row("ambient occlusion", ns_per_vertex(n, repeats, [&] { sd::shade_ambient_occlusion(in, ao.data(), out.data()); }), k);
     if (!material.glossy) {
-      row("PRT (2) diffuse", ns_per_vertex(n, repeats, [&] { sd::shade_diffuse_prt(in, transfer.data(), out.data()); }), k);
+      row("PRT (2) diffuse", ns_per_vertex(n, repeats, [&] { sd::shade_prt_diffuse(in, transfer.data(), out.data()); }), k);
     }
     const double prt8 = row("PRT (8)-(9) product matrix",
-                            ns_per_vertex(n, repeats, [&] { sd::shade_prt_product_matrix(in, s_v, matrices.data(), out.data()); }),
+                            ns_per_vertex(n, repeats, [&] { sd::shade_prt_matrix(in, s_v, matrices.data(), out.data()); }),
                             double(k) * kv);
     const double prt10 = row("PRT (10) Gaunt",
                              ns_per_vertex(n, repeats, [&] { sd::shade_prt_gaunt(in, s_v, visibility.data(), out.data()); }),
                              double(gaunt_terms));
     const double msd12 = row("MSD (12) lobe design",
                              ns_per_vertex(n, repeats, [&] {
-                               sd::shade_msd_lobe_design(in, s_v, visibility.data(), lobe_design, out.data());
+                               sd::shade_msd_lobe(in, s_v, visibility.data(), lobe_design, out.data());
                              }),
                              double(lobe_design.size()) * kv);
     const double msd13 = row("MSD (13) visibility designs",
                              ns_per_vertex(n, repeats, [&] {
-                               sd::shade_msd_visibility_design(in, s_v, sd::VertexDesigns{offsets.data(), nodes.data(), weights.data()},
-                                                               out.data());
+                               sd::shade_msd_visibility(in, s_v, sd::VertexDesigns{offsets.data(), nodes.data(), weights.data()},
+                                                        out.data());
                              }),
                              mean_design * (s_v + 1));
     std::printf("%-10s ratio PRT (10) / MSD (12) = %.2f   PRT (8) / MSD (13) = %.2f   (lobe design %d nodes, "

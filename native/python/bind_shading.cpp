@@ -12,6 +12,7 @@
 
 #include <glm/matrix.hpp>
 
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -70,6 +71,112 @@ int trailing_order(const char* name, const std::optional<DoubleArray>& a) {
   return sh_order_from_count(name, a->shape(a->ndim() - 1), sd::kMaxShadingOrder);
 }
 
+// The arguments of shade() that the methods read, checked shape by shape by the method that reads them.
+struct ShadeArguments {
+  const sd::ShadingInputs& in;
+  py::ssize_t rows;  // N
+  const std::optional<DoubleArray>& ambient_occlusion;
+  const std::optional<DoubleArray>& transfer;
+  const std::optional<DoubleArray>& visibility;
+  const std::optional<DoubleArray>& product_matrices;
+  std::optional<int> visibility_order;
+  const std::optional<IndexArray>& design_offsets;
+  const std::optional<DoubleArray>& design_nodes;
+  const std::optional<DoubleArray>& design_weights;
+
+  // sh_count(s), the light's coefficients.
+  py::ssize_t k() const { return sd::sh_count(in.light_order); }
+
+  // Ṽ of shape (N, (s'+1)²) for prt_gaunt and msd_lobe; s_v receives s'.
+  const DoubleArray& visibility_sh(int& s_v) const {
+    s_v = trailing_order("visibility", visibility);
+    return require("visibility", visibility, {rows, sd::sh_count(s_v)});
+  }
+};
+
+// One method of shade(): its id (sdnative.shade's name, the add-on's and the shader's SD_METHOD_<ID>)
+// and what it does: check the arrays it reads, then run its evaluator (shading.h's shade_<id>)
+// without the GIL into out (N × 3).
+struct ShadeMethod {
+  const char* id;
+  void (*shade)(const ShadeArguments& a, double* out);
+};
+
+// The methods, keyed by id.
+const ShadeMethod kShadeMethods[] = {
+    {"unshadowed",
+     [](const ShadeArguments& a, double* out) {
+       py::gil_scoped_release release;
+       sd::shade_unshadowed(a.in, out);
+     }},
+    {"ambient_occlusion",
+     [](const ShadeArguments& a, double* out) {
+       const DoubleArray& ao = require("ambient_occlusion", a.ambient_occlusion, {a.rows});
+       py::gil_scoped_release release;
+       sd::shade_ambient_occlusion(a.in, ao.data(), out);
+     }},
+    {"prt_diffuse",
+     [](const ShadeArguments& a, double* out) {
+       const DoubleArray& t = require("transfer", a.transfer, {a.rows, a.k()});
+       py::gil_scoped_release release;
+       sd::shade_prt_diffuse(a.in, t.data(), out);
+     }},
+    {"prt_matrix",
+     [](const ShadeArguments& a, double* out) {
+       const int s_v = trailing_order("product_matrices", a.product_matrices);
+       const DoubleArray& m = require("product_matrices", a.product_matrices, {a.rows, a.k(), sd::sh_count(s_v)});
+       py::gil_scoped_release release;
+       sd::shade_prt_matrix(a.in, s_v, m.data(), out);
+     }},
+    {"prt_gaunt",
+     [](const ShadeArguments& a, double* out) {
+       int s_v = 0;
+       const DoubleArray& v = a.visibility_sh(s_v);
+       py::gil_scoped_release release;
+       sd::shade_prt_gaunt(a.in, s_v, v.data(), out);
+     }},
+    {"msd_lobe",
+     [](const ShadeArguments& a, double* out) {
+       int s_v = 0;
+       const DoubleArray& v = a.visibility_sh(s_v);
+       py::gil_scoped_release release;
+       sd::shade_msd_lobe(a.in, s_v, v.data(), cached_lobe_design(a.in.material, a.in.light_order + s_v), out);
+     }},
+    {"msd_visibility",
+     [](const ShadeArguments& a, double* out) {
+       if (!a.visibility_order) value_error("msd_visibility needs visibility_order (s', the order of the truncated lobe)");
+       check_order("visibility_order", *a.visibility_order, sd::kMaxShadingOrder);
+       if (!a.design_offsets || a.design_offsets->ndim() != 1 || a.design_offsets->shape(0) != a.rows + 1) {
+         value_error("msd_visibility needs design_offsets of shape (N+1,)");
+       }
+       const int64_t* offsets = a.design_offsets->data();
+       const size_t n = static_cast<size_t>(a.rows);
+       if (offsets[0] != 0) value_error("design_offsets must start at 0");
+       for (size_t p = 0; p < n; ++p) {
+         if (offsets[p + 1] < offsets[p]) value_error("design_offsets must be non-decreasing");
+       }
+       const py::ssize_t total = static_cast<py::ssize_t>(offsets[n]);
+       const DoubleArray& nodes = require("design_nodes", a.design_nodes, {total, 3});
+       const DoubleArray& weights = require("design_weights", a.design_weights, {total});
+       py::gil_scoped_release release;
+       sd::shade_msd_visibility(a.in, *a.visibility_order, sd::VertexDesigns{offsets, nodes.data(), weights.data()},
+                                out);
+     }},
+};
+
+// The method with this id; ValueError listing the ids otherwise.
+const ShadeMethod& shade_method(const std::string& id) {
+  for (const ShadeMethod& method : kShadeMethods) {
+    if (id == method.id) return method;
+  }
+  std::string ids;
+  const size_t count = std::size(kShadeMethods);
+  for (size_t i = 0; i < count; ++i) {
+    ids += std::string(i == 0 ? "" : i + 1 == count ? " or " : ", ") + kShadeMethods[i].id;
+  }
+  value_error("unknown method '" + id + "' (expected " + ids + ")");
+}
+
 py::array_t<double> shade(const std::string& method, const DoubleArray& light, const DoubleArray& normals,
                           const std::optional<DoubleArray>& views, const std::optional<DoubleArray>& rotation,
                           const std::string& lobe, double exponent, const std::optional<DoubleArray>& ambient_occlusion,
@@ -103,56 +210,11 @@ py::array_t<double> shade(const std::string& method, const DoubleArray& light, c
   in.view_dirs = material.glossy ? unit_views.data() : nullptr;
   in.material = material;
 
+  const ShadeMethod& evaluator = shade_method(method);
   py::array_t<double> out({rows, py::ssize_t{3}});
-  double* result = out.mutable_data();
-  const py::ssize_t k = sd::sh_count(s);
-  if (method == "unshadowed") {
-    py::gil_scoped_release release;
-    sd::shade_unshadowed(in, result);
-  } else if (method == "ambient_occlusion") {
-    const DoubleArray& ao = require("ambient_occlusion", ambient_occlusion, {rows});
-    py::gil_scoped_release release;
-    sd::shade_ambient_occlusion(in, ao.data(), result);
-  } else if (method == "prt_diffuse") {
-    const DoubleArray& t = require("transfer", transfer, {rows, k});
-    py::gil_scoped_release release;
-    sd::shade_diffuse_prt(in, t.data(), result);
-  } else if (method == "prt_matrix") {
-    const int s_v = trailing_order("product_matrices", product_matrices);
-    const DoubleArray& m = require("product_matrices", product_matrices, {rows, k, sd::sh_count(s_v)});
-    py::gil_scoped_release release;
-    sd::shade_prt_product_matrix(in, s_v, m.data(), result);
-  } else if (method == "prt_gaunt" || method == "msd_lobe") {
-    const int s_v = trailing_order("visibility", visibility);
-    const DoubleArray& v = require("visibility", visibility, {rows, sd::sh_count(s_v)});
-    py::gil_scoped_release release;
-    if (method == "prt_gaunt") {
-      sd::shade_prt_gaunt(in, s_v, v.data(), result);
-    } else {
-      sd::shade_msd_lobe_design(in, s_v, v.data(), cached_lobe_design(material, s + s_v), result);
-    }
-  } else if (method == "msd_visibility") {
-    if (!visibility_order) value_error("msd_visibility needs visibility_order (s', the order of the truncated lobe)");
-    check_order("visibility_order", *visibility_order, sd::kMaxShadingOrder);
-    if (!design_offsets || design_offsets->ndim() != 1 || design_offsets->shape(0) != rows + 1) {
-      value_error("msd_visibility needs design_offsets of shape (N+1,)");
-    }
-    const int64_t* offsets = design_offsets->data();
-    if (offsets[0] != 0) value_error("design_offsets must start at 0");
-    for (size_t p = 0; p < n; ++p) {
-      if (offsets[p + 1] < offsets[p]) value_error("design_offsets must be non-decreasing");
-    }
-    const py::ssize_t total = static_cast<py::ssize_t>(offsets[n]);
-    const DoubleArray& nodes = require("design_nodes", design_nodes, {total, 3});
-    const DoubleArray& weights = require("design_weights", design_weights, {total});
-    py::gil_scoped_release release;
-    sd::shade_msd_visibility_design(in, *visibility_order, sd::VertexDesigns{offsets, nodes.data(), weights.data()},
-                                    result);
-  } else {
-    value_error("unknown method '" + method +
-                "' (expected unshadowed, ambient_occlusion, prt_diffuse, prt_matrix, prt_gaunt, msd_lobe or "
-                "msd_visibility)");
-  }
+  evaluator.shade(ShadeArguments{in, rows, ambient_occlusion, transfer, visibility, product_matrices, visibility_order,
+                                 design_offsets, design_nodes, design_weights},
+                  out.mutable_data());
   return out;
 }
 

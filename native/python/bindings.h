@@ -12,8 +12,20 @@ void bind_sh(pybind11::module_& m);
 /// Weighted spherical designs of lobes, tabulated zonal weights and discrete measures.
 void bind_designs(pybind11::module_& m);
 
-/// Environment maps: loading, SH projection, band-limited textures, error measures, designs.
+/// Environment maps: the class Environment (size, texels, masses, area-averaged copies), loading.
 void bind_environment(pybind11::module_& m);
+
+/// Environment.sh, .band_limited, .band_energies and band_limited_texture (after bind_environment).
+void bind_sh_projection(pybind11::module_& m);
+
+/// Environment.low_frequency_error, .lobe_filtered_error, .smallest_order (after bind_environment).
+void bind_environment_error(pybind11::module_& m);
+
+/// Environment.ringing_window and .displayed_error (after bind_environment).
+void bind_ringing(pybind11::module_& m);
+
+/// Environment.channel_design (after bind_environment).
+void bind_channel_design(pybind11::module_& m);
 
 /// Importance sampling of environment maps.
 void bind_environment_sampler(pybind11::module_& m);

@@ -100,7 +100,11 @@ PYBIND11_MODULE(sdnative, m) {
   m.attr("MAX_CALL_BYTES") = sd::kMaxCallBytes;
   sdpy::bind_sh(m);
   sdpy::bind_designs(m);
-  sdpy::bind_environment(m);
+  sdpy::bind_environment(m);  // the class first: the next four add its methods
+  sdpy::bind_sh_projection(m);
+  sdpy::bind_environment_error(m);
+  sdpy::bind_ringing(m);
+  sdpy::bind_channel_design(m);
   sdpy::bind_environment_sampler(m);
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);

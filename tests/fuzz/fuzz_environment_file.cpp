@@ -4,6 +4,7 @@
 // std::exception with a message: never a crash, hang, leak or undefined behaviour.
 #include "fuzz_values.h"
 #include "sdlighting/environment.h"
+#include "sdlighting/sh_projection.h"
 
 #include <unistd.h>
 
@@ -39,7 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
     for (float v : map.pixels()) {
       if (!std::isfinite(v) || v < 0.0f) sd::fuzz::contract_broken("a loaded pixel is negative or not finite");
     }
-    for (double c : map.sh(2, 1)) {
+    for (double c : sd::sh(map, 2, 1)) {
       if (!std::isfinite(c)) sd::fuzz::contract_broken("a loaded map's SH coefficient is not finite");
     }
   } catch (const std::exception& error) {

@@ -3,7 +3,11 @@
 // them: the SH projection, a band-limited texture, the error measures, area averaging and a
 // channel design. Every call must give finite results or a std::exception with a message.
 #include "fuzz_values.h"
+#include "sdlighting/channel_design.h"
 #include "sdlighting/environment.h"
+#include "sdlighting/environment_error.h"
+#include "sdlighting/ringing.h"
+#include "sdlighting/sh_projection.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -20,24 +24,25 @@ void expect_finite(const std::vector<double>& values, const char* what) {
 // One of the queries on a map that loaded.
 void query(FuzzedDataProvider& data, const sd::Environment& map) {
   switch (data.ConsumeIntegralInRange<int>(0, 5)) {
-    case 0: expect_finite(map.sh(sd::fuzz::hostile_order(data, 0, 4), 1), "an SH coefficient is not finite"); break;
+    case 0: expect_finite(sd::sh(map, sd::fuzz::hostile_order(data, 0, 4), 1), "an SH coefficient is not finite"); break;
     case 1: {
       const auto window = static_cast<sd::RingingWindow>(data.ConsumeIntegralInRange<int>(0, 2));
       const int order = sd::fuzz::hostile_order(data, 0, 6);
       const int width = sd::fuzz::hostile_order(data, 1, 16), height = sd::fuzz::hostile_order(data, 1, 8);
-      for (float v : map.band_limited(order, width, height, window)) {
+      for (float v : sd::band_limited(map, order, width, height, window)) {
         if (!std::isfinite(v)) sd::fuzz::contract_broken("a band-limited texel is not finite");
       }
       break;
     }
     case 2: {
-      const double error = map.lobe_filtered_error(sd::ZonalLobe::phong(data.ConsumeFloatingPointInRange(0.0, 1e4)),
+      const double error = sd::lobe_filtered_error(map, sd::ZonalLobe::phong(data.ConsumeFloatingPointInRange(0.0, 1e4)),
                                                    sd::fuzz::hostile_order(data, 0, 8));
       if (!(error >= 0.0 && error <= 1.0 + 1e-9)) sd::fuzz::contract_broken("a lobe-filtered error outside [0, 1]");
       break;
     }
     case 3: {
-      const double error = map.low_frequency_error(sd::fuzz::hostile_order(data, 0, 8), data.ConsumeIntegralInRange(0, 3));
+      const double error =
+          sd::low_frequency_error(map, sd::fuzz::hostile_order(data, 0, 8), data.ConsumeIntegralInRange(0, 3));
       if (!(error >= 0.0 && error <= 1.0 + 1e-9)) sd::fuzz::contract_broken("ε(s) outside [0, 1]");
       break;
     }
@@ -50,7 +55,7 @@ void query(FuzzedDataProvider& data, const sd::Environment& map) {
     }
     default: {
       const sd::SphericalDesign design =
-          map.channel_design(sd::fuzz::hostile_order(data, 0, 3), sd::fuzz::hostile_order(data, 0, 4));
+          sd::channel_design(map, sd::fuzz::hostile_order(data, 0, 3), sd::fuzz::hostile_order(data, 0, 4));
       for (double w : design.weights) {
         if (!(w > 0.0 && std::isfinite(w))) sd::fuzz::contract_broken("a channel design weight is not positive");
       }

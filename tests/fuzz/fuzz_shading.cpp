@@ -67,13 +67,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
     switch (method) {
       case 0: sd::shade_unshadowed(in, out.data()); break;
       case 1: sd::shade_ambient_occlusion(in, finite_array(data, vertices, 1.0).data(), out.data()); break;
-      case 2: sd::shade_diffuse_prt(in, finite_array(data, vertices * k, 1.0).data(), out.data()); break;
-      case 3: sd::shade_prt_product_matrix(in, s_v, finite_array(data, vertices * k * kv, 1.0).data(), out.data()); break;
+      case 2: sd::shade_prt_diffuse(in, finite_array(data, vertices * k, 1.0).data(), out.data()); break;
+      case 3: sd::shade_prt_matrix(in, s_v, finite_array(data, vertices * k * kv, 1.0).data(), out.data()); break;
       case 4: sd::shade_prt_gaunt(in, s_v, finite_array(data, vertices * kv, 1.0).data(), out.data()); break;
       case 5: {
         const auto visibility = finite_array(data, vertices * kv, 1.0);
         const int degree = sd::fuzz::hostile_order(data, 0, 6);
-        sd::shade_msd_lobe_design(in, s_v, visibility.data(), lobe_design(material, degree), out.data());
+        sd::shade_msd_lobe(in, s_v, visibility.data(), lobe_design(material, degree), out.data());
         break;
       }
       default: {
@@ -88,8 +88,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
           }
           offsets.push_back(static_cast<std::int64_t>(weights.size()));
         }
-        sd::shade_msd_visibility_design(in, s_v, sd::VertexDesigns{offsets.data(), nodes.data(), weights.data()},
-                                        out.data());
+        sd::shade_msd_visibility(in, s_v, sd::VertexDesigns{offsets.data(), nodes.data(), weights.data()},
+                                 out.data());
         break;
       }
     }

@@ -1,7 +1,9 @@
-// Environment maps L (the distant light of eq. (1)): loading through OpenImageIO, projection to
-// real spherical harmonics, band-limited textures L̃, the error measures that choose the order s
-// and weighted designs of a channel. Rotation: rotated_sh (sh_rotation.h); importance sampling:
-// environment_sampler.h.
+// Environment maps L (the distant light of eq. (1)): loading through OpenImageIO, the texels, their
+// masses and norms, area-averaged copies. What is computed from a map has a header per concern:
+// sh_projection.h (SH coefficients, band energies, band-limited textures L̃), environment_error.h
+// (the error measures that choose the order s), ringing.h (windows against ringing and the error of
+// the displayed radiance that chooses them), channel_design.h (weighted designs of a channel).
+// Rotation: rotated_sh (sh_rotation.h); importance sampling: environment_sampler.h.
 //
 // Orientation (Blender/Cycles world, blender-notes "Cycles as a reference"): a direction d is
 // seen in an equirectangular image at
@@ -28,15 +30,7 @@
 // looks it up (nearest texel), and every sum over the map runs over these texels: masses and norms
 // exactly, SH coefficients with the integral of y_lm over each texel's area (not its value at the
 // centre, which makes a small constant map light like a few point lights).
-//
-// SH convention: spherical_harmonics.h (y_00 = 1, orthonormal for dμ). RGB coefficient arrays
-// are coefficient-major, channel-minor: c[3 i + ch] is coefficient i = l² + l + m of channel ch,
-// as ShRotation::apply(in, out, 3) and the shading evaluators (shading.h) expect.
 #pragma once
-
-#include "sdlighting/limits.h"
-#include "sdlighting/spherical_design.h"
-#include "sdlighting/zonal_lobe.h"
 
 #include <glm/vec3.hpp>
 
@@ -63,53 +57,13 @@ inline double luminance(double r, double g, double b) {
 /// The two storage layouts.
 enum class EnvironmentLayout { Equirect, Cube };
 
-/// Windows σ_l against ringing of the truncated expansion L̃ = Σ_{l<=s} σ_l L_lm y_lm:
-/// None σ_l = 1; Hanning σ_l = (1 + cos(π l/(s+1)))/2; Lanczos σ_l = sinc(l/(s+1)) = sin(πx)/(πx);
-/// Sloan σ_l = 1/(1 + λ l²(l+1)²) (P.-P. Sloan, "Stupid Spherical Harmonics (SH) Tricks", GDC 2008,
-/// section "Windowing": the minimiser of ‖f̃ − f‖² + λ ‖Δf̃‖², the Laplacian's eigenvalue being −l(l+1)).
-enum class RingingWindow { None, Hanning, Lanczos, Sloan };
-
-/// A window with its parameter: Sloan's λ (>= 0; ignored by the others). Converts from a RingingWindow
-/// (λ = 0), so a Sloan window needs its λ given explicitly.
-struct RingingWindowSpec {
-  RingingWindow window = RingingWindow::None;
-  double sloan_lambda = 0.0;
-  RingingWindowSpec(RingingWindow w = RingingWindow::None, double lambda = 0.0) : window(w), sloan_lambda(lambda) {}
-};
-
-/// "none", "hanning" (or "hann"), "lanczos" or "sloan"; throws std::invalid_argument otherwise.
-RingingWindow ringing_window_from_name(const std::string& name);
-
-/// The name ringing_window_from_name reads.
-std::string ringing_window_name(RingingWindow window);
-
-/// σ_l of the window for band l of an expansion of order `order` (0 <= l <= order).
-double ringing_window_factor(const RingingWindowSpec& window, int l, int order);
-
-/// What Environment::ringing_window reports: a window for one lobe and order s, and the error of the
-/// displayed radiance with it and without (see Environment::displayed_error for the measure).
-struct RingingWindowChoice {
-  RingingWindowSpec window;
-  std::vector<double> factors;          // σ_0..σ_s
-  double error = 0.0;                   // displayed_error with the window
-  double unwindowed_error = 0.0;        // displayed_error with none
-  double l2_error = 0.0;                // plain relative RMS of the clamped B, with the window
-  double unwindowed_l2_error = 0.0;     // the same with none
-  double min_over_max = 0.0;            // min / max of B̃ (not clamped) over axes and channels
-  double unwindowed_min_over_max = 0.0; // the same with none: negative = ringing below zero
-};
-
-/// What Environment::band_limited reports about L̃ (all in linear radiance).
-struct BandLimitedReport {
-  std::array<double, 3> min_value{};  // per channel; negative = ringing below zero
-  std::array<double, 3> max_value{};  // per channel
-  int64_t negative_texels = 0;        // output texels with at least one channel < 0
-  double negative_fraction = 0.0;     // negative_texels / (width * height)
-  double negative_solid_angle = 0.0;  // μ-measure (dx/4π) covered by those texels, in [0, 1]
-};
+/// The lazily computed high-order projection of a map (the reference of band_energies,
+/// sh_projection.h), shared by its copies. Private to the library (src/environment/environment_detail.h).
+struct ReferenceProjection;
 
 /// A distant environment map, immutable once built. Copies share the lazily computed high-order
-/// projection (band_energies); every const member is safe to call from several threads at once.
+/// projection (band_energies, sh_projection.h); every const member, and every function of the
+/// headers above that takes a map, is safe to call from several threads at once.
 class Environment {
  public:
   // ---- construction ----
@@ -186,110 +140,13 @@ class Environment {
   /// Throws std::invalid_argument for sizes < 1 or a non-square cube size.
   Environment area_averaged(int width, int height) const;
 
-  // ---- spherical harmonics ----
-
-  /// L_lm = ∫ L y_lm dμ = Σ_texels L(texel) ∫_texel y_lm dμ for l <= order (0..kMaxProjectionOrder,
-  /// else std::invalid_argument): the exact coefficients of the piecewise-constant map, each texel
-  /// integral by a Gauss–Legendre rule sized to the texel (within 1e-5 of max |y_lm| × the mass; a
-  /// constant map of any size, down to 1 × 1, gives L_00 = the constant and every other
-  /// coefficient below that bound). Returns sh_count(order) × 3 doubles, out[3 i + c].
-  /// Multi-threaded on `threads` threads (0: every hardware thread); the result is bit-identical
-  /// for every thread count (per-row partial sums reduced in a fixed order). Equirect maps use the
-  /// row structure: the azimuthal integrals exactly (sinc factors) once per column, the θ rule
-  /// once per row (cost ∝ W H (order+1)); cube maps evaluate y_lm at each texel's rule points
-  /// (cost ∝ texels × points × (order+1)², 4 points per texel from face 128 on).
-  std::vector<double> sh(int order, int threads = 0) const;
-
-  /// Band-limited L̃(d) = Σ_{l<=order} σ_l L_lm y_lm(d) (the seed's partial sum of order s, windowed
-  /// by σ_l against ringing) — the L̃ that eqs. (12) and (13) look up, stored as a texture as comment 1
-  /// to Theorem 2.1 suggests — sampled at the centres of a width × height equirectangular texture in
-  /// the same orientation, rows top-first: 3 floats per texel, rgb[3 (j width + i) + c] — ready
-  /// for a float texture (L̃ is not clamped: negative lobes are kept and reported).
-  /// order 0..kMaxEnergyOrder; coefficients from sh(order) for order <= kMaxProjectionOrder,
-  /// otherwise from the reference projection (see band_energies); then band_limited_texture.
-  /// If `report` is non-null it receives the minima/maxima and the negative texels of L̃.
-  /// Throws std::invalid_argument for an order out of range or a size < 1 (or above 16384).
-  std::vector<float> band_limited(int order, int width, int height, const RingingWindowSpec& window = {},
-                                  BandLimitedReport* report = nullptr) const;
-
-  /// Per-band energies E_l = Σ_m L_lm² for l = 0..lmax (lmax in 0..kMaxEnergyOrder), channels
-  /// R, G, B and the luminance: out[4 l + c]. Rotation invariant. Computed once (lazily, cached)
-  /// from the reference projection of order kMaxEnergyOrder: of the map itself when it has at
-  /// most 4096 × 2048 texels (equirect) or a face of at most 128 (cube); of an area_averaged copy
-  /// reduced to that otherwise. Box-filtering over texels of angular width h attenuates band l by
-  /// about l(l+1)h²/12 in energy: < 1e-3 at l = 64 for the 4096-wide equirect copy, about 2 % at
-  /// l = 32 for the face-128 cube copy — negligible in the lobe-filtered errors, whose factors ŵ_l²
-  /// are below 1e-7 (Lambert) and 1e-17 (Phong σ = 32) from l = 32 on.
-  std::vector<double> band_energies(int lmax) const;
-
-  /// The seed's low-frequency measure ε(s) = ‖L − L̃_s‖ / ‖L‖ in L²(dμ) (the condition stated before
-  /// Theorem 1.1, whose bound |B − B̄| <= ε ‖L‖ ‖ρ̂‖ uses eqs. (6)–(7)) for one channel (0..2 or
-  /// kLuminance), exact via Parseval: ‖L − L̃_s‖² = ‖L‖² − Σ_{l<=s} E_l, with ‖L‖² = Σ L² Δμ over
-  /// the texels of the map the energies were projected from. order in 0..kMaxEnergyOrder.
-  /// Returns 0 for a black channel.
-  double low_frequency_error(int order, int channel = kLuminance) const;
-
-  /// The error that really decides s (msd-notes, "Facts worth knowing"): the relative RMS over
-  /// lobe axes a ∈ S² of the truncation error B − B̄ of eq. (6) for V = 1, i.e. of the unshadowed
-  /// B(a) = Σ_lm ŵ_l L_lm y_lm(a) (Funk–Hecke) cut at l <= s, on luminance:
-  ///     sqrt( Σ_{order<l<=64} ŵ_l² E_l / Σ_{l<=64} ŵ_l² E_l ),
-  /// since ∫ (B − B̃_s)² dμ(a) = Σ_{l>s} ŵ_l² E_l. order in 0..kMaxEnergyOrder. 0 for a black map.
-  /// The neglected tail Σ_{l>64} ŵ_l² E_l has factors ŵ_l² < 1e-19 for Phong σ <= 100 (< 2e-13 for
-  /// σ = 150, < 3e-9 for Lambert); for much narrower lobes the error is underestimated (it is then
-  /// close to 1 anyway).
-  double lobe_filtered_error(const ZonalLobe& lobe, int order) const;
-
-  /// The error of the *displayed* unshadowed B of order s with window factors σ_0..σ_order (one per
-  /// band; order 0..kMaxShadingOrder) against the full-resolution B — the one that decides the window
-  /// (ringing_window). Both are evaluated per RGB channel c at the centres of a 256 × 128 equirect
-  /// grid of lobe axes a (the texels' solid angles as weights):
-  ///     B̃_c(a) = Σ_{l<=s} σ_l ŵ_l L_lm y_lm(a),   B_c(a) = Σ_{l<=64} ŵ_l L_lm y_lm(a)  (Funk–Hecke),
-  /// and compared as displayed: clamped at 0 (D = max(B̃, 0), the live shading's clamp) and through
-  /// Reinhard's tone curve T_c(x) = x / (x + B̄_c), B̄_c = L_00,c the mean of B over the axes:
-  ///     sqrt( Σ_a Σ_c (T_c(D_c) − T_c(max(B_c, 0)))² Δμ / Σ_a Σ_c T_c(max(B_c, 0))² Δμ ).
-  /// Why this measure: in plain L² the truncation is the best approximation of order s, so any
-  /// window loses there; clamping does not change that at first order (lifting a negative lobe
-  /// towards 0 shows nothing, its cost elsewhere stays), and L² weighs a sun's highlight a thousand
-  /// times more than the dark side it rings into. What ringing spoils on screen is that dark side
-  /// (axes shown black, or as rings, next to a bright one), which T, relative to the local
-  /// brightness above the mean and absolute below it, measures. The plain clamped relative RMS is
-  /// reported beside it (RingingWindowChoice::l2_error). L_lm: the reference projection of
-  /// band_energies. 0 for a black map. Throws std::invalid_argument for a bad order or size.
-  RingingWindowChoice displayed_error(const ZonalLobe& lobe, int order, const std::vector<double>& factors) const;
-
-  /// The window for `lobe` and order s (0..kMaxShadingOrder) and its errors (displayed_error):
-  /// None, Hanning and Lanczos as defined; Sloan with the λ that minimises displayed_error over
-  /// λ = t / (s(s+1))², t = 10^(k/4), k = −16..12 (t is 1/σ_s − 1: the attenuation of the top band).
-  RingingWindowChoice ringing_window(const ZonalLobe& lobe, int order, RingingWindow window) const;
-
-  /// The automatic choice: of None, Hanning, Lanczos and Sloan (as ringing_window), the window with
-  /// the smallest displayed_error; None unless another lowers none's error by more than 1 % of it.
-  /// Costs about 40 evaluations of order s and one of order 64 on the 256 × 128 grid (0.1–0.4 s on
-  /// two cores for s = 4..16), plus the reference projection the first time (band_energies).
-  RingingWindowChoice automatic_ringing_window(const ZonalLobe& lobe, int order) const;
-
-  /// The smallest s in [0, max_order] with lobe_filtered_error(lobe, s) <= target_error, or −1
-  /// if none reaches it. max_order in 0..kMaxEnergyOrder; target_error finite and >= 0.
-  int smallest_order(const ZonalLobe& lobe, double target_error, int max_order) const;
-
-  /// A weighted spherical design of `degree` (0..kMaxDesignDegree) for one channel (0..2 or
-  /// kLuminance) of the environment, i.e. for the measure L_c dμ (the seed's comment 3 and
-  /// Table 2): sd::weighted_design on an area-averaged copy of about 2000 texels (equirect
-  /// 64 × 32, cube face 18; the map itself when it is already that small), with nodes at texel
-  /// centres and weights L_c Δμ, so the design's moments are those of the copy: they match the
-  /// full map's L_lm up to the box filter's attenuation (about l(l+1)h²/24, h ≈ 0.1 rad: ~1 %
-  /// at l = 4). Certified to kDesignTolerance against the copy's moments. Throws
-  /// std::invalid_argument for a bad channel or degree or a black channel, std::runtime_error
-  /// if no design certifies.
-  SphericalDesign channel_design(int channel, int degree) const;
-
  private:
-  struct EnergyCache;
+  /// The map's reference projection, computed on the first call (src/environment/projection.cpp).
+  friend const ReferenceProjection& reference_projection(const Environment& environment);
 
   Environment() = default;
   static Environment from_texels(EnvironmentLayout layout, int width, int height, std::vector<float> rgb,
                                  const std::string& origin);
-  const EnergyCache& energy_cache() const;
 
   EnvironmentLayout layout_ = EnvironmentLayout::Equirect;
   int width_ = 0;
@@ -298,21 +155,7 @@ class Environment {
   int64_t clamped_negative_pixels_ = 0;
   std::array<double, 4> mass_{};
   std::array<double, 4> norm_squared_{};
-  std::shared_ptr<EnergyCache> cache_;
+  std::shared_ptr<ReferenceProjection> reference_;
 };
-
-/// The texture of Environment::band_limited from given RGB coefficients (layout as sh(), e.g.
-/// already rotated by rotated_sh): L̃(d) = Σ_{l<=order} σ_l c_lm y_lm(d) at the texel centres of
-/// a width × height equirect image in the file comment's orientation, rows top-first, 3 floats
-/// per texel; `report` (if non-null) as for band_limited. order in 0..kMaxEnergyOrder, sizes in
-/// [1, 16384], coefficients finite and sh_count(order) × 3 of them, and every value within the
-/// float32 range of the texture (huge coefficients overflow it); std::invalid_argument otherwise. Multi-threaded over rows; cost ∝ width × height × (order+1).
-std::vector<float> band_limited_texture(const std::vector<double>& coefficients, int order, int width, int height,
-                                        const RingingWindowSpec& window = {},
-                                        BandLimitedReport* report = nullptr);
-
-/// Σ_{l<=order} Σ_m c_lm y_lm(dir) for the three channels of RGB coefficients (layout as sh()).
-/// `dir` must be unit.
-glm::dvec3 evaluate_sh_rgb(const std::vector<double>& coeffs, int order, const glm::dvec3& dir);
 
 }  // namespace sd

@@ -37,7 +37,9 @@ class EnvironmentSampler {
   double texel_probability(int64_t t) const { return probability_[static_cast<size_t>(t)]; }
 
  private:
-  double pdf_in_texel(int64_t t, const glm::dvec3& dir) const;
+  /// The density w.r.t. dμ at a point of texel t (the class comment): p_t / Δμ_t in an equirect
+  /// texel (a, b ignored); p_t 4π (1 + a² + b²)^{3/2} / (Δa Δb) at face coordinates (a, b) in a cube's.
+  double density(int64_t t, double a, double b) const;
 
   EnvironmentLayout layout_;
   int width_;

@@ -22,7 +22,7 @@ constexpr double kMaxPhongExponent = 1e4;
 /// Highest order of Environment::sh (the full-resolution projection used for shading).
 constexpr int kMaxProjectionOrder = 16;
 /// Highest order of the band energies, the error measures and the band-limited textures: the "high
-/// order" to which lobe-filtered errors are summed (environment.h, band_energies).
+/// order" to which lobe-filtered errors are summed (sh_projection.h, band_energies).
 constexpr int kMaxEnergyOrder = 64;
 /// Largest width and height of a band-limited texture.
 constexpr int kMaxTextureSide = 16384;

@@ -95,7 +95,7 @@ struct TransferBake {
   std::vector<glm::dvec3> normals;
   int rays = 0;
   std::uint64_t seed = 0;
-  std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object frame
+  std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object space
   double seconds = 0.0;  ///< wall time of the whole bake (scene build included)
 
   std::vector<double> ambient_occlusion;  ///< [N]

@@ -198,6 +198,6 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
   }
 }
 
-std::vector<glm::dvec3> TracedScene::object_frame_origins() const { return shifted(origins_, -centre_); }
+std::vector<glm::dvec3> TracedScene::object_space_origins() const { return shifted(origins_, -centre_); }
 
 }  // namespace sd

@@ -10,7 +10,7 @@
 // vertices at exactly p (a mesh split at hard edges or seams).
 //   η = kOriginOffset × the shortest edge of the triangles around p (the size of the local
 //       geometry: thin slabs and fine detail stay resolved, the scale of the object does not
-//       matter), at least kOriginFloat × |p|∞ in the traced frame (above float32 rounding);
+//       matter), at least kOriginFloat × |p|∞ in the traced space (above float32 rounding);
 //   u is the first of these candidates whose q passes the probes: n + (c − p)/h — along the normal
 //       and into the faces around p, towards the area-weighted mean c of their centroids (h the
 //       shortest edge), as Cycles' bakes move their ray origins into the face —, then n, then the
@@ -25,8 +25,8 @@
 //   When no candidate passes (an enclosed vertex, a mesh with inconsistent winding) the first is used.
 //   A vertex without faces (a probe point) starts at p + η n, η = kFacelessOffset × the diagonal of
 //   the object's bounding box (of the occluders' when the object is one point), at least the floor.
-// The traced frame is the object's shifted by the centre of its vertices' bounding box, so Embree's
-// float32 keeps the object's own precision however far from the origin it sits.
+// The traced space is the object's space shifted by the centre of its vertices' bounding box, so
+// Embree's float32 keeps the object's own precision however far from the origin it sits.
 #pragma once
 
 #include "sdlighting/visibility.h"
@@ -43,7 +43,7 @@ namespace sd {
 
 /// η = kOriginOffset × the shortest edge around the vertex (see the file comment).
 constexpr double kOriginOffset = 1e-3;
-/// ... but at least kOriginFloat × the vertex's largest coordinate in the traced frame.
+/// ... but at least kOriginFloat × the vertex's largest coordinate in the traced space.
 constexpr double kOriginFloat = 1e-5;
 /// The faces around a vertex whose centroids a candidate origin is probed towards, largest first.
 constexpr int kProbedFaces = 16;
@@ -52,7 +52,7 @@ constexpr double kFacelessOffset = 1e-4;
 /// Spherical-Fibonacci candidates tried after n + (c − p)/h, n and the faces' normal.
 constexpr int kCandidateDirections = 64;
 
-/// The object's and the occluders' triangles in one Embree scene, in the traced frame, and every
+/// The object's and the occluders' triangles in one Embree scene, in the traced space, and every
 /// object vertex's ray origin.
 class TracedScene {
  public:
@@ -65,10 +65,10 @@ class TracedScene {
               const ParallelOptions& parallel, bool offset_origins = true);
 
   const EmbreeScene& scene() const { return scene_; }
-  /// Vertex v's ray origin in the traced frame (the one scene() is built in).
+  /// Vertex v's ray origin in the traced space (the one scene() is built in).
   const glm::dvec3& origin(std::size_t v) const { return origins_[v]; }
-  /// Every ray origin in the object's frame.
-  std::vector<glm::dvec3> object_frame_origins() const;
+  /// Every ray origin in object space.
+  std::vector<glm::dvec3> object_space_origins() const;
 
  private:
   glm::dvec3 centre_;

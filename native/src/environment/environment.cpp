@@ -1,13 +1,11 @@
-// Environment maps: construction (from files or pixels), their texels' radiance, masses and norms,
-// and the weighted designs of a channel. The layouts are in texel_layout.cpp, the SH side in
-// projection.cpp. Conventions and equations: environment.h and msd-notes.
+// Environment maps: construction (from files or pixels), their texels' radiance, masses and norms.
+// The layouts are in texel_layout.cpp, the SH side in projection.cpp. Conventions and equations:
+// environment.h and msd-notes.
 #include "sdlighting/environment.h"
 
 #include "environment/environment_detail.h"
 #include "environment/image_io.h"
-#include "sdlighting/weighted_design.h"
 
-#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -15,14 +13,6 @@
 #include <vector>
 
 namespace sd {
-namespace {
-
-// channel_design's area-averaged copy.
-constexpr int kDesignEquirectWidth = 64;
-constexpr int kDesignEquirectHeight = 32;
-constexpr int kDesignCubeFace = 18;
-
-}  // namespace
 
 void check_channel(const char* what, int channel) {
   if (channel < 0 || channel > kLuminance) {
@@ -73,7 +63,7 @@ Environment Environment::from_texels(EnvironmentLayout layout, int width, int he
       env.norm_squared_[c] += v[c] * v[c] * dmu;
     }
   }
-  env.cache_ = std::make_shared<EnergyCache>();
+  env.reference_ = std::make_shared<ReferenceProjection>();
   return env;
 }
 
@@ -126,34 +116,6 @@ double Environment::mass(int channel) const {
 double Environment::norm_squared(int channel) const {
   check_channel("norm_squared", channel);
   return norm_squared_[channel];
-}
-
-SphericalDesign Environment::channel_design(int channel, int degree) const {
-  check_channel("Environment::channel_design", channel);
-  check_order("Environment::channel_design: degree", degree, kMaxDesignDegree);
-  if (!(mass_[channel] > 0.0)) {
-    throw std::invalid_argument("Environment::channel_design: channel " + std::to_string(channel) +
-                                " is black everywhere: its measure L dμ is empty");
-  }
-  const Environment* source = this;
-  Environment reduced;
-  if (layout_ == EnvironmentLayout::Equirect && (width_ > kDesignEquirectWidth || height_ > kDesignEquirectHeight)) {
-    reduced = area_averaged(std::min(width_, kDesignEquirectWidth), std::min(height_, kDesignEquirectHeight));
-    source = &reduced;
-  } else if (layout_ == EnvironmentLayout::Cube && width_ > kDesignCubeFace) {
-    reduced = area_averaged(kDesignCubeFace, kDesignCubeFace);
-    source = &reduced;
-  }
-  std::vector<glm::dvec3> dirs;
-  std::vector<double> weights;
-  for (int64_t t = 0; t < source->texel_count(); ++t) {
-    const glm::dvec3 l = source->texel_radiance(t);
-    const double value = channel == kLuminance ? luminance(l.x, l.y, l.z) : l[channel];
-    if (!(value > 0.0)) continue;
-    dirs.push_back(source->texel_direction(t));
-    weights.push_back(value * source->texel_solid_angle(t));
-  }
-  return weighted_design(dirs, weights, degree);
 }
 
 }  // namespace sd

@@ -1,5 +1,5 @@
-// What the files of Environment share: its lazily computed high-order projection and the channel
-// check. Private to the environment files.
+// What the files of environment maps share: the lazily computed high-order projection, the row
+// evaluator of SH expansions and the channel check. Private to the environment files.
 #pragma once
 
 #include "sdlighting/environment.h"
@@ -11,7 +11,8 @@
 
 namespace sd {
 
-struct Environment::EnergyCache {
+/// A map's reference projection (band_energies, sh_projection.h): computed once, shared by copies.
+struct ReferenceProjection {
   std::mutex mutex;
   bool ready = false;
   std::vector<double> coefficients;     // order kMaxEnergyOrder, RGB interleaved
@@ -19,8 +20,11 @@ struct Environment::EnergyCache {
   std::array<double, 4> norm_squared{};  // of the projected copy
 };
 
-/// Evaluates Σ_{l<=order} c_lm y_lm (RGB coefficients, layout as Environment::sh) at the texel centres
-/// of a width × height equirect grid (environment.h's orientation, rows top-first) and calls
+/// The reference projection of `environment`, computed on the first call (projection.cpp).
+const ReferenceProjection& reference_projection(const Environment& environment);
+
+/// Evaluates Σ_{l<=order} c_lm y_lm (RGB coefficients, layout as sh) at the texel centres of a
+/// width × height equirect grid (environment.h's orientation, rows top-first) and calls
 /// row(j, values) once per row j with values[3 i + c] for column i — from several threads at once,
 /// for different rows. Cost ∝ height (order+1)² + width height (order+1). Unchecked sizes.
 void evaluate_equirect_rows(const std::vector<double>& coefficients, int order, int width, int height,

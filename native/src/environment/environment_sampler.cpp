@@ -81,15 +81,12 @@ glm::dvec3 EnvironmentSampler::sample(double u1, double u2, double* pdf) const {
     const double phi = kPi - 2.0 * kPi * (c + v2) / width_;
     const double s = std::sqrt(std::max(0.0, (1.0 - z) * (1.0 + z)));
     dir = glm::dvec3(s * std::cos(phi), s * std::sin(phi), z);
-    if (pdf != nullptr) *pdf = probability_[t] / row_solid_angle_[r];
+    if (pdf != nullptr) *pdf = density(t, 0.0, 0.0);
   } else {
     const int n = width_, face = r / n, j = r % n;
     const double a = cube_edge(c, n) + v2 * (2.0 / n), b = cube_edge(j, n) + v1 * (2.0 / n);
     dir = glm::normalize(cube_face_direction(face, a, b));
-    if (pdf != nullptr) {
-      const double q = 1.0 + a * a + b * b;
-      *pdf = probability_[t] * 4.0 * kPi * q * std::sqrt(q) / ((2.0 / n) * (2.0 / n));
-    }
+    if (pdf != nullptr) *pdf = density(t, a, b);
   }
   return dir;
 }
@@ -98,14 +95,15 @@ double EnvironmentSampler::pdf(const glm::dvec3& dir) const {
   check_direction(dir);
   if (layout_ == EnvironmentLayout::Equirect) {
     const auto [j, i] = equirect_cell(dir, width_, height_);
-    return probability_[static_cast<size_t>(j) * width_ + i] / row_solid_angle_[j];
+    return density(static_cast<int64_t>(j) * width_ + i, 0.0, 0.0);
   }
-  return pdf_in_texel(cube_index(dir, width_), dir);
+  const FaceCoordinates f = cube_face_coordinates(dir);
+  return density(cube_index(dir, width_), f.a, f.b);
 }
 
-double EnvironmentSampler::pdf_in_texel(int64_t t, const glm::dvec3& dir) const {
-  const FaceCoordinates f = cube_face_coordinates(dir);
-  const double q = 1.0 + f.a * f.a + f.b * f.b;
+double EnvironmentSampler::density(int64_t t, double a, double b) const {
+  if (layout_ == EnvironmentLayout::Equirect) return probability_[static_cast<size_t>(t)] / row_solid_angle_[t / columns_];
+  const double q = 1.0 + a * a + b * b;
   const double side = 2.0 / width_;
   return probability_[static_cast<size_t>(t)] * 4.0 * kPi * q * std::sqrt(q) / (side * side);
 }

@@ -1,11 +1,12 @@
-// The SH side of an environment: projection to SH coefficients (eq. (1)'s L_lm), band energies and
-// the error measures that choose s, band-limited textures L̃ (eqs. (12), (13)) and their ringing
-// windows. Conventions: environment.h.
-#include "sdlighting/environment.h"
+// The SH side of an environment (sh_projection.h): projection to SH coefficients (eq. (1)'s L_lm),
+// the reference projection and its band energies, band-limited textures L̃ (eqs. (12), (13)).
+// Conventions: environment.h and sh_projection.h.
+#include "sdlighting/sh_projection.h"
 
 #include "environment/environment_detail.h"
 #include "environment/texel_layout.h"
 #include "sdlighting/gauss_quadrature.h"
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "util/number_string.h"
 #include "util/parallel_for.h"
@@ -18,6 +19,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,7 +27,7 @@
 namespace sd {
 namespace {
 
-// The reference copy for the high-order projection (band_energies): see environment.h.
+// The reference copy for the high-order projection (band_energies): see sh_projection.h.
 constexpr int64_t kReferenceEquirectTexels = int64_t(4096) * 2048;
 constexpr int kReferenceCubeFace = 128;
 
@@ -168,7 +170,7 @@ std::vector<double> project_equirect(const float* rgb, int width, int height, in
 // solid angle. The rule costs points² basis evaluations per texel (4 on a face-128 map), so it
 // resolves the first kMaxProjectionOrder bands whatever the order: the bands above feed only
 // band_energies' order-64 projection, where the face-128 copy's box filter already attenuates them
-// by percents (environment.h); and sh(s) agrees with that projection to rounding. Fixed blocks of texel rows (independent of the thread count) are summed by one
+// by percents (sh_projection.h); and sh(s) agrees with that projection to rounding. Fixed blocks of texel rows (independent of the thread count) are summed by one
 // thread each, then reduced in block order: bit-identical for any thread count.
 constexpr double kCubePanel = 0.25;
 
@@ -243,10 +245,10 @@ std::vector<double> project_cube(const float* rgb, int n, int order, int threads
   return out;
 }
 
-std::vector<double> project(EnvironmentLayout layout, const std::vector<float>& rgb, int width, int height, int order,
-                            int threads) {
-  return layout == EnvironmentLayout::Equirect ? project_equirect(rgb.data(), width, height, order, threads)
-                                                : project_cube(rgb.data(), width, order, threads);
+std::vector<double> project(const Environment& environment, int order, int threads) {
+  return environment.layout() == EnvironmentLayout::Equirect
+             ? project_equirect(environment.pixels().data(), environment.width(), environment.height(), order, threads)
+             : project_cube(environment.pixels().data(), environment.width(), order, threads);
 }
 
 void check_output_size(const char* what, int width, int height) {
@@ -256,28 +258,29 @@ void check_output_size(const char* what, int width, int height) {
 
 }  // namespace
 
-std::vector<double> Environment::sh(int order, int threads) const {
+std::vector<double> sh(const Environment& environment, int order, int threads) {
   check_order("Environment::sh: order", order, kMaxProjectionOrder);
-  return project(layout_, rgb_, width_, height_, order, threads);
+  return project(environment, order, threads);
 }
 
-const Environment::EnergyCache& Environment::energy_cache() const {
-  EnergyCache& cache = *cache_;
+const ReferenceProjection& reference_projection(const Environment& environment) {
+  ReferenceProjection& cache = *environment.reference_;
   std::lock_guard<std::mutex> lock(cache.mutex);
   if (cache.ready) return cache;
-  // The reference copy (environment.h, band_energies).
-  const Environment* source = this;
-  Environment reduced;
-  if (layout_ == EnvironmentLayout::Equirect && texel_count() > kReferenceEquirectTexels) {
-    const double scale = std::sqrt(static_cast<double>(texel_count()) / kReferenceEquirectTexels);
-    reduced = area_averaged(std::max(1, static_cast<int>(width_ / scale)), std::max(1, static_cast<int>(height_ / scale)));
-    source = &reduced;
-  } else if (layout_ == EnvironmentLayout::Cube && width_ > kReferenceCubeFace) {
-    reduced = area_averaged(kReferenceCubeFace, kReferenceCubeFace);
-    source = &reduced;
+  // The reference copy (sh_projection.h, band_energies).
+  const Environment* source = &environment;
+  std::optional<Environment> reduced;
+  const int64_t texels = environment.texel_count();
+  if (environment.layout() == EnvironmentLayout::Equirect && texels > kReferenceEquirectTexels) {
+    const double scale = std::sqrt(static_cast<double>(texels) / kReferenceEquirectTexels);
+    reduced = environment.area_averaged(std::max(1, static_cast<int>(environment.width() / scale)),
+                                        std::max(1, static_cast<int>(environment.height() / scale)));
+    source = &*reduced;
+  } else if (environment.layout() == EnvironmentLayout::Cube && environment.width() > kReferenceCubeFace) {
+    reduced = environment.area_averaged(kReferenceCubeFace, kReferenceCubeFace);
+    source = &*reduced;
   }
-  std::vector<double> coefficients =
-      project(source->layout_, source->rgb_, source->width_, source->height_, kMaxEnergyOrder, 0);
+  std::vector<double> coefficients = project(*source, kMaxEnergyOrder, 0);
   std::vector<double> energies(static_cast<size_t>(kMaxEnergyOrder + 1) * 4, 0.0);
   for (int l = 0; l <= kMaxEnergyOrder; ++l) {
     for (int m = -l; m <= l; ++m) {
@@ -294,60 +297,24 @@ const Environment::EnergyCache& Environment::energy_cache() const {
   return cache;
 }
 
-std::vector<float> Environment::band_limited(int order, int width, int height, const RingingWindowSpec& window,
-                                             BandLimitedReport* report) const {
+std::vector<float> band_limited(const Environment& environment, int order, int width, int height,
+                                const RingingWindowSpec& window, BandLimitedReport* report) {
   check_order("Environment::band_limited: order", order, kMaxEnergyOrder);
   check_output_size("Environment::band_limited", width, height);
   std::vector<double> coefficients;
   if (order <= kMaxProjectionOrder) {
-    coefficients = sh(order);
+    coefficients = sh(environment, order);
   } else {
-    const auto& all = energy_cache().coefficients;
+    const auto& all = reference_projection(environment).coefficients;
     coefficients.assign(all.begin(), all.begin() + 3 * sh_count(order));
   }
   return band_limited_texture(coefficients, order, width, height, window, report);
 }
 
-std::vector<double> Environment::band_energies(int lmax) const {
+std::vector<double> band_energies(const Environment& environment, int lmax) {
   check_order("Environment::band_energies: lmax", lmax, kMaxEnergyOrder);
-  const auto& energies = energy_cache().energies;
+  const auto& energies = reference_projection(environment).energies;
   return std::vector<double>(energies.begin(), energies.begin() + 4 * (lmax + 1));
-}
-
-double Environment::low_frequency_error(int order, int channel) const {
-  check_order("Environment::low_frequency_error: order", order, kMaxEnergyOrder);
-  check_channel("Environment::low_frequency_error", channel);
-  const EnergyCache& cache = energy_cache();
-  const double norm2 = cache.norm_squared[channel];
-  if (!(norm2 > 0.0)) return 0.0;
-  double kept = 0.0;
-  for (int l = 0; l <= order; ++l) kept += cache.energies[4 * l + channel];
-  return std::sqrt(std::max(0.0, norm2 - kept) / norm2);
-}
-
-double Environment::lobe_filtered_error(const ZonalLobe& lobe, int order) const {
-  check_order("Environment::lobe_filtered_error: order", order, kMaxEnergyOrder);
-  const std::vector<double> w = lobe.coefficients(kMaxEnergyOrder);
-  const auto& energies = energy_cache().energies;
-  double missed = 0.0, total = 0.0;  // summed separately: no cancellation
-  for (int l = 0; l <= kMaxEnergyOrder; ++l) {
-    const double term = w[l] * w[l] * energies[4 * l + kLuminance];
-    total += term;
-    if (l > order) missed += term;
-  }
-  if (!(total > 0.0)) return 0.0;
-  return std::sqrt(missed / total);
-}
-
-int Environment::smallest_order(const ZonalLobe& lobe, double target_error, int max_order) const {
-  check_order("Environment::smallest_order: max_order", max_order, kMaxEnergyOrder);
-  if (!(target_error >= 0.0) || !std::isfinite(target_error)) {
-    throw std::invalid_argument("Environment::smallest_order: target_error must be finite and >= 0");
-  }
-  for (int s = 0; s <= max_order; ++s) {
-    if (lobe_filtered_error(lobe, s) <= target_error) return s;
-  }
-  return -1;
 }
 
 std::vector<float> band_limited_texture(const std::vector<double>& sh_coefficients, int order, int width, int height,

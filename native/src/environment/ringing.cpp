@@ -1,10 +1,11 @@
 // Ringing of the truncated expansion: the windows σ_l, the error of the displayed (clamped) radiance
 // that decides between them, and the automatic choice per lobe, order and environment. Conventions
-// and the measure: environment.h.
-#include "sdlighting/environment.h"
+// and the measure: ringing.h.
+#include "sdlighting/ringing.h"
 
 #include "environment/environment_detail.h"
 #include "environment/texel_layout.h"
+#include "sdlighting/limits.h"
 #include "sdlighting/spherical_harmonics.h"
 
 #include <algorithm>
@@ -56,7 +57,7 @@ std::vector<double> window_factors(const RingingWindowSpec& window, int order) {
   return f;
 }
 
-// displayed_error's measure (environment.h) for one lobe: the full-resolution B on the grid of
+// displayed_error's measure (ringing.h) for one lobe: the full-resolution B on the grid of
 // axes, evaluated once, against which any order and window factors are then measured.
 class DisplayedError {
  public:
@@ -127,7 +128,7 @@ class DisplayedError {
     return out;
   }
 
-  // Environment::ringing_window on this lobe.
+  // ringing_window on this lobe.
   RingingWindowChoice best_of(int order, RingingWindow window) const {
     if (window != RingingWindow::Sloan || order == 0) return choice(order, window, window_factors(window, order));
     const double scale = static_cast<double>(order) * order * (order + 1.0) * (order + 1.0);
@@ -180,8 +181,8 @@ double ringing_window_factor(const RingingWindowSpec& window, int l, int order) 
   }
 }
 
-RingingWindowChoice Environment::displayed_error(const ZonalLobe& lobe, int order,
-                                                 const std::vector<double>& factors) const {
+RingingWindowChoice displayed_error(const Environment& environment, const ZonalLobe& lobe, int order,
+                                    const std::vector<double>& factors) {
   check_order("Environment::displayed_error: order", order, kMaxShadingOrder);
   if (factors.size() != static_cast<size_t>(order + 1)) {
     throw std::invalid_argument("Environment::displayed_error: expected order + 1 = " + std::to_string(order + 1) +
@@ -190,17 +191,18 @@ RingingWindowChoice Environment::displayed_error(const ZonalLobe& lobe, int orde
   for (double f : factors) {
     if (!std::isfinite(f)) throw std::invalid_argument("Environment::displayed_error: window factors must be finite");
   }
-  return DisplayedError(energy_cache().coefficients, lobe).choice(order, RingingWindowSpec(), factors);
+  return DisplayedError(reference_projection(environment).coefficients, lobe).choice(order, RingingWindowSpec(), factors);
 }
 
-RingingWindowChoice Environment::ringing_window(const ZonalLobe& lobe, int order, RingingWindow window) const {
+RingingWindowChoice ringing_window(const Environment& environment, const ZonalLobe& lobe, int order,
+                                   RingingWindow window) {
   check_order("Environment::ringing_window: order", order, kMaxShadingOrder);
-  return DisplayedError(energy_cache().coefficients, lobe).best_of(order, window);
+  return DisplayedError(reference_projection(environment).coefficients, lobe).best_of(order, window);
 }
 
-RingingWindowChoice Environment::automatic_ringing_window(const ZonalLobe& lobe, int order) const {
+RingingWindowChoice automatic_ringing_window(const Environment& environment, const ZonalLobe& lobe, int order) {
   check_order("Environment::automatic_ringing_window: order", order, kMaxShadingOrder);
-  const DisplayedError measure(energy_cache().coefficients, lobe);
+  const DisplayedError measure(reference_projection(environment).coefficients, lobe);
   RingingWindowChoice best = measure.best_of(order, RingingWindow::None);
   const double threshold = (1.0 - kMinimumGain) * best.unwindowed_error;
   for (RingingWindow window : {RingingWindow::Hanning, RingingWindow::Lanczos, RingingWindow::Sloan}) {

@@ -1,5 +1,7 @@
 #include "quadrature/design_fit.h"
 
+#include "util/orthonormal_basis.h"
+
 #include <glm/geometric.hpp>
 
 #include <Eigen/Cholesky>
@@ -9,12 +11,6 @@
 #include <numeric>
 
 namespace sd {
-
-void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2) {
-  const glm::dvec3 helper = std::abs(dir.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-  e1 = glm::normalize(glm::cross(dir, helper));
-  e2 = glm::cross(dir, e1);
-}
 
 namespace {
 
@@ -85,7 +81,7 @@ void linearise(const MomentSystem& system, const std::vector<glm::dvec3>& nodes,
   lin.gradients.resize(3, k);
   for (int i = 0; i < n; ++i) {
     system.evaluate(nodes[i], lin.values.data(), lin.gradients.data());
-    tangent_frame(nodes[i], lin.e1[i], lin.e2[i]);
+    orthonormal_basis(nodes[i], lin.e1[i], lin.e2[i]);
     const Eigen::Vector3d e1(lin.e1[i].x, lin.e1[i].y, lin.e1[i].z);
     const Eigen::Vector3d e2(lin.e2[i].x, lin.e2[i].y, lin.e2[i].z);
     lin.raw_sum += weights[i] * lin.values;

@@ -105,7 +105,4 @@ SphericalDesign prune_design(const MomentSystem& system, SphericalDesign design,
                              const std::function<bool(SphericalDesign&)>& certify, const FitOptions& options,
                              const PruneOptions& pruning = {});
 
-/// Two unit vectors completing `dir` to an orthonormal frame.
-void tangent_frame(const glm::dvec3& dir, glm::dvec3& e1, glm::dvec3& e2);
-
 }  // namespace sd

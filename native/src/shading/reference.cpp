@@ -5,7 +5,7 @@
 #include "sdlighting/visibility.h"
 
 #include "bake/traced_scene.h"
-#include "shading/lobe_frame.h"
+#include "util/orthonormal_basis.h"
 #include "util/parallel_for.h"
 
 #include <glm/geometric.hpp>
@@ -47,7 +47,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   const TracedScene traced(vertices, unit, triangles, occluders, ParallelOptions(options.threads));  // the bake's origins
   const EnvironmentSampler sampler(environment);
   // The integrand reads L at g x (rotated_sh, sh_rotation.h, states the convention); a direction y
-  // drawn from the map is therefore the object-frame direction x = gᵀ y.
+  // drawn from the map is therefore the object-space direction x = gᵀ y.
   const glm::dmat3 g_inverse = glm::transpose(g);
 
   ReferenceResult result;
@@ -64,9 +64,9 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
       lobe_axis(material, &n.x, &v.x, axis);
       const glm::dvec3 a = glm::normalize(glm::dvec3(axis[0], axis[1], axis[2]));
       glm::dvec3 t1, t2;
-      frame_around(a, t1, t2);
+      orthonormal_basis(a, t1, t2);
       const glm::dvec3& origin = traced.origin(p);
-      // f(x)/(pdf_env + pdf_lobe) for a direction x in the object's frame; L is looked up at g x.
+      // f(x)/(pdf_env + pdf_lobe) for a direction x in object space; L is looked up at g x.
       auto balanced = [&](const glm::dvec3& x) {
         const double w = lobe.value(glm::dot(a, x));
         const glm::dvec3 y = g * x;

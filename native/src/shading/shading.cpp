@@ -1,6 +1,6 @@
 #include "sdlighting/shading.h"
 
-#include "shading/lobe_frame.h"
+#include "util/orthonormal_basis.h"
 #include "util/parallel_for.h"
 #include "sdlighting/gaunt.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -100,7 +100,7 @@ void shade_ambient_occlusion(const ShadingInputs& in, const double* ambient_occl
     for (int c = 0; c < 3; ++c) out[3 * p + c] *= ambient_occlusion[p];
 }
 
-void shade_diffuse_prt(const ShadingInputs& in, const double* transfer, double* out) {
+void shade_prt_diffuse(const ShadingInputs& in, const double* transfer, double* out) {
   check_inputs(in);
   if (in.material.glossy) throw std::invalid_argument("diffuse PRT (2) needs a Lambert material");
   const int k = sh_count(in.light_order);
@@ -109,7 +109,7 @@ void shade_diffuse_prt(const ShadingInputs& in, const double* transfer, double* 
   });
 }
 
-void shade_prt_product_matrix(const ShadingInputs& in, int visibility_order, const double* matrices, double* out) {
+void shade_prt_matrix(const ShadingInputs& in, int visibility_order, const double* matrices, double* out) {
   check_inputs(in);
   check_visibility_order(visibility_order);
   const int k = sh_count(in.light_order), kv = sh_count(visibility_order);
@@ -152,8 +152,8 @@ void shade_prt_gaunt(const ShadingInputs& in, int visibility_order, const double
   });
 }
 
-void shade_msd_lobe_design(const ShadingInputs& in, int visibility_order, const double* visibility,
-                           const SphericalDesign& lobe_design, double* out) {
+void shade_msd_lobe(const ShadingInputs& in, int visibility_order, const double* visibility,
+                    const SphericalDesign& lobe_design, double* out) {
   check_inputs(in);
   check_visibility_order(visibility_order);
   if (lobe_design.degree < in.light_order + visibility_order) {
@@ -167,7 +167,7 @@ void shade_msd_lobe_design(const ShadingInputs& in, int visibility_order, const 
     thread_local std::vector<double> y;
     y.resize(sh_count(top));
     glm::dvec3 t1, t2;
-    frame_around(a, t1, t2);
+    orthonormal_basis(a, t1, t2);
     const double* v = visibility + p * kv;
     for (int nu = 0; nu < lobe_design.size(); ++nu) {
       const glm::dvec3& x = lobe_design.nodes[nu];
@@ -179,8 +179,8 @@ void shade_msd_lobe_design(const ShadingInputs& in, int visibility_order, const 
   });
 }
 
-void shade_msd_visibility_design(const ShadingInputs& in, int visibility_order, const VertexDesigns& designs,
-                                 double* out) {
+void shade_msd_visibility(const ShadingInputs& in, int visibility_order, const VertexDesigns& designs,
+                          double* out) {
   check_inputs(in);
   check_visibility_order(visibility_order);
   const int s = in.light_order, k = sh_count(s);

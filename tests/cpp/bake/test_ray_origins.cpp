@@ -116,7 +116,7 @@ TEST(RayOrigins, FlippedNormalsStillStartOutsideTheSolid) {
 }
 
 TEST(RayOrigins, NeitherPositionNorScaleChangesTheResult) {
-  // The bake traces in a frame centred on the object and offsets by the local edge length, so a
+  // The bake traces in coordinates centred on the object and offsets by the local edge length, so a
   // box 10⁶ of its size away from the origin, or scaled by 10⁻⁴ or 10⁴, bakes the same values
   // (the rays are the same; only float32 rounding of the geometry differs). Before, a mesh 10⁴
   // of its size away lost 0.07 of its ambient occlusion and at 10⁶ 0.78.

@@ -1,9 +1,11 @@
-// Tests of the ringing windows of sdlighting/environment.h: the factors, the displayed error that
+// Tests of the ringing windows of sdlighting/ringing.h: the factors, the displayed error that
 // decides between them and the automatic choice, on a synthetic sun and on Blender's sun HDRIs
 // (skipped, with a message, only when the files are absent). kExact (1e-12) for what is computed
 // exactly up to rounding; the measured errors and minima are printed.
 #include "environment_test_support.h"
 #include "sdlighting/environment.h"
+#include "sdlighting/ringing.h"
+#include "sdlighting/sh_projection.h"
 #include "sdlighting/zonal_lobe.h"
 
 #include <gtest/gtest.h>
@@ -30,8 +32,8 @@ TEST(RingingWindow, Factors) {
   // The texture of a Sloan window is that of the windowed coefficients.
   const Environment env = Environment::from_equirect_pixels(64, 32, equirect_pixels(64, 32, sun_map({0.6, 0.0, 0.8}, 10.0)));
   const RingingWindowSpec sloan(RingingWindow::Sloan, 1e-3);
-  std::vector<double> c = env.sh(6);
-  const std::vector<float> windowed = env.band_limited(6, 32, 16, sloan);
+  std::vector<double> c = sh(env, 6);
+  const std::vector<float> windowed = band_limited(env, 6, 32, 16, sloan);
   for (int l = 0; l <= 6; ++l) {
     for (int q = 3 * l * l; q < 3 * (l + 1) * (l + 1); ++q) c[q] *= ringing_window_factor(sloan, l, 6);
   }
@@ -42,37 +44,37 @@ TEST(RingingWindow, Factors) {
 TEST(RingingWindow, DisplayedErrorIsNormalised) {
   const Environment env = Environment::from_equirect_pixels(128, 64, equirect_pixels(128, 64, sun_map({0.6, 0.0, 0.8}, 6.0)));
   const ZonalLobe lobe = ZonalLobe::phong(32.0);
-  const RingingWindowChoice ones = env.displayed_error(lobe, 8, std::vector<double>(9, 1.0));
+  const RingingWindowChoice ones = displayed_error(env, lobe, 8, std::vector<double>(9, 1.0));
   EXPECT_EQ(ones.error, ones.unwindowed_error);
   EXPECT_EQ(ones.l2_error, ones.unwindowed_l2_error);
   EXPECT_GT(ones.error, 0.0);
   // Nothing shown: every axis wrong by all of its displayed value, the relative error is 1.
-  const RingingWindowChoice zeros = env.displayed_error(lobe, 8, std::vector<double>(9, 0.0));
+  const RingingWindowChoice zeros = displayed_error(env, lobe, 8, std::vector<double>(9, 0.0));
   EXPECT_NEAR(zeros.error, 1.0, kExact);
   EXPECT_NEAR(zeros.l2_error, 1.0, kExact);
   // A map of order 1 (up to its texels' steps) loses nothing at s = 16.
   const Environment sky = Environment::from_equirect_pixels(
       128, 64, equirect_pixels(128, 64, [](const glm::dvec3& d) { return glm::dvec3(1.0 + 0.5 * d.z); }));
-  const RingingWindowChoice full = sky.displayed_error(ZonalLobe::lambert(), 16, std::vector<double>(17, 1.0));
+  const RingingWindowChoice full = displayed_error(sky, ZonalLobe::lambert(), 16, std::vector<double>(17, 1.0));
   EXPECT_LT(full.error, 1e-4);
   EXPECT_GT(full.min_over_max, 0.0);
-  EXPECT_THROW(env.displayed_error(lobe, 8, std::vector<double>(8, 1.0)), std::invalid_argument);
-  EXPECT_THROW(env.displayed_error(lobe, kMaxShadingOrder + 1, std::vector<double>(kMaxShadingOrder + 2, 1.0)),
+  EXPECT_THROW(displayed_error(env, lobe, 8, std::vector<double>(8, 1.0)), std::invalid_argument);
+  EXPECT_THROW(displayed_error(env, lobe, kMaxShadingOrder + 1, std::vector<double>(kMaxShadingOrder + 2, 1.0)),
                std::invalid_argument);
   // A black map has nothing to show.
   const Environment black = Environment::from_equirect_pixels(8, 4, std::vector<float>(8 * 4 * 3, 0.0f));
-  EXPECT_EQ(black.automatic_ringing_window(lobe, 4).error, 0.0);
+  EXPECT_EQ(automatic_ringing_window(black, lobe, 4).error, 0.0);
 }
 
 // The automatic choice is never worse than none in its own measure: the best of the four, or none
 // when no window lowers none's error by more than 1 % of it.
 void expect_automatic_is_best(const Environment& env, const ZonalLobe& lobe, int order, const std::string& what) {
-  const RingingWindowChoice chosen = env.automatic_ringing_window(lobe, order);
+  const RingingWindowChoice chosen = automatic_ringing_window(env, lobe, order);
   EXPECT_LE(chosen.error, chosen.unwindowed_error) << what;
   const bool none = chosen.window.window == RingingWindow::None;
   if (none) EXPECT_EQ(chosen.error, chosen.unwindowed_error) << what;
   for (RingingWindow w : {RingingWindow::None, RingingWindow::Hanning, RingingWindow::Lanczos, RingingWindow::Sloan}) {
-    const double other = env.ringing_window(lobe, order, w).error;
+    const double other = ringing_window(env, lobe, order, w).error;
     EXPECT_LE(none ? 0.99 * chosen.error : chosen.error, other) << what << " vs " << ringing_window_name(w);
   }
   ASSERT_EQ(chosen.factors.size(), static_cast<size_t>(order + 1));
@@ -104,7 +106,7 @@ TEST(RingingWindow, SunHdrisRingLessWithTheAutomaticWindow) {
   for (const char* name : {"sunrise", "city", "interior"}) {
     const Environment env = Environment::load(kBlenderWorlds + name + ".exr");
     for (int order : {8, 16}) {
-      const RingingWindowChoice chosen = env.automatic_ringing_window(ZonalLobe::phong(61.0), order);
+      const RingingWindowChoice chosen = automatic_ringing_window(env, ZonalLobe::phong(61.0), order);
       std::printf("%-9s Phong 61, s = %2d: %s (lambda %.3g): displayed error %.1f %% -> %.1f %%, plain clamped RMS "
                   "%.1f %% -> %.1f %%, min B / max B %+.1f %% -> %+.1f %%\n",
                   name, order, ringing_window_name(chosen.window.window).c_str(), chosen.window.sloan_lambda,

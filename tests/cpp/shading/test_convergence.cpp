@@ -7,6 +7,7 @@
 // (13) = (8)-(9).
 #include "sdlighting/environment.h"
 #include "sdlighting/reference.h"
+#include "sdlighting/sh_projection.h"
 #include "sdlighting/shading.h"
 #include "sdlighting/visibility.h"
 #include "sdlighting/zonal_design.h"
@@ -90,7 +91,7 @@ std::map<std::string, std::vector<double>> all_methods(const Environment& enviro
   options.transfer_order = level.s;
   const TransferBake bake = bake_transfer(scene.vertices, scene.normals, scene.triangles, options, scene.box);
 
-  const std::vector<double> light = environment.sh(level.s);
+  const std::vector<double> light = sh(environment, level.s);
   std::vector<double> normals, views;
   for (std::size_t p = 0; p < scene.vertices.size(); ++p) {
     normals.insert(normals.end(), {scene.normals[p].x, scene.normals[p].y, scene.normals[p].z});
@@ -116,13 +117,13 @@ std::map<std::string, std::vector<double>> all_methods(const Environment& enviro
   };
   shade_unshadowed(in, result("unshadowed"));
   shade_ambient_occlusion(in, bake.ambient_occlusion.data(), result("ambient_occlusion"));
-  shade_prt_product_matrix(in, level.s_v, bake.product_matrices.data(), result("prt_matrix"));
+  shade_prt_matrix(in, level.s_v, bake.product_matrices.data(), result("prt_matrix"));
   shade_prt_gaunt(in, level.s_v, bake.visibility.data(), result("prt_gaunt"));
-  shade_msd_lobe_design(in, level.s_v, bake.visibility.data(), lobe_design, result("msd_lobe"));
-  shade_msd_visibility_design(in, level.s_v,
-                              VertexDesigns{bake.design_offsets.data(), design_nodes.data(), bake.design_weights.data()},
-                              result("msd_visibility"));
-  if (!material.glossy) shade_diffuse_prt(in, bake.transfer.data(), result("prt_diffuse"));
+  shade_msd_lobe(in, level.s_v, bake.visibility.data(), lobe_design, result("msd_lobe"));
+  shade_msd_visibility(in, level.s_v,
+                       VertexDesigns{bake.design_offsets.data(), design_nodes.data(), bake.design_weights.data()},
+                       result("msd_visibility"));
+  if (!material.glossy) shade_prt_diffuse(in, bake.transfer.data(), result("prt_diffuse"));
   return out;
 }
 

@@ -26,7 +26,7 @@ TEST(Shading, MsdTheorem21EqualsGauntPrt) {  // (12) = (10)
       const ShadingInputs in = inputs(scene, material);
       const SphericalDesign design = zonal_design(ZonalWeight::from_lobe(material.lobe()), s + 2);
       std::vector<double> msd(3 * scene.count), prt(3 * scene.count);
-      shade_msd_lobe_design(in, 2, scene.visibility.data(), design, msd.data());
+      shade_msd_lobe(in, 2, scene.visibility.data(), design, msd.data());
       shade_prt_gaunt(in, 2, scene.visibility.data(), prt.data());
       expect_relative_equal(msd, prt, kEqualFormulas);
     }
@@ -40,8 +40,8 @@ TEST(Shading, MsdTheorem22EqualsProductMatrixPrt) {  // (13) = (8)-(9)
   for (const Material& material : kMaterials) {
     const ShadingInputs in = inputs(scene, material);
     std::vector<double> msd(3 * scene.count), prt(3 * scene.count);
-    shade_msd_visibility_design(in, s_v, rays_v.designs(), msd.data());
-    shade_prt_product_matrix(in, s_v, rays_v.matrices.data(), prt.data());
+    shade_msd_visibility(in, s_v, rays_v.designs(), msd.data());
+    shade_prt_matrix(in, s_v, rays_v.matrices.data(), prt.data());
     expect_relative_equal(msd, prt, kEqualFormulas);
   }
 }
@@ -89,9 +89,9 @@ TEST(Shading, UnoccludedTransferReducesToUnshadowed) {
   const ShadingInputs in = inputs(scene, Material::lambert());
   std::vector<double> unshadowed(3 * scene.count), other(3 * scene.count);
   shade_unshadowed(in, unshadowed.data());
-  shade_diffuse_prt(in, transfer.data(), other.data());
+  shade_prt_diffuse(in, transfer.data(), other.data());
   expect_relative_equal(other, unshadowed, 1e-12);
-  shade_prt_product_matrix(in, 4, identity.data(), other.data());
+  shade_prt_matrix(in, 4, identity.data(), other.data());
   expect_relative_equal(other, unshadowed, 1e-12);
   shade_ambient_occlusion(in, ao.data(), other.data());
   expect_relative_equal(other, unshadowed, 1e-12);
@@ -104,9 +104,9 @@ TEST(Shading, RejectsBadInput) {
   in.light_order = 17;
   EXPECT_THROW(shade_unshadowed(in, out.data()), std::invalid_argument);
   in = inputs(scene, Material::phong(8.0));
-  EXPECT_THROW(shade_diffuse_prt(in, scene.visibility.data(), out.data()), std::invalid_argument);
+  EXPECT_THROW(shade_prt_diffuse(in, scene.visibility.data(), out.data()), std::invalid_argument);
   const SphericalDesign low = zonal_design(ZonalWeight::from_lobe(ZonalLobe::phong(8.0)), 2);
-  EXPECT_THROW(shade_msd_lobe_design(in, 2, scene.visibility.data(), low, out.data()), std::invalid_argument);
+  EXPECT_THROW(shade_msd_lobe(in, 2, scene.visibility.data(), low, out.data()), std::invalid_argument);
   in.view_dirs = nullptr;
   EXPECT_THROW(shade_unshadowed(in, out.data()), std::invalid_argument);
   EXPECT_THROW(Material::from_name("ward", 1.0), std::invalid_argument);

@@ -50,7 +50,7 @@ TEST(ShadingProperties, MsdTheorem21EqualsGauntPrtOnRandomScenes) {  // (12) = (
     const ShadingInputs in = test::inputs(scene, c.material);
     const SphericalDesign design = zonal_design(ZonalWeight::from_lobe(c.material.lobe()), scene.s + scene.s_v);
     std::vector<double> msd(3 * scene.count), prt(3 * scene.count);
-    shade_msd_lobe_design(in, scene.s_v, scene.visibility.data(), design, msd.data());
+    shade_msd_lobe(in, scene.s_v, scene.visibility.data(), design, msd.data());
     shade_prt_gaunt(in, scene.s_v, scene.visibility.data(), prt.data());
     test::expect_relative_equal(msd, prt, kEqualFormulas);
   }
@@ -65,8 +65,8 @@ TEST(ShadingProperties, MsdTheorem22EqualsProductMatrixPrtOnRandomScenes) {  // 
     const test::RayVisibility visibility = test::random_ray_visibility(scene.count, scene.s, scene.s_v, rays, seed);
     const ShadingInputs in = test::inputs(scene, c.material);
     std::vector<double> msd(3 * scene.count), prt(3 * scene.count);
-    shade_msd_visibility_design(in, scene.s_v, visibility.designs(), msd.data());
-    shade_prt_product_matrix(in, scene.s_v, visibility.matrices.data(), prt.data());
+    shade_msd_visibility(in, scene.s_v, visibility.designs(), msd.data());
+    shade_prt_matrix(in, scene.s_v, visibility.matrices.data(), prt.data());
     test::expect_relative_equal(msd, prt, kEqualFormulas);
   }
 }

@@ -108,6 +108,7 @@ def registration_state():
             return False
     return {"scene_property": hasattr(bpy.types.Scene, "sd_lighting"),
             "panel": hasattr(bpy.types, "SD_PT_lighting"),
+            "panels": sorted(name for name in dir(bpy.types) if name.startswith("SD_PT_")),
             "bake_operator": operator_exists("bake"),
             "preview_operator": operator_exists("render_preview"),
             "load_post": len(bpy.app.handlers.load_post),
@@ -133,6 +134,24 @@ class LayoutStub:
 
     def __setattr__(self, name, value):
         pass
+
+
+def panel_texts(context=None):
+    """The texts the add-on's sidebar panel and its sub-panels draw now, in their order, into one
+    LayoutStub: every sub-panel whose poll() passes (and its parent's), open or closed."""
+    import importlib
+    context = context or bpy.context
+    stub = LayoutStub()
+    drawn = set()
+    for cls in importlib.import_module(addon_module + ".ui.panels").CLASSES:
+        parent = getattr(cls, "bl_parent_id", "")
+        if (parent and parent not in drawn) or (hasattr(cls, "poll") and not cls.poll(context)):
+            continue
+        drawn.add(cls.bl_idname)
+        if hasattr(cls, "draw_header"):
+            cls.draw_header(stub, context)
+        cls.draw(stub, context)
+    return stub.texts
 
 
 class Checks:

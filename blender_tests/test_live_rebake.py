@@ -90,10 +90,8 @@ class Context:
         return False
 
     def panel_texts(self):
-        """The texts the panel draws now."""
-        panel = sdtest.LayoutStub()
-        bpy.types.SD_PT_lighting.draw(panel, bpy.context)
-        return panel.texts
+        """The texts the panel (with its sub-panels) draws now."""
+        return sdtest.panel_texts()
 
     def evaluated_positions(self):
         """The object's evaluated vertex positions (edit mode: the edit mesh with its modifiers)."""

@@ -1,7 +1,10 @@
 """The add-on in a running Blender UI (under Xvfb): the modal bake runs in a worker thread with
 progress while the UI keeps running, cancels on request leaving everything as it was, and the
 live shading's POST_VIEW handler draws the baked objects in the viewport with the values of the
-CPU evaluator for the viewport's own camera (read back from the viewport's framebuffer).
+CPU evaluator for the viewport's own camera (read back from the viewport's framebuffer). Then the
+sidebar at Blender's default width, on the SD Lighting tab with a baked object active, is saved
+for review under --out: panel.png (the panels as they first open; panel_2.png... further down)
+and panel_open.png... (every sub-panel open).
 Run: xvfb-run -a blender --factory-startup --enable-event-simulate --python-exit-code 1 \
          --python blender_tests/test_viewport.py -- --zip Z
 (--enable-event-simulate lets the test press Esc; without it, it cancels with the Cancel button.)
@@ -91,6 +94,10 @@ class Test:
 
     # -- the test, one step per timer tick
     def run(self):
+        yield from self.shading()
+        yield from self.sidebar()
+
+    def shading(self):
         checks = self.checks
         package = self.package
         scene = self.build_scene()
@@ -134,10 +141,9 @@ class Test:
                      "%s cancels a modal bake and nothing changes" % how)
 
         # The panel draws without errors.
-        panel = sdtest.LayoutStub()
         try:
             with self.override():
-                bpy.types.SD_PT_lighting.draw(panel, bpy.context)
+                sdtest.panel_texts()
             ok, detail = True, ""
         except Exception as exc:
             ok, detail = False, "%s: %s" % (type(exc).__name__, exc)
@@ -235,6 +241,139 @@ class Test:
                      "the world background leaves the shaded objects as they were",
                      "median %.2f / 255 over %d vertices" % (np.median(moved), len(moved)))
 
+    # -- the sidebar, for review
+    def sidebar(self):
+        """Screenshots of the sidebar at its default width on the SD Lighting tab, the baked ball
+        active and selected, the settings the bake's but for the method (Automatic, the default,
+        predicted in the background first): as the panels first open (panel.png), and with every
+        sub-panel open (panel_open.png), each page of it."""
+        checks, package = self.checks, self.package
+        if not getattr(bpy.app, "use_event_simulate", False):
+            print("test_viewport: no sidebar screenshots (selecting its tab needs --enable-event-simulate)")
+            return
+        scene = bpy.context.scene
+        scene.sd_lighting.rays = 256
+        scene.sd_lighting.method = 'automatic'
+        sdtest.select_only([self.ball])
+        bpy.context.view_layer.objects.active = self.ball
+        window, area, _ = self.viewport()
+        area.spaces.active.show_region_ui = True
+        shown = yield from self.show_tab(window, area)
+        ui = next(r for r in area.regions if r.type == 'UI')
+        scale = bpy.context.preferences.system.ui_scale
+        checks.check(shown, "the sidebar shows the SD Lighting tab", "%d pixels wide, %.0f at UI scale 1"
+                     % (ui.width, ui.width / scale))
+        if not shown:
+            with bpy.context.temp_override(window=window, area=area):   # what it shows instead
+                bpy.ops.screen.screenshot_area(filepath=os.path.join(self.args.out, "no_panel.png"))
+            return
+        # Every text the panels draw fits a line of the sidebar (wrapped, or short).
+        with bpy.context.temp_override(window=window, area=area, region=ui):
+            width = package.ui.panels._chars(bpy.context)
+            too_long = [text for text in sdtest.panel_texts() if width is not None and len(text) > width]
+        checks.check(width is not None and not too_long, "every text of the panels fits a line of the "
+                     "sidebar (%s characters)" % width, "; ".join(too_long[:3]))
+        for _ in range(300):         # the automatic mode's prediction, measured in the background
+            if package.ui.prediction.predicted_errors(bpy.context):
+                break
+            area.tag_redraw()
+            yield
+        pages = yield from self.sidebar_pages(window, area, "panel")
+
+        # Every sub-panel open: registered without DEFAULT_CLOSED, in another workspace, whose 3D
+        # view has not drawn them yet (a region keeps the panels' open state it has).
+        workspace = bpy.data.workspaces.get("Modeling")
+        if workspace is not None:
+            closed = self.register_panels(open_all=True)
+            workspace.object_mode = 'OBJECT'
+            window.workspace = workspace
+            yield
+            yield
+            area = max((a for a in window.screen.areas if a.type == 'VIEW_3D'),
+                       key=lambda a: a.width * a.height)
+            area.spaces.active.show_region_ui = True
+            if (yield from self.show_tab(window, area)):
+                pages += yield from self.sidebar_pages(window, area, "panel_open")
+            self.register_panels(open_all=False, closed=closed)
+        checks.check(bool(pages) and all(os.path.getsize(path) > 1000 for path in pages),
+                     "the sidebar's screenshots are saved", " ".join(pages))
+        for path in pages:
+            print("test_viewport: sidebar screenshot %s" % path)
+
+    def show_tab(self, window, area):
+        """Selects the SD Lighting tab of the area's sidebar (Ctrl+Wheel over its tabs, one tab a
+        step; Blender 3.4 has no API for it) until the panel draws; whether it did."""
+        ui = next(r for r in area.regions if r.type == 'UI')
+        panel = self.package.ui.panels.SD_PT_lighting
+        draw, drawn = panel.draw, []
+
+        def watched(panel_self, context):
+            drawn.append(True)
+            draw(panel_self, context)
+        panel.draw = watched
+        try:
+            for _ in range(10):
+                drawn.clear()
+                area.tag_redraw()
+                for _ in range(3):
+                    yield
+                if drawn:
+                    return True
+                x, y = ui.x + ui.width - 10, ui.y + ui.height - 20     # over the tabs
+                window.event_simulate(type='MOUSEMOVE', value='NOTHING', x=x, y=y)
+                window.event_simulate(type='WHEELDOWNMOUSE', value='PRESS', x=x, y=y, ctrl=True)
+            return False
+        finally:
+            panel.draw = draw
+
+    def sidebar_shot(self, window, area):
+        """The area's sidebar as it is on screen (RGBA8, rows top-first)."""
+        ui = next(r for r in area.regions if r.type == 'UI')
+        path = os.path.join(self.args.out, "area.png")
+        with bpy.context.temp_override(window=window, area=area):
+            bpy.ops.screen.screenshot_area(filepath=path)
+        image = bpy.data.images.load(path)
+        try:
+            width, height = image.size
+            pixels = np.array(image.pixels[:], dtype=np.float32).reshape(height, width, 4)
+        finally:
+            bpy.data.images.remove(image)
+            os.remove(path)
+        x, y = ui.x - area.x, ui.y - area.y
+        return np.round(255 * pixels[y:y + ui.height, x:x + ui.width][::-1]).astype(np.uint8)
+
+    def sidebar_pages(self, window, area, stem, most=6):
+        """Screenshots of the sidebar, a page at a time down to its end: STEM.png, STEM_2.png...
+        under --out; their paths."""
+        ui = next(r for r in area.regions if r.type == 'UI')
+        for _ in range(3):
+            yield
+        paths, previous = [], None
+        for page in range(most):
+            shot = self.sidebar_shot(window, area)
+            if previous is not None and np.array_equal(shot, previous):
+                break
+            paths.append(os.path.join(self.args.out, "%s%s.png" % (stem, "_%d" % (page + 1) if page else "")))
+            self.package.live.preview.write_png(paths[-1], shot)
+            previous = shot
+            with bpy.context.temp_override(window=window, area=area, region=ui):
+                bpy.ops.view2d.scroll_down(page=True)
+            for _ in range(3):
+                yield
+        return paths
+
+    def register_panels(self, open_all, closed=()):
+        """Registers the panels again, every one open (open_all; returns those that start
+        closed), or as they were."""
+        panels = self.package.ui.panels
+        panels.unregister()
+        if open_all:
+            closed = [cls for cls in panels.CLASSES if 'DEFAULT_CLOSED' in getattr(cls, "bl_options", ())]
+        for cls in closed:
+            cls.bl_options = set() if open_all else {'DEFAULT_CLOSED'}
+        panels.register()
+        return closed
+
     def tick(self):
         self.ticks += 1
         try:
@@ -252,6 +391,9 @@ class Test:
 
 
 def main():
+    # A fresh user folder shows the first-run splash after this script, over the viewport and the
+    # sidebar (and taking the events the test simulates): not in this run.
+    bpy.context.preferences.view.show_splash = False
     test = Test()
     test.start = 0.0
     bpy.app.timers.register(test.tick, first_interval=0.5)

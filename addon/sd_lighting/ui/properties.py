@@ -103,7 +103,7 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="For a chosen method, choose the environment's SH order s from the "
                     "lobe-filtered truncation error")
     target_error: FloatProperty(
-        name="Target error", default=0.02, min=0.001, max=1.0, subtype='FACTOR',
+        name="Target Error", default=0.02, min=0.001, max=1.0, subtype='FACTOR',
         description="Relative RMS error to aim for: of B against the reference of eq. (1), "
                     "measured on sampled vertices (Automatic method); of the lobe-filtered "
                     "environment (Automatic s of a chosen method); of the light between two "
@@ -147,7 +147,7 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "matches the light at the faces' centres as well as at the vertices (bakes about "
                     "3x the rays; all methods but MSD (13), whose designs are kept as baked)")
     refine_max_vertices: IntProperty(
-        name="Max Vertices", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
+        name="Max Verts", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
         description="Most vertices a refined copy may have (its bake time and memory grow with "
                     "them); a copy that has as many already is not refined")
 

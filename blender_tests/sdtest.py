@@ -45,6 +45,7 @@ def arguments():
     parser = argparse.ArgumentParser()
     parser.add_argument("--zip", default=None, help="the add-on zip to install")
     parser.add_argument("--out", default=os.path.join(os.getcwd(), "blender_test_output"))
+    parser.add_argument("--quick", action="store_true", help="the quick tier's part of the test")
     args, _ = parser.parse_known_args(argv)
     args.out = os.path.abspath(args.out)
     os.makedirs(args.out, exist_ok=True)

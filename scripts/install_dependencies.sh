@@ -7,7 +7,8 @@
 # lavapipe, the Vulkan driver on which Blender 5.3 (whose default backend is Vulkan; without a
 # driver it falls back to OpenGL) runs the GPU tests. glslang-tools: the strict GLSL checks of
 # every shader variant (blender_tests/test_shader_variants.py). clang and libclang-rt-14-dev
-# (libFuzzer and the sanitizers' runtimes for clang 14): the fuzz targets (tests/fuzz).
+# (libFuzzer and the sanitizers' runtimes for clang 14): the fuzz targets (tests/fuzz); ccache
+# keeps their sanitizer build between clean clones.
 # assimp-testmodels (a real asset with hard edges) and python3-matplotlib (its plots): the
 # accuracy-cost report (blender_tests/accuracy_report.py).
 set -euo pipefail
@@ -17,7 +18,7 @@ packages=(cmake g++ make pkg-config libembree-dev pybind11-dev libglm-dev libope
           blender xvfb xauth libgl1-mesa-dri
           python3-venv libegl1 libgl1 libegl-mesa0 libx11-6 libxext6 libxfixes3 libxi6 libxrender1
           libxxf86vm1 libxkbcommon0 libsm6 libice6 libgomp1 mesa-vulkan-drivers
-          glslang-tools clang libclang-rt-14-dev assimp-testmodels python3-matplotlib)
+          glslang-tools clang libclang-rt-14-dev ccache assimp-testmodels python3-matplotlib)
 
 missing=()
 for package in "${packages[@]}"; do

@@ -45,9 +45,12 @@ def main():
                      "%d evaluated, %d baked" % (count, len(baked.vertices) if baked else -1))
         method = package.methods.get(info["method"])
         # The predicted error is a Monte Carlo estimate (plan/accuracy.py), and Suzanne's best
-        # setting sits at the 2 % target: within its noise of it (10 %) either side.
+        # setting sits at the 2 % target, on either side of it by the estimate's noise: the mode
+        # then says that no setting reaches it and takes one near the most accurate.
+        target = bpy.context.scene.sd_lighting.target_error
+        missed = "no setting reaches the %.1f %% target" % (100 * target) in info.get("automatic", "")
         checks.check("automatic" in info and info["lobe"] == "lambert" and
-                     info["predicted_error"] <= 1.1 * bpy.context.scene.sd_lighting.target_error,
+                     (info["predicted_error"] <= target or missed and info["predicted_error"] <= 1.25 * target),
                      "%s: the automatic mode chose %s at the target for Lambert from the rough "
                      "material" % (obj.name, method.label),
                      "predicted %.4f; %s" % (info.get("predicted_error", -1), info.get("automatic", "")[:200]))

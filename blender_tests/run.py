@@ -24,7 +24,9 @@ one line per test and a summary; exits non-zero if any test fails, and with SKIP
 every selected test was skipped (CTest's SKIP_RETURN_CODE).
 
 `--quick` passes --quick to each script: the quick tier's part of the test where it has one
-(test_shader_variants: one variant per #define).
+(test_shader_variants: one variant per #define). `--no-numeric` passes --no-numeric: the scripts
+leave out their version-independent numeric checks (test_scale, test_ringing, test_automatic),
+which the CTest suite runs on Debian's Blender only.
 `--benchmark` runs blender_tests/benchmark_viewport.py instead (prints the frame-time table).
 `--main-job DIR` runs blender_tests/run_default_scene.py with --out DIR instead.
 """
@@ -193,6 +195,9 @@ def main():
     parser.add_argument("--quick", action="store_true",
                         help="the quick tier's part of each test (scripts that have one: "
                              "test_shader_variants); give it its own --out")
+    parser.add_argument("--no-numeric", action="store_true",
+                        help="leave out the version-independent numeric checks (scripts that have "
+                             "them: test_scale, test_ringing, test_automatic)")
     parser.add_argument("tests", nargs="*")
     args = parser.parse_args()
     out = os.path.abspath(args.out)
@@ -229,7 +234,8 @@ def main():
             skipped.append(name)
             continue
         code, seconds, text, log_path = run_one(blender, name, needs, limit, zip_path, out, options=options,
-                                                arguments=list(arguments) + (["--quick"] if args.quick else []))
+                                                arguments=list(arguments) + (["--quick"] if args.quick else [])
+                                                + (["--no-numeric"] if args.no_numeric else []))
         summary = [l for l in text.splitlines() if l.startswith(name + ":")]
         ok = code == 0
         print("%-24s %s  %5.1f s  %s" % (name, "PASS" if ok else "FAIL", seconds,

@@ -126,10 +126,13 @@ def main():
         "the cost model's stored floats are what the bakes store",
         ", ".join(str(info["floats_per_vertex"]) for info in (lone_info, resting_info)))
 
-    measured = measured_error(package, scene, resting)
-    ratio = measured / resting_info["predicted_error"]
-    checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
-                 "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
+    # The Monte Carlo reference is version-independent: with --no-numeric (tests/CMakeLists.txt:
+    # every Blender but Debian's) it is left out.
+    if args.numeric:
+        measured = measured_error(package, scene, resting)
+        ratio = measured / resting_info["predicted_error"]
+        checks.check(0.5 <= ratio <= 2.0, "the predicted error is within a factor 2 of the measured one",
+                     "predicted %.4f, measured %.4f" % (resting_info["predicted_error"], measured))
 
     package.live.gpu_context.ensure()
     data = package.live.drawing.object_data(resting)

@@ -125,12 +125,17 @@ def main():
 
     checks.check(settings.ringing_window == 'AUTOMATIC', "the ringing window is Automatic by default")
     check_choice_in_background(checks, package, scene, ball, view)
-    choice = drawing.ringing_choice(scene, ball, wait=True)
-    line = package.scene.ringing.describe(choice, "automatic")
-    checks.check(choice["window"] != "none" and choice["error"] < choice["unwindowed_error"] and
-                 choice["min_over_max"] > choice["unwindowed_min_over_max"],
-                 "Automatic picks a window that lowers the displayed error and lifts the negative part",
-                 line)
+    # The window's numbers (the native module's choice, and the CPU's clamped vertices below) are
+    # the same on every Blender: with --no-numeric (tests/CMakeLists.txt: every Blender but
+    # Debian's) they are left out; the GPU's agreement, the previews and the background choice
+    # run on every version.
+    if args.numeric:
+        choice = drawing.ringing_choice(scene, ball, wait=True)
+        line = package.scene.ringing.describe(choice, "automatic")
+        checks.check(choice["window"] != "none" and choice["error"] < choice["unwindowed_error"] and
+                     choice["min_over_max"] > choice["unwindowed_min_over_max"],
+                     "Automatic picks a window that lowers the displayed error and lifts the negative part",
+                     line)
 
     clamped = {}
     for setting in ('NONE', 'AUTOMATIC'):
@@ -150,10 +155,11 @@ def main():
                      "preview (%s): no negative pixel" % setting,
                      "%.0f %% covered, min %.3g, max %.3g" % (100 * covered.mean(), image[covered][:, :3].min(),
                                                                image[covered][:, :3].max()))
-    checks.check(clamped['NONE'] > 0 and clamped['AUTOMATIC'] < clamped['NONE'],
-                 "without a window B rings below zero at some vertices (shown as 0); the window lifts most",
-                 "vertices with a channel clamped to 0: %d without, %d with the window of %d" % (
-                     clamped['NONE'], clamped['AUTOMATIC'], len(ball.data.vertices)))
+    if args.numeric:
+        checks.check(clamped['NONE'] > 0 and clamped['AUTOMATIC'] < clamped['NONE'],
+                     "without a window B rings below zero at some vertices (shown as 0); the window lifts most",
+                     "vertices with a channel clamped to 0: %d without, %d with the window of %d" % (
+                         clamped['NONE'], clamped['AUTOMATIC'], len(ball.data.vertices)))
 
     # The band-limited texture holds the same windowed L~ as the SH sums (MSD 12 at s + s' = 8:
     # a small lobe design), so GPU (texture) = CPU (SH) with the window and without.

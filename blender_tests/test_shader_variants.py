@@ -179,20 +179,32 @@ def background_stage_source(package, stage, dialect):
     return "\n".join(lines) + "\n" + (vertex if stage == "vert" else fragment)
 
 
-def glslang_errors(validator, source, stage, dialect, directory):
-    directory = tempfile.mkdtemp(dir=directory)
-    path = os.path.join(directory, "variant." + stage)
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(source)
-    command = [validator]
-    if dialect == "vulkan":
-        command += ["-V", "--target-env", "vulkan1.2", "-o", os.path.join(directory, "variant.spv")]
-    command.append(path)
-    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
-    if done.returncode == 0:
-        return []
-    return [l for l in (done.stdout + done.stderr).splitlines()
-            if "ERROR" in l and "compilation terminated" not in l] or [done.stdout + done.stderr]
+GLSLANG_BATCH = 40   # GLSL ES stage files per glslang process
+
+
+def glslang_errors(validator, paths, dialect):
+    """glslang's errors for each stage file of `paths` ([] where it accepts the file), from one
+    process for all of them: glslang sets up its built-in symbol tables once per process, most of
+    a small compile's time. As GLSL ES each file is compiled on its own; to SPIR-V (-V) the files of
+    one stage are linked into one module, so there `paths` are one program's vertex and fragment
+    stages. When the process fails, each file once more on its own says which fail and why."""
+    def run(files):
+        command = [validator]
+        if dialect == "vulkan":
+            command += ["-V", "--target-env", "vulkan1.2", "-o", os.path.splitext(files[0])[0] + ".spv"]
+        done = subprocess.run(command + list(files), capture_output=True, text=True, timeout=600)
+        if done.returncode == 0:
+            return []
+        return [l for l in (done.stdout + done.stderr).splitlines()
+                if "ERROR" in l and "compilation terminated" not in l] or [done.stdout + done.stderr]
+
+    together = run(paths)
+    if not together:
+        return [[] for _ in paths]
+    alone = [run([path]) for path in paths]
+    if not any(alone):   # only together (the stages linked): the first file says so
+        alone[0] = together
+    return alone
 
 
 BACKGROUND = object()   # the world background's program, beside the variants in the glslang jobs
@@ -248,8 +260,16 @@ def main():
             return stage_source(package, variant, stage, dialect)
 
         with tempfile.TemporaryDirectory() as directory, ThreadPoolExecutor(os.cpu_count() or 2) as pool:
-            results = pool.map(lambda job: glslang_errors(
-                validator, source(*job), job[1], dialect, directory), jobs)
+            paths = []
+            for index, (variant, stage) in enumerate(jobs):
+                paths.append(os.path.join(directory, "%d.%s" % (index // 2, stage)))
+                with open(paths[-1], "w", encoding="utf-8") as f:
+                    f.write(source(variant, stage))
+            # jobs alternate vert, frag of one program: to SPIR-V one program per process
+            size = 2 if dialect == "vulkan" else GLSLANG_BATCH
+            batches = [paths[i:i + size] for i in range(0, len(paths), size)]
+            results = [errors for batch in pool.map(lambda batch: glslang_errors(validator, batch, dialect), batches)
+                       for errors in batch]
             failed = ["%s %s: %s" % ("background" if variant is BACKGROUND else name(variant), stage,
                                      " | ".join(errors[:3]))
                       for (variant, stage), errors in zip(jobs, results) if errors]

@@ -18,8 +18,13 @@ TEST names a test (test_bake, ...; default: all of TESTS, in order). Two kinds o
 
 A test may also need a minimum Blender version (test_extension: extensions exist since 4.2);
 below it, it is skipped. Every run gets its own BLENDER_USER_SCRIPTS/BLENDER_USER_CONFIG (and
-extension repository, and shader caches) under --out, so installing the zip never touches
-~/.config/blender and every shader is compiled afresh. Prints
+extension repository, and the add-on's cache) under --out, so installing the zip never touches
+~/.config/blender. test_shader_variants also gets fresh shader caches, so every variant is really
+compiled; the other tests share a shader cache per Blender (Blender's own - the SPIR-V of its
+Vulkan backend - and Mesa's), kept between runs like the bpy venvs, in
+${XDG_CACHE_HOME:-~/.cache}/sd-lighting/shader-cache/: a program that an earlier test or run
+compiled from the same source with the same compiler is loaded, not compiled again (a program
+that fails to compile is never cached). SD_FRESH_SHADER_CACHES=1 gives every test fresh ones. Prints
 one line per test and a summary; exits non-zero if any test fails, and with SKIPPED (77) when
 every selected test was skipped (CTest's SKIP_RETURN_CODE).
 
@@ -151,9 +156,27 @@ def blender_environment(user):
         env["BLENDER_USER_EXTENSIONS"] = os.path.join(user, "extensions")   # 4.2+
         env["BLENDER_USER_DATAFILES"] = os.path.join(user, "datafiles")
         # Blender's shader caches (OpenGL, Vulkan SPIR-V and pipelines) and Mesa's live under
-        # $XDG_CACHE_HOME: a fresh one per run, so every shader is really compiled.
+        # $XDG_CACHE_HOME (and the add-on's, always fresh): run_one links the shader caches to
+        # the shared ones (FRESH_SHADER_CACHES).
         env["XDG_CACHE_HOME"] = os.path.join(user, "cache")
     return env
+
+
+# The tests whose shader caches are fresh: they check that every program compiles.
+FRESH_SHADER_CACHES = {"test_shader_variants"}
+SHADER_CACHES = ("blender", "mesa_shader_cache", "mesa_shader_cache_db")   # under $XDG_CACHE_HOME
+
+
+def share_shader_caches(blender, user):
+    """Links the shader caches of the run's $XDG_CACHE_HOME (user/cache) to the shared ones of
+    this Blender (see the module's doc)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    shared = os.path.join(base, "sd-lighting", "shader-cache", "%s-%d.%d.%d" % (
+        "bpy" if isinstance(blender, BlenderModule) else "blender", *blender.version[:3]))
+    os.makedirs(os.path.join(user, "cache"), exist_ok=True)
+    for name in SHADER_CACHES:
+        os.makedirs(os.path.join(shared, name), exist_ok=True)
+        os.symlink(os.path.join(shared, name), os.path.join(user, "cache", name))
 
 
 def run_one(blender, name, needs, limit, zip_path, out, script_out=None, options=(), arguments=()):
@@ -162,6 +185,8 @@ def run_one(blender, name, needs, limit, zip_path, out, script_out=None, options
     user = os.path.join(out, "blender_user", name)
     shutil.rmtree(user, ignore_errors=True)
     os.makedirs(user, exist_ok=True)
+    if name not in FRESH_SHADER_CACHES and os.environ.get("SD_FRESH_SHADER_CACHES") != "1":
+        share_shader_caches(blender, user)
     env = blender_environment(user)
     command = blender.command(name, needs, options,
                               ["--zip", zip_path, "--out", script_out or out] + list(arguments))

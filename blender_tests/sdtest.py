@@ -118,10 +118,14 @@ def registration_state():
             "panels": sorted(name for name in dir(bpy.types) if name.startswith("SD_PT_")),
             "bake_operator": operator_exists("bake"),
             "preview_operator": operator_exists("render_preview"),
-            "load_post": len(bpy.app.handlers.load_post),
-            # the live re-bake's, while a scene has it on
-            "handlers": {name: len(getattr(bpy.app.handlers, name))
-                         for name in ("depsgraph_update_post", "undo_post", "redo_post")}}
+            "handlers": {name: len(getattr(bpy.app.handlers, name)) for name in HANDLER_LISTS}}
+
+
+# The handler lists the add-on adds to: while it is enabled, and those Live Re-bake adds to while
+# a scene has it on.
+HANDLER_LISTS = ("load_post", "save_pre", "depsgraph_update_post", "frame_change_post", "undo_post",
+                 "redo_post")
+LIVE_REBAKE_HANDLERS = ("depsgraph_update_post", "undo_post", "redo_post")
 
 
 class LayoutStub:

@@ -235,6 +235,21 @@ def main():
     bpy.data.meshes.remove(smooth)
     bpy.data.meshes.remove(cube_mesh)
 
+    # A deleted object's bake is not saved with the file (its baked mesh has a fake user).
+    copy = ball.copy()
+    copy.name = "Copy"
+    scene.collection.objects.link(copy)
+    sdtest.select_only([copy])
+    checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and "SD Copy" in bpy.data.meshes, "bake a copy")
+    bpy.ops.object.delete()
+    path = os.path.join(args.out, "test_bake_deleted.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    with bpy.data.libraries.load(path) as (saved, _):
+        meshes = list(saved.meshes)
+    checks.check("Copy" not in bpy.data.objects and "SD Copy" not in meshes and "SD Ball" in meshes,
+                 "a deleted object's baked mesh is not saved, a live one's is", ", ".join(meshes))
+    ball = bpy.data.objects["Ball"]
+
     sdtest.select_only([ball])
     result = bpy.ops.sd_lighting.clear_bake()
     checks.check(result == {'FINISHED'} and "sd_bake" not in ball and "SD Ball" not in bpy.data.meshes,

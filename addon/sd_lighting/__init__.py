@@ -27,15 +27,16 @@ bl_info = {
 # scene gives: environment, materials, view), plan (the automatic mode's error and cost
 # predictions), bake, store (the baked meshes and their records), live (the shading), ui.
 _SUBMODULES = ("background", "compat", "errors", "native", "redraw",
-               "scene.lobes", "scene.materials", "scene.ringing", "scene.transforms", "scene.environment",
+               "scene.lobes", "scene.materials", "scene.ringing", "scene.transforms", "scene.world_render",
+               "scene.environment",
                "scene.view",
                "plan.bake_time", "plan.cost", "store.bake_data", "methods", "plan.accuracy",
-               "store.record", "store.attributes",
+               "store.record", "store.attributes", "store.source",
                "bake.corners", "bake.least_squares", "plan.automatic", "plan.analysis", "bake.lightmap",
                "store.baked", "bake.refine", "bake.geometry", "bake.task", "bake.job", "bake.unwrap",
                "bake.prepare",
                "live.gpu_context", "live.lobe_designs", "live.rebake_schedule", "live.shader_variant",
-               "live.gpu_shading", "live.drawing", "live.live_rebake", "live.preview",
+               "live.gpu_shading", "live.staleness", "live.drawing", "live.live_rebake", "live.preview",
                "ui.limits", "ui.prediction", "ui.operators", "ui.panels", "ui.properties", "registration")
 
 if "registration" in locals():

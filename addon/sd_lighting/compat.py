@@ -120,3 +120,13 @@ def make_batch(primitive, content, indices=None):
         return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer)
     index_buffer = gpu.types.GPUIndexBuf(type=primitive, seq=np.ascontiguousarray(indices, dtype=np.int32))
     return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer, elem=index_buffer)
+
+
+def equirectangular_camera(camera):
+    """Makes a camera panoramic, equirectangular over the whole sphere (4.0 moved the panorama's
+    settings from Cycles' camera properties to the camera's own)."""
+    camera.type = 'PANO'
+    if _has_rna_property(type(camera), "panorama_type"):
+        camera.panorama_type = 'EQUIRECTANGULAR'
+    else:
+        camera.cycles.panorama_type = 'EQUIRECTANGULAR'

@@ -1,4 +1,5 @@
-"""Redrawing Blender's 3D viewports: the one loop over windows, areas and regions."""
+"""Redrawing Blender's 3D viewports (the one loop over windows, areas and regions) and the status
+bar's text."""
 
 
 def viewports(region_type=None):
@@ -15,3 +16,13 @@ def viewports(region_type=None):
             for region in area.regions:
                 if region.type == region_type:
                     region.tag_redraw()
+
+
+def status_bar(text):
+    """Shows the text in the status bar of every window (None: clears it)."""
+    import bpy
+    for window in getattr(bpy.context.window_manager, "windows", ()):
+        with bpy.context.temp_override(window=window):
+            workspace = bpy.context.workspace
+            if workspace is not None:
+                workspace.status_text_set(text)

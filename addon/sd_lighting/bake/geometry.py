@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import compat
 from ..scene import materials, transforms
-from ..store import attributes
+from ..store import attributes, source as source_module
 from . import corners, refine
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
@@ -70,6 +70,11 @@ class Geometry:
         return (self._local_positions, self._loop_vertices, self.loop_starts, self.loop_totals,
                 self._loop_slots, self._loop_uvs, np.array(self._mirrored), self._corner_normals,
                 self._scaled_positions, self._triangle_loops)
+
+    @functools.cached_property
+    def source(self):
+        """The digest of the mesh as read (store/source.py): what a bake of it was baked from."""
+        return source_module.digest(self._local_positions, self._loop_vertices, self.loop_totals)
 
     @property
     def mesh_positions(self):

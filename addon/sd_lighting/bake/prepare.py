@@ -133,7 +133,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     if not native.available():
         raise BakeError(native.error_message())
     try:
-        env_source = environment.source(scene)
+        env_source = environment.source(scene, render=True)
         if env_source.kind != "uniform":
             environment.environment(env_source)  # an unreadable file fails now, not at every frame
     except environment.Unavailable as exc:

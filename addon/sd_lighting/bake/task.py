@@ -235,6 +235,7 @@ class BakeTask:
             "vertices": int(n),
             "bake_id": uuid.uuid4().hex,
             "inputs": self.inputs_hash(),
+            "source": self.geometry.source,
         }
         refinement = self.refinement
         if refinement is not None:

@@ -28,7 +28,7 @@ from ..scene import environment, materials, transforms
 from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
-from . import gpu_shading
+from . import gpu_shading, staleness
 
 log = logging.getLogger(__name__)
 
@@ -61,15 +61,18 @@ def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=
 
 
 def baked_objects(scene, view_layer=None):
-    """Visible objects with a bake whose record can be read (the panel says to bake the others
-    again)."""
+    """Visible objects with a bake whose record can be read and which fits their evaluated mesh
+    (staleness.py); the panel says to bake the others again. view_layer: an evaluated one (default:
+    the context's)."""
+    import bpy
+    depsgraph = (view_layer or bpy.context.view_layer).depsgraph
     out = []
     for obj in scene.objects:
         try:
             visible = obj.visible_get(view_layer=view_layer) if view_layer else obj.visible_get()
         except (RuntimeError, TypeError):
             visible = False
-        if visible and _readable(obj):
+        if visible and _readable(obj) and not staleness.stale(obj, depsgraph):
             out.append(obj)
     return out
 

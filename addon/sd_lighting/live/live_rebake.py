@@ -114,17 +114,8 @@ class Rebake(job.BakeJob):
         self.started = started
 
 
-def _status(text):
-    """Shows (None: clears) the text in the status bar of every window."""
-    for window in bpy.context.window_manager.windows:
-        with bpy.context.temp_override(window=window):
-            workspace = bpy.context.workspace
-            if workspace is not None:
-                workspace.status_text_set(text)
-
-
 def _clear_status():
-    _status(None)
+    redraw.status_bar(None)
 
 
 def _report(text, level=logging.INFO):
@@ -132,7 +123,7 @@ def _report(text, level=logging.INFO):
     global message
     message = text
     log.log(level, text)
-    _status("SD Lighting: " + text)
+    redraw.status_bar("SD Lighting: " + text)
     if bpy.app.timers.is_registered(_clear_status):
         bpy.app.timers.unregister(_clear_status)
     bpy.app.timers.register(_clear_status, first_interval=MESSAGE_SECONDS)
@@ -163,7 +154,7 @@ def _start(name):
 def _show_progress():
     """The running re-bake's progress, in the status bar and the panel."""
     name, job = _scheduler.running
-    _status("SD Lighting: re-baking %s, %d %%" % (name, int(100 * job.fraction)))
+    redraw.status_bar("SD Lighting: re-baking %s, %d %%" % (name, int(100 * job.fraction)))
     redraw.viewports()
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from .. import compat
 from ..bake import geometry
 from . import drawing, gpu_context
+from ..scene import environment
 from ..scene.view import View
 
 OTHER_MESH_GREY = 0.18
@@ -48,6 +49,10 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
     camera = camera or scene.camera
     if camera is None:
         raise RuntimeError("the scene has no camera")
+    try:
+        environment.source(scene, render=True)   # a world Cycles renders: now, not while drawing
+    except environment.Unavailable:
+        pass                                     # the drawing below says what is missing
     gpu_context.ensure()
     view = View.from_camera(camera, depsgraph, width, height, scene)
     objects = drawing.baked_objects(scene, view_layer)

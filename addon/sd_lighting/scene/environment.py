@@ -1,16 +1,19 @@
 """The environment L that lights the scene, and its rotation g (eq. 1).
 
 Source (the scene's settings, `environment_source`):
-- 'WORLD' (default): the image of the world's Environment Texture node (the one feeding the
-  active World Output through a Background node, else any), times the Background's Strength.
-  A world without an Environment Texture lights with its uniform Background colour.
+- 'WORLD' (default): the image of the Environment Texture node feeding the active World
+  Output through a Background node, times the Background's Strength; a Background of a plain
+  colour (an Environment Texture elsewhere in the tree does not light) or a world without nodes
+  lights with its uniform colour. Any other world - a Sky Texture, mixes, a Strength from nodes -
+  is rendered by Cycles into an equirectangular image and read as an HDRI (world_render.py).
 - 'FILE': an image file (EXR/HDR), in Blender's equirectangular orientation.
 What is missing or cannot be read - the world, the texture's image, its file - raises
 Unavailable, whose message names it (the bake refuses, the panel and the live shading show it).
 
 Rotation g: the world's Mapping node feeding the Environment Texture's Vector input turns the
 environment (scene/transforms.mapping_rotation; location and scale are ignored). Without a Mapping
-node (or for 'FILE'), g is the settings' own `environment_rotation`. The panel's rotation slider
+node (or for 'FILE', or a rendered world, whose image has its Mapping in it), g is the settings'
+own `environment_rotation`. The panel's rotation slider
 writes the Mapping node when there is one.
 
 SH coefficients are cached per (source, order): loading and projecting an HDRI takes a moment, the
@@ -25,7 +28,7 @@ import os
 import numpy as np
 
 from .. import background, compat, native
-from . import ringing, transforms
+from . import ringing, transforms, world_render
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
@@ -36,6 +39,7 @@ def clear_cache():
     global _window_choices
     _cache.clear()
     _sh_cache.clear()
+    world_render.clear()
     if _window_choices is not None:
         _window_choices.close()
         _window_choices = None
@@ -58,36 +62,42 @@ def _linked_node(socket):
     return socket.links[0].from_node
 
 
-def world_nodes(world):
-    """(environment texture node, background node, mapping node), each None when absent."""
+def _surface_nodes(world):
+    """(active World Output, Background, Environment Texture, Mapping) on the Surface path
+    Output <- Background.Color <- Environment Texture.Vector <- Mapping, each None when absent."""
     if not compat.uses_nodes(world):
-        return None, None, None
-    tree = world.node_tree
-    background = None
-    output = _active_output(tree)
-    if output is not None:
-        node = _linked_node(output.inputs.get("Surface"))
-        if node is not None and node.type == 'BACKGROUND':
-            background = node
-    env = None
-    if background is not None:
-        node = _linked_node(background.inputs.get("Color"))
-        if node is not None and node.type == 'TEX_ENVIRONMENT':
-            env = node
-    if env is None:
-        env = next((n for n in tree.nodes if n.type == 'TEX_ENVIRONMENT'), None)
-    mapping = None
-    if env is not None:
-        node = _linked_node(env.inputs.get("Vector"))
-        if node is not None and node.type == 'MAPPING':
-            mapping = node
-    return env, background, mapping
+        return None, None, None, None
+    output = _active_output(world.node_tree)
+    background = _linked_node(output.inputs.get("Surface")) if output is not None else None
+    if background is not None and background.type != 'BACKGROUND':
+        background = None
+    texture = _linked_node(background.inputs.get("Color")) if background is not None else None
+    if texture is not None and texture.type != 'TEX_ENVIRONMENT':
+        texture = None
+    mapping = _linked_node(texture.inputs.get("Vector")) if texture is not None else None
+    if mapping is not None and mapping.type != 'MAPPING':
+        mapping = None
+    return output, background, texture, mapping
+
+
+def world_nodes(world):
+    """(environment texture node, background node, mapping node) on the active World Output's
+    Surface path, each None when absent; an Environment Texture elsewhere in the tree does not
+    light the scene."""
+    _, background, texture, mapping = _surface_nodes(world)
+    return texture, background, mapping
+
+
+def render_reason(world):
+    """Why the world is rendered by Cycles to be read (scene/world_render.py), or None."""
+    return world_render.reason(world, *_surface_nodes(world))
 
 
 def mapping_node(scene):
-    """The Mapping node that turns the world's environment, or None."""
+    """The Mapping node that turns the world's environment, or None (also for a rendered world,
+    whose image has the Mapping's rotation in it)."""
     settings = scene.sd_lighting
-    if settings.environment_source != 'WORLD':
+    if settings.environment_source != 'WORLD' or scene.world is None or render_reason(scene.world):
         return None
     return world_nodes(scene.world)[2]
 
@@ -129,9 +139,29 @@ class Unavailable(Exception):
     """The scene's environment cannot be read; the message names what is missing."""
 
 
-def source(scene):
+def _rendered_source(world, why, render):
+    """The Source of a world Cycles renders (world_render.py): render=True renders it now if it
+    is not there; otherwise a timer is asked to and Unavailable raised meanwhile."""
+    path, failure = world_render.rendered(world)
+    if path is None and failure is None and render:
+        try:
+            path = world_render.render(world)
+        except Exception:
+            path, failure = world_render.rendered(world)
+    if failure is not None:
+        raise Unavailable("world '%s' (%s) could not be rendered by Cycles: %s" % (world.name, why, failure))
+    if path is None:
+        world_render.request(world)
+        raise Unavailable("world '%s' (%s) is being rendered by Cycles" % (world.name, why))
+    return Source("file", _file_key(path), "world '%s' rendered by Cycles (%s)" % (world.name, why),
+                  path=path)
+
+
+def source(scene, render=False):
     """The environment Source of the scene's settings. Raises Unavailable when what they name is
-    missing: no world, an Environment Texture without an image, an image without its file."""
+    missing: no world, an Environment Texture without an image, an image without its file; and
+    for a world Cycles renders (world_render.py), until it is rendered - now with render=True
+    (main thread, not while drawing), else by a timer it asks for."""
     import bpy
     settings = scene.sd_lighting
     if settings.environment_source == 'FILE':
@@ -144,6 +174,9 @@ def source(scene):
     if scene.world is None:
         raise Unavailable("the scene has no world: add one (Properties > World) or choose an "
                           "HDRI file (Environment: File)")
+    why = render_reason(scene.world)
+    if why:
+        return _rendered_source(scene.world, why, render)
     env, background, _ = world_nodes(scene.world)
     strength = 1.0
     if background is not None:

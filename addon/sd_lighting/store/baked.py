@@ -7,7 +7,8 @@ user so it persists, and the bake record (record.py) in `sd_bake`, on the mesh a
 the object. A bake with texture-space data also has the UV map "SD Lightmap" and links the
 texels' mesh "SD Lightmap <object>" (one point per texel stored, the same attributes) in the baked
 mesh's `sd_lightmap` property. Shift+D and Alt+D copies of a baked object link the same baked mesh:
-it is removed only when no object links it any more.
+it is removed only when no object links it any more (Clear Bake), and before the file is saved
+once the objects that linked it were deleted (remove_unlinked).
 """
 
 import dataclasses
@@ -158,6 +159,23 @@ def _release(mesh):
     import bpy
     if mesh.library is None and not any(o.get(BAKED_MESH) == mesh for o in bpy.data.objects):
         _remove_baked_mesh(mesh)
+
+
+def remove_unlinked():
+    """Removes the baked meshes (with their texels' meshes) that no object in use links: those of
+    deleted objects, which their fake user would otherwise keep in the file. Returns their names."""
+    import bpy
+    linked = set()
+    for obj in bpy.data.objects:
+        mesh = obj.get(BAKED_MESH)
+        if obj.users > 0 and isinstance(mesh, bpy.types.Mesh):
+            linked.add(mesh.as_pointer())
+    removed = []
+    for mesh in list(bpy.data.meshes):
+        if mesh.library is None and BAKE in mesh and mesh.as_pointer() not in linked:
+            removed.append(mesh.name)
+            _remove_baked_mesh(mesh)
+    return removed
 
 
 def clear(obj):

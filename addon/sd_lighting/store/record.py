@@ -58,6 +58,7 @@ class BakeRecord:
     # What the bake found.
     bake_id: str = _found("")
     inputs: str = _found("")     # digest of everything the result depends on (BakeTask.inputs_hash)
+    source: str = _found("")     # digest of the evaluated mesh baked (store/source.py; before it: "")
     seconds: float = _found(0.0)
     vertices: int = _found(0)
     floats_per_vertex: int = _found(0)

@@ -7,7 +7,7 @@ from .. import redraw
 from ..bake import prepare
 from ..bake.job import BakeJob
 from ..errors import BakeError
-from ..live import drawing, live_rebake, preview
+from ..live import drawing, live_rebake, preview, staleness
 from ..store import baked
 from . import prediction
 
@@ -194,6 +194,7 @@ class SD_OT_clear_bake(bpy.types.Operator):
         drawing.clear_cache()
         if not cleared:
             return {'CANCELLED'}
+        baked.remove_unlinked()
         self.report({'INFO'}, "Cleared the bake of %s" % ", ".join(cleared))
         return {'FINISHED'}
 
@@ -242,6 +243,9 @@ class SD_OT_render_preview(bpy.types.Operator):
         except Exception as exc:
             self.report({'ERROR'}, "Preview failed: %s: %s" % (type(exc).__name__, exc))
             return {'CANCELLED'}
+        stale = staleness.stale_names(scene)
+        if stale:
+            self.report({'WARNING'}, "Preview: %s (drawn grey)" % staleness.message(stale, scene.sd_lighting.live_rebake))
         self.report({'INFO'}, "Preview written to %s" % path)
         return {'FINISHED'}
 

@@ -17,7 +17,7 @@ import bpy
 
 from .. import methods, native
 from ..bake import least_squares
-from ..live import drawing, gpu_shading, live_rebake
+from ..live import drawing, gpu_shading, live_rebake, staleness
 from ..plan import analysis, cost
 from ..scene import environment, materials, ringing
 from ..store import baked
@@ -147,6 +147,11 @@ class SD_PT_lighting(_Sidebar, bpy.types.Panel):
             layout.operator("sd_lighting.cancel_bake", text="Cancel", icon='CANCEL')
         elif settings.live_rebake and live_rebake.message:
             _text(layout, context, live_rebake.message, icon='INFO')
+        stale = staleness.stale_names(context.scene)
+        if stale:
+            col = layout.column()
+            col.alert = True
+            _text(col, context, staleness.message(stale, settings.live_rebake), icon='ERROR')
         if drawing.last_error:
             col = layout.column()
             col.alert = True
@@ -166,7 +171,7 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
             layout.prop(settings, "environment_path")
         try:
             src = environment.source(scene)
-            _text(layout, context, os.path.basename(src.description) if src.kind == "file"
+            _text(layout, context, os.path.basename(src.path) if src.description == src.path
                   else src.description, icon='WORLD')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')
@@ -409,6 +414,9 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
         if settings.live_rebake and method is not None and method.designs_per_vertex:
             _text(warnings, context, "%s builds a design per vertex: each live re-bake takes about "
                   "as long" % method.label, icon='ERROR')
+        if staleness.known_stale(obj):
+            _text(warnings, context, "The mesh changed since the bake: not shaded, %s"
+                  % ("re-baking" if settings.live_rebake else "bake again"), icon='ERROR')
         if baked.scale_changed(obj):
             _text(warnings, context, "Scale changed since the bake: bake again", icon='ERROR')
         if baked.albedo_texture_unbaked(obj):

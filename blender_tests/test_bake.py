@@ -243,7 +243,7 @@ def main():
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and "SD Copy" in bpy.data.meshes, "bake a copy")
     bpy.ops.object.delete()
     path = os.path.join(args.out, "test_bake_deleted.blend")
-    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.save_as_mainfile(filepath=path, copy=True)   # 4.2+ loads no data from the open file
     with bpy.data.libraries.load(path) as (saved, _):
         meshes = list(saved.meshes)
     checks.check("Copy" not in bpy.data.objects and "SD Copy" not in meshes and "SD Ball" in meshes,

@@ -7,7 +7,8 @@ from sd_lighting.store.record import VERSION, BakeRecord, RecordError
 ASKED = {"method": "prt_matrix", "light_order": 4, "visibility_order": 2, "rays": 256, "seed": 7,
          "lobe": "phong", "exponent": 8.0, "environment": "forest.exr", "refine": False,
          "refine_target": 0.02, "refine_max_vertices": 100000, "least_squares": True, "lightmap": 0,
-         "shape": [1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0], "diffuse_lobe": True,
+         "shape": [1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0],
+         "placement": [1.0, 0.0, 0.0, 3.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.0, 0.0, 1.0], "diffuse_lobe": True,
          "lobe_weights": False, "diffuse_share": 0.25}
 FOUND = {"bake_id": "abc", "inputs": "def", "seconds": 1.5, "vertices": 10, "floats_per_vertex": 16,
          "bytes_per_vertex": 64, "refine_levels": 0, "unrefined_vertices": 10, "refine_seconds": 0.1,

@@ -6,6 +6,7 @@ The bake space is the object's local space with its scale K applied (scene/trans
 the rays of a non-uniformly scaled object are traced in the shape it is shown with.
 """
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -178,25 +179,53 @@ def evaluated_geometry(obj, depsgraph, shape):
         evaluated.to_mesh_clear()
 
 
-def world_triangles(obj, depsgraph, view_layer):
-    """World-space triangles of a visible object with geometry: (vertices float64 [V, 3],
-    triangles [T, 3], wound outside-out also for a mirrored object) or None."""
-    if obj.type not in GEOMETRY_TYPES or not obj.visible_get(view_layer=view_layer):
-        return None
-    evaluated = obj.evaluated_get(depsgraph)
+@dataclasses.dataclass
+class Part:
+    """A piece of visible geometry in world space: an object, or an instance of one (a collection
+    instance, geometry nodes' instances, particles)."""
+    name: str             # the object's name_full (for an instance, the instanced object's)
+    instance: bool
+    vertices: np.ndarray  # float64 [V, 3], world space
+    triangles: np.ndarray  # [T, 3], wound outside-out also for a mirroring matrix
+
+
+def _local_triangles(evaluated):
+    """(positions float32 [V, 3], triangles [T, 3]) of an evaluated object's mesh, or None without
+    faces."""
     mesh = evaluated.to_mesh()
     try:
         if mesh is None or len(mesh.vertices) == 0:
             return None
         triangles = attributes.read_triangles(mesh)
-        if len(triangles) == 0:
-            return None
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
-        if np.linalg.det(matrix[:3, :3]) < 0:
-            triangles = triangles[:, ::-1].copy()
-        return transforms.transform_points(matrix, attributes.read_positions(mesh)), triangles
+        return (attributes.read_positions(mesh), triangles) if len(triangles) else None
     finally:
         evaluated.to_mesh_clear()
+
+
+def scene_parts(depsgraph, view_layer):
+    """Every visible piece of geometry as the evaluated depsgraph instances it, as Parts: what
+    occludes a bake and what a preview draws. Each instanced mesh is read once."""
+    local = {}
+    parts = []
+    for instance in depsgraph.object_instances:
+        evaluated = instance.object
+        if evaluated.type not in GEOMETRY_TYPES:
+            continue
+        original = evaluated.original
+        if not instance.is_instance and not original.visible_get(view_layer=view_layer):
+            continue
+        key = (evaluated.name_full, evaluated.data.as_pointer() if evaluated.data is not None else 0)
+        if key not in local:
+            local[key] = _local_triangles(evaluated)
+        if local[key] is None:
+            continue
+        positions, triangles = local[key]
+        matrix = np.array(instance.matrix_world, dtype=np.float64)
+        if np.linalg.det(matrix[:3, :3]) < 0:
+            triangles = triangles[:, ::-1].copy()
+        parts.append(Part(original.name_full, bool(instance.is_instance),
+                          transforms.transform_points(matrix, positions), triangles))
+    return parts
 
 
 def join(parts):

@@ -139,17 +139,12 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     except environment.Unavailable as exc:
         raise BakeError(str(exc)) from exc
 
-    # The other objects' world triangles, each read when first needed: an object baked alone (a
-    # live re-bake) never reads its own.
-    triangles = {}
+    # Everything visible occludes, instances of objects (and of the object itself) included.
+    parts = geometry_module.scene_parts(depsgraph, view_layer)
 
     def occluders_of(obj):
-        for other in scene.objects:
-            if other != obj:
-                if other.name_full not in triangles:
-                    triangles[other.name_full] = geometry_module.world_triangles(other, depsgraph, view_layer)
-                if triangles[other.name_full] is not None:
-                    yield triangles[other.name_full]
+        return ((part.vertices, part.triangles) for part in parts
+                if part.instance or part.name != obj.name_full)
 
     tasks, skipped = [], []
     for obj in objects:
@@ -169,6 +164,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
                                          for world, faces in occluders_of(obj))
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
+        settings["placement"] = [float(x) for x in np.array(obj.evaluated_get(depsgraph).matrix_world).ravel()]
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
         if unwrap:

@@ -96,8 +96,8 @@ class BakeTask:
 
     def adopt(self, settings, predicted_error):
         """Takes over an automatic choice already made for this object (the prediction's), with
-        this bake's own shape."""
-        self.settings = dict(settings, shape=self.settings["shape"])
+        this bake's own shape and placement."""
+        self.settings = dict(settings, shape=self.settings["shape"], placement=self.settings["placement"])
         self.predicted_error = predicted_error
 
     def predict(self, stop):
@@ -236,6 +236,7 @@ class BakeTask:
             "bake_id": uuid.uuid4().hex,
             "inputs": self.inputs_hash(),
             "source": self.geometry.source,
+            "occluder_triangles": 0 if self.occluder_triangles is None else int(len(self.occluder_triangles)),
         }
         refinement = self.refinement
         if refinement is not None:

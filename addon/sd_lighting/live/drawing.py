@@ -77,6 +77,43 @@ def baked_objects(scene, view_layer=None):
     return out
 
 
+def _instances_something(scene):
+    """Whether some object of the scene instances others (collections, vertices or faces, particles,
+    geometry nodes): only then are the depsgraph's instances looked through."""
+    return any(obj.is_instancer or len(obj.particle_systems) or any(m.type == 'NODES' for m in obj.modifiers)
+               for obj in scene.objects)
+
+
+def baked_instances(scene, objects, view_layer=None):
+    """(object, world matrix) of each instance of one of `objects` (baked_objects: drawn, fresh) that
+    the depsgraph makes - in a collection instance, on vertices or faces, from particles or
+    geometry nodes' Object Info - to draw its bake there."""
+    import bpy
+    if not objects or not _instances_something(scene):
+        return []
+    drawn = {obj.name_full: obj for obj in objects}
+    out = []
+    for instance in (view_layer or bpy.context.view_layer).depsgraph.object_instances:
+        if not instance.is_instance:
+            continue
+        original = instance.object.original
+        if original.name_full in drawn and original != instance.parent.original:
+            out.append((drawn[original.name_full], instance.matrix_world.copy()))
+    return out
+
+
+def placed_elsewhere(scene, view_layer=None):
+    """What is drawn elsewhere than its bake was made while other objects occluded it
+    (store.baked.placed_elsewhere), for the preview's report: ["Ball", "2 instances of Box", ...]."""
+    objects = baked_objects(scene, view_layer)
+    out = [obj.name for obj in objects if baked.placed_elsewhere(obj)]
+    counts = {}
+    for obj, matrix in baked_instances(scene, objects, view_layer):
+        if baked.placed_elsewhere(obj, matrix):
+            counts[obj.name] = counts.get(obj.name, 0) + 1
+    return out + ["%d instance%s of %s" % (n, "" if n == 1 else "s", name) for name, n in sorted(counts.items())]
+
+
 def _readable(obj):
     try:
         return baked.record(obj) is not None
@@ -108,12 +145,12 @@ def ringing_choice(scene, obj, wait=False):
                                       record.light_order, ringing_setting(scene), wait)
 
 
-def local_light(scene, obj, data, wait, source=None, rotation=None):
-    """Coefficients of x -> L(g R x) for the object's data (ObjectData), windowed (shading_light):
-    [(s+1)^2, 3] float64; and g R."""
+def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None):
+    """Coefficients of x -> L(g R x) for the object's data (ObjectData) drawn with `matrix` (default:
+    its own world matrix), windowed (shading_light): [(s+1)^2, 3] float64; and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
-    gr = g @ transforms.rotation_part(np.array(obj.matrix_world))
+    gr = g @ transforms.rotation_part(np.array(obj.matrix_world if matrix is None else matrix))
     light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait)
     return native.get().rotated_environment_sh(light, gr), gr
 
@@ -124,11 +161,13 @@ def use_band_limited_texture(scene):
     return bool(settings is not None and settings.band_limited_texture)
 
 
-def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, **kwargs):
-    """(uniform block, band-limited texture or None) of one draw of the object's data. wait: as
-    shading_light; without waiting, what is still pending is watched (_watch_background)."""
-    light, gr = local_light(scene, obj, data, wait, source, rotation)
-    block = data.frame_block(np.array(obj.matrix_world), view.view_projection, view.camera,
+def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, **kwargs):
+    """(uniform block, band-limited texture or None) of one draw of the object's data with `matrix`
+    (default: its world matrix; an instance's). wait: as shading_light; without waiting, what is
+    still pending is watched (_watch_background)."""
+    matrix = np.array(obj.matrix_world if matrix is None else matrix)
+    light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
+    block = data.frame_block(matrix, view.view_projection, view.camera,
                              light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
     texture = None
     if data.uses_band_limited_texture:
@@ -144,21 +183,21 @@ def exposure_scale(scene):
     return 2.0 ** float(scene.view_settings.exposure)
 
 
-def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False):
-    """Draws the baked objects into the bound framebuffer with the current GPU state. per_pixel:
-    every object per pixel (the panel's Per Pixel), else those whose automatic choice says so.
-    wait=False (the interactive draw) shades with no ringing window until it is chosen; True
-    waits for it."""
+def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False, instances=()):
+    """Draws the baked objects, and the instances (baked_instances: (object, matrix)) of them, into
+    the bound framebuffer with the current GPU state. per_pixel: every object per pixel (the
+    panel's Per Pixel), else those whose automatic choice says so. wait=False (the interactive
+    draw) shades with no ringing window until it is chosen; True waits for it."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
-    for obj in objects:
+    for obj, matrix in [(obj, None) for obj in objects] + list(instances):
         record = baked.record(obj)
         data = object_data(obj, per_pixel=per_pixel or bool(record and record.per_pixel),
                            band_limited_texture=band_limited_texture)
         if data is None:
             continue
-        block, texture = _frame(scene, obj, data, view, scale, wait, source, g, depth_bias=depth_bias)
+        block, texture = _frame(scene, obj, data, view, scale, wait, source, g, matrix, depth_bias=depth_bias)
         data.draw(block, texture)
 
 
@@ -208,7 +247,8 @@ def _draw_handler():
         gpu.state.depth_test_set('LESS_EQUAL')
         gpu.state.depth_mask_set(True)
         gpu.state.blend_set('NONE')
-        draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS)
+        draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS,
+                     instances=baked_instances(scene, objects, context.view_layer))
         if settings.world_background:
             draw_background(scene, view, exposure_scale(scene))
         gpu.state.depth_mask_set(False)

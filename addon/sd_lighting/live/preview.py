@@ -27,20 +27,15 @@ from ..scene.view import View
 OTHER_MESH_GREY = 0.18
 
 
-def _other_mesh_batches(scene, depsgraph, view_layer, exclude):
-    """(shader, batch) of the other visible meshes, for a grey depth-tested draw."""
+def _other_mesh_batches(depsgraph, view_layer, drawn):
+    """(shader, batch) of the visible geometry not drawn shaded (drawn: the baked objects' names,
+    whose instances are drawn shaded too), for a grey depth-tested draw."""
     from gpu_extras.batch import batch_for_shader
     shader = compat.uniform_color_shader()
-    out = []
-    for obj in scene.objects:
-        if obj.name in exclude:
-            continue
-        triangles = geometry.world_triangles(obj, depsgraph, view_layer)
-        if triangles is not None:
-            world, indices = triangles
-            out.append((shader, batch_for_shader(shader, 'TRIS', {"pos": world.astype(np.float32)},
-                                                 indices=indices)))
-    return out
+    return [(shader, batch_for_shader(shader, 'TRIS', {"pos": part.vertices.astype(np.float32)},
+                                      indices=part.triangles))
+            for part in geometry.scene_parts(depsgraph, view_layer)
+            if part.name not in drawn]
 
 
 def render(scene, depsgraph, view_layer, width, height, camera=None):
@@ -56,10 +51,12 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
     gpu_context.ensure()
     view = View.from_camera(camera, depsgraph, width, height, scene)
     objects = drawing.baked_objects(scene, view_layer)
-    others = _other_mesh_batches(scene, depsgraph, view_layer, {o.name for o in objects})
+    instances = drawing.baked_instances(scene, objects, view_layer)
+    others = _other_mesh_batches(depsgraph, view_layer, {o.name_full for o in objects})
 
     def draw():
-        drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel, wait=True)
+        drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel, wait=True,
+                             instances=instances)
         if scene.sd_lighting.world_background:
             drawing.draw_background(scene, view, 1.0)
         if others:

@@ -130,6 +130,21 @@ def scale_changed(obj):
     return not np.allclose(current, shape, rtol=0.0, atol=1e-5 * np.abs(shape).max())
 
 
+def placed_elsewhere(obj, matrix=None):
+    """Whether the object drawn with `matrix` (default: its world matrix; an instance's, or a linked
+    copy's own) stands elsewhere than its bake was made - moved, turned, or another copy - while
+    other objects occluded that bake: their shadows on it are then those of the baked place. False
+    for a bake that did not record its place or had nothing else to occlude it."""
+    baked = record(obj)
+    if baked is None or not baked.placement or not baked.occluder_triangles:
+        return False
+    placement = np.array(baked.placement, dtype=np.float64).reshape(4, 4)
+    current = np.array(obj.matrix_world if matrix is None else matrix, dtype=np.float64)
+    size = max(np.abs(placement[:3, :3]).max(), 1e-12)
+    return not (np.allclose(current[:3, :3], placement[:3, :3], rtol=0.0, atol=1e-5 * size) and
+                np.allclose(current[:3, 3], placement[:3, 3], rtol=0.0, atol=1e-5 * (size + np.abs(placement[:3, 3]).max())))
+
+
 def albedo_texture_unbaked(obj):
     """Whether the object's material reads an image texture its bake kept no UVs for (the texture
     was added since): the live shading then shows the material's flat colour."""

@@ -47,6 +47,7 @@ class BakeRecord:
     least_squares: bool
     lightmap: int                # the lightmap's side asked for texture-space data; 0: none
     shape: Tuple[float, ...] = ()   # the object's scale K (3 x 3, row-major) it was baked with
+    placement: Tuple[float, ...] = ()   # its world matrix (4 x 4, row-major) at the bake
     diffuse_lobe: bool = False   # a Lambert lobe besides `lobe` (records before it: none)
     lobe_weights: bool = False
     diffuse_share: float = 0.0
@@ -59,6 +60,7 @@ class BakeRecord:
     bake_id: str = _found("")
     inputs: str = _found("")     # digest of everything the result depends on (BakeTask.inputs_hash)
     source: str = _found("")     # digest of the evaluated mesh baked (store/source.py; before it: "")
+    occluder_triangles: int = _found(0)   # the other objects' triangles it was baked against
     seconds: float = _found(0.0)
     vertices: int = _found(0)
     floats_per_vertex: int = _found(0)
@@ -98,6 +100,7 @@ class BakeRecord:
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                   if getattr(self, f.name) is not None}
         values["shape"] = list(self.shape)
+        values["placement"] = list(self.placement)
         values["version"] = VERSION
         return values
 

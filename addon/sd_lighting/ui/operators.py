@@ -243,6 +243,11 @@ class SD_OT_render_preview(bpy.types.Operator):
         except Exception as exc:
             self.report({'ERROR'}, "Preview failed: %s: %s" % (type(exc).__name__, exc))
             return {'CANCELLED'}
+        elsewhere = drawing.placed_elsewhere(scene, context.view_layer)
+        if elsewhere:
+            self.report({'WARNING'}, "Preview: other objects' shadows on %s are from where %s baked: "
+                        "bake again where it stands" % (", ".join(elsewhere), "it was" if len(elsewhere) == 1
+                                                       else "they were"))
         stale = staleness.stale_names(scene)
         if stale:
             self.report({'WARNING'}, "Preview: %s (drawn grey)" % staleness.message(stale, scene.sd_lighting.live_rebake))

@@ -417,6 +417,9 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
         if staleness.known_stale(obj):
             _text(warnings, context, "The mesh changed since the bake: not shaded, %s"
                   % ("re-baking" if settings.live_rebake else "bake again"), icon='ERROR')
+        if baked.placed_elsewhere(obj):
+            _text(warnings, context, "Not where it was baked (moved, or a copy): other objects' shadows on "
+                  "it are from there: bake again", icon='ERROR')
         if baked.scale_changed(obj):
             _text(warnings, context, "Scale changed since the bake: bake again", icon='ERROR')
         if baked.albedo_texture_unbaked(obj):

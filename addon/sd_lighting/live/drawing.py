@@ -37,11 +37,14 @@ DEPTH_BIAS = 2e-6     # clip-space pull towards the eye, so the overlay wins ove
 _handler = None
 _objects = {}         # object name -> (key, ObjectData)
 _generations = ()     # the background work's generations the viewports last showed
+_instances = (None, [])   # (key, baked_instances' result) of the last depsgraph looked through
 last_error = ""
 
 
 def clear_cache():
+    global _instances
     _objects.clear()
+    _instances = (None, [])
 
 
 def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False):
@@ -89,9 +92,13 @@ def baked_instances(scene, objects, view_layer=None):
     the depsgraph makes - in a collection instance, on vertices or faces, from particles or
     geometry nodes' Object Info - to draw its bake there."""
     import bpy
+    global _instances
     if not objects or not _instances_something(scene):
         return []
     drawn = {obj.name_full: obj for obj in objects}
+    key = (staleness.generation, scene.name_full, tuple(sorted(drawn)))
+    if _instances[0] == key:   # the same depsgraph as the last draw: the same instances
+        return _instances[1]
     out = []
     for instance in (view_layer or bpy.context.view_layer).depsgraph.object_instances:
         if not instance.is_instance:
@@ -99,6 +106,7 @@ def baked_instances(scene, objects, view_layer=None):
         original = instance.object.original
         if original.name_full in drawn and original != instance.parent.original:
             out.append((drawn[original.name_full], instance.matrix_world.copy()))
+    _instances = (key, out)
     return out
 
 

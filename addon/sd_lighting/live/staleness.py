@@ -23,6 +23,7 @@ from ..store.record import RecordError
 
 _verdicts = {}   # object name -> (the bake_id checked, whether it is stale)
 _shown = False   # whether the status bar names stale bakes
+generation = 0   # counts the depsgraph updates, frame changes, undos and loads seen (drawing's caches)
 
 
 def _record(obj):
@@ -98,6 +99,8 @@ def forget(names=None):
 @persistent
 def _on_update(_scene, depsgraph):
     """depsgraph_update_post, frame_change_post: the objects whose geometry was evaluated again."""
+    global generation
+    generation += 1
     forget({update.id.original.name for update in depsgraph.updates
             if update.is_updated_geometry and isinstance(update.id, bpy.types.Object)})
 
@@ -105,6 +108,8 @@ def _on_update(_scene, depsgraph):
 @persistent
 def _on_reset(*_args):
     """undo_post, redo_post, load_post: anything may have changed."""
+    global generation
+    generation += 1
     forget()
 
 
@@ -124,6 +129,10 @@ def unregister():
         handlers = getattr(bpy.app.handlers, name)
         if handler in handlers:
             handlers.remove(handler)
+    global _shown
     if bpy.app.timers.is_registered(_show_status):
         bpy.app.timers.unregister(_show_status)
+    if _shown:
+        redraw.status_bar(None)
+        _shown = False
     forget()

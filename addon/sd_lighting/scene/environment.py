@@ -143,7 +143,7 @@ def _rendered_source(world, why, render):
     """The Source of a world Cycles renders (world_render.py): render=True renders it now if it
     is not there; otherwise a timer is asked to and Unavailable raised meanwhile."""
     path, failure = world_render.rendered(world)
-    if path is None and failure is None and render:
+    if path is None and render:   # a bake or a preview tries again what failed before
         try:
             path = world_render.render(world)
         except Exception:
@@ -197,10 +197,10 @@ def source(scene, render=False):
             raise Unavailable("the image '%s' of world '%s' has no pixels" % (image.name, scene.world.name))
         return Source("pixels", ("pixels", image.name, tuple(image.size)), "image " + image.name,
                       strength=strength, image=image)
-    colour = (0.05, 0.05, 0.05)
-    if background is None:
+    colour = (0.0, 0.0, 0.0)      # nothing on the World Output's Surface: black, as Cycles has it
+    if not compat.uses_nodes(scene.world):
         colour = tuple(scene.world.color)
-    else:
+    elif background is not None:
         socket = background.inputs.get("Color")
         if socket is not None and not socket.is_linked:
             colour = tuple(socket.default_value)[:3]

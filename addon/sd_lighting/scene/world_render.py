@@ -16,6 +16,7 @@ Rendering needs the main thread outside drawing: a bake and a preview render it 
 the viewport's draw asks for it (`request`) and shows the world once a timer has rendered it.
 """
 
+import contextlib
 import hashlib
 import math
 import os
@@ -24,6 +25,7 @@ from .. import compat, redraw
 
 WIDTH = 512       # of the rendered image (its height is half): detail to s = 16 and more
 SAMPLES = 16
+REQUEST_DELAY = 0.3   # seconds after the draw's last request (a slider being dragged) before rendering
 # Node properties that change how the node editor shows a node, not what it computes.
 _LAYOUT = {"rna_type", "name", "label", "location", "width", "width_hidden", "height", "dimensions",
            "select", "show_options", "show_preview", "show_texture", "hide", "color",
@@ -49,6 +51,11 @@ def reason(world, output, background, texture, mapping):
         return None
     if output is None:
         return "no World Output"
+    tree = world.node_tree
+    if any(node.type == 'LIGHT_PATH' for node in tree.nodes):
+        return "a Light Path node: lit as camera rays see it"
+    if any(node.mute for node in tree.nodes) or any(getattr(link, "is_muted", False) for link in tree.links):
+        return "muted nodes or links"
     surface = _linked_node(output.inputs.get("Surface"))
     if surface is None:
         return None          # black, as Cycles renders it: read as a uniform colour
@@ -70,6 +77,10 @@ def reason(world, output, background, texture, mapping):
         return "a %s node before the Environment Texture" % vector.name
     if any(socket.is_linked for socket in mapping.inputs if socket.name != "Vector"):
         return "a Mapping node driven by nodes"
+    location, scale = mapping.inputs.get("Location"), mapping.inputs.get("Scale")
+    if ((location is not None and any(abs(x) > 0.0 for x in location.default_value)) or
+            (scale is not None and any(x != 1.0 for x in scale.default_value))):
+        return "a Mapping location or scale"
     coordinates = _linked_node(mapping.inputs["Vector"])
     if coordinates is None:
         return None
@@ -78,12 +89,23 @@ def reason(world, output, background, texture, mapping):
     return "%s coordinates" % coordinates.name
 
 
-def _value(value):
-    """A property's value as something repr() keeps apart: images by name and file."""
-    if hasattr(value, "filepath") and hasattr(value, "name"):
-        return ("image", value.name, value.filepath)
-    if hasattr(value, "name"):
+def _value(value, depth=0):
+    """A property's value as something repr() keeps apart: an image by name, file, colour space and
+    the file's time; another ID by name (a node group by its nodes); a struct (a colour ramp, a
+    curve mapping, a texture mapping) or collection by what it holds."""
+    import bpy
+    if isinstance(value, bpy.types.Image):
+        path = bpy.path.abspath(value.filepath, library=value.library) if value.filepath else ""
+        return ("image", value.name, path, value.source, value.colorspace_settings.name,
+                os.path.getmtime(path) if path and os.path.isfile(path) else 0.0)
+    if isinstance(value, bpy.types.NodeTree):
+        return ("tree", value.name, _tree_values(value, depth + 1)) if depth < 4 else ("tree", value.name)
+    if isinstance(value, bpy.types.ID):
         return ("id", value.name)
+    if isinstance(value, bpy.types.bpy_struct):
+        return _struct_values(value, depth + 1) if depth < 4 else None
+    if isinstance(value, bpy.types.bpy_prop_collection):
+        return tuple(_value(item, depth + 1) for item in value) if depth < 4 else None
     if hasattr(value, "__len__") and not isinstance(value, str):
         try:
             return tuple(value)
@@ -92,23 +114,37 @@ def _value(value):
     return value
 
 
+def _struct_values(struct, depth):
+    values = []
+    for prop in struct.bl_rna.properties:
+        if prop.identifier not in _LAYOUT:
+            try:
+                values.append((prop.identifier, _value(getattr(struct, prop.identifier), depth)))
+            except (AttributeError, RuntimeError, TypeError, ValueError):   # unreadable here: left out
+                continue
+    return values
+
+
+def _tree_values(tree, depth=0):
+    """Every node's settings, inputs and outputs (the values of RGB and Value nodes), and the
+    links, of a node tree."""
+    values = []
+    for node in sorted(tree.nodes, key=lambda n: n.name):
+        values.append((node.bl_idname, node.name, node.mute, _struct_values(node, depth)))
+        for socket in list(node.inputs) + list(node.outputs):
+            if hasattr(socket, "default_value") and not (socket.is_output is False and socket.is_linked):
+                values.append((socket.identifier, socket.is_output, _value(socket.default_value, depth)))
+    for link in tree.links:
+        values.append((link.from_node.name, link.from_socket.identifier, link.to_node.name,
+                       link.to_socket.identifier, getattr(link, "is_muted", False)))
+    return values
+
+
 def digest(world):
     """A digest of everything the world's rendered image depends on."""
     hasher = hashlib.blake2b(digest_size=16)
     hasher.update(repr((world.name, tuple(world.color), WIDTH, SAMPLES)).encode())
-    tree = world.node_tree
-    for node in sorted(tree.nodes, key=lambda n: n.name):
-        values = [node.bl_idname, node.name, node.mute]
-        for prop in node.bl_rna.properties:
-            if prop.identifier not in _LAYOUT and prop.type != 'COLLECTION':
-                values.append((prop.identifier, _value(getattr(node, prop.identifier, None))))
-        for socket in node.inputs:
-            if not socket.is_linked and hasattr(socket, "default_value"):
-                values.append((socket.identifier, _value(socket.default_value)))
-        hasher.update(repr(values).encode())
-    for link in tree.links:
-        hasher.update(repr((link.from_node.name, link.from_socket.identifier, link.to_node.name,
-                            link.to_socket.identifier, link.is_muted if hasattr(link, "is_muted") else False)).encode())
+    hasher.update(repr(_tree_values(world.node_tree)).encode())
     return hasher.hexdigest()
 
 
@@ -122,11 +158,12 @@ def rendered(world):
 
 def render(world):
     """Renders the world (the module's doc) unless its image is there; returns the EXR's path.
-    A failure is raised, and kept for `rendered` until the world changes."""
+    A failure is raised, and kept for `rendered` until the world changes or it is rendered again."""
     key = digest(world)
     path = _rendered.get(key)
     if path is not None and os.path.isfile(path):
         return path
+    _failed.pop(key, None)
     try:
         _rendered[key] = _render(world, key)
     except Exception as exc:
@@ -159,7 +196,9 @@ def _render(world, key):
         settings.image_settings.color_depth = '32'
         settings.filepath = path
         settings.use_file_extension = False
-        bpy.ops.render.render(write_still=True, scene=scene.name)
+        scene.frame_current = bpy.context.scene.frame_current if bpy.context.scene else 1   # animated worlds
+        with _camera_sees(world), _own_render_slot():
+            bpy.ops.render.render(write_still=True, scene=scene.name)
     finally:
         bpy.data.scenes.remove(scene)
         bpy.data.objects.remove(camera)
@@ -169,13 +208,54 @@ def _render(world, key):
     return path
 
 
+@contextlib.contextmanager
+def _camera_sees(world):
+    """The world visible to camera rays while it is rendered (a user may hide it from the camera)."""
+    visibility = getattr(world, "cycles_visibility", None)
+    hidden = visibility is not None and not visibility.camera
+    if hidden:
+        visibility.camera = True
+    try:
+        yield
+    finally:
+        if hidden:
+            visibility.camera = False
+
+
+RENDER_SLOT = "SD World Render"
+
+
+@contextlib.contextmanager
+def _own_render_slot():
+    """The render written to a Render Result slot of its own, so that the user's render in the
+    active slot stays (slots cannot be removed: the one slot is reused)."""
+    import bpy
+    result = next((image for image in bpy.data.images if image.type == 'RENDER_RESULT'), None)
+    slots = result.render_slots if result is not None else None
+    if slots is None:
+        yield
+        return
+    previous = slots.active_index
+    names = [slot.name for slot in slots]
+    if RENDER_SLOT in names:
+        slots.active_index = names.index(RENDER_SLOT)
+    else:
+        slots.new(name=RENDER_SLOT)
+        slots.active_index = len(slots) - 1
+    try:
+        yield
+    finally:
+        slots.active_index = previous
+
+
 def request(world):
     """Asks for the world's image from where rendering is not allowed (the draw): a timer renders
     it and redraws the viewports."""
     import bpy
     _requested.add(world.name)
-    if not bpy.app.timers.is_registered(_render_requested):
-        bpy.app.timers.register(_render_requested, first_interval=0.0)
+    if bpy.app.timers.is_registered(_render_requested):   # a world still being edited: wait for it
+        bpy.app.timers.unregister(_render_requested)
+    bpy.app.timers.register(_render_requested, first_interval=REQUEST_DELAY)
 
 
 def _render_requested():

@@ -185,11 +185,13 @@ def remove_unlinked():
         mesh = obj.get(BAKED_MESH)
         if obj.users > 0 and isinstance(mesh, bpy.types.Mesh):
             linked.add(mesh.as_pointer())
-    removed = []
-    for mesh in list(bpy.data.meshes):
-        if mesh.library is None and BAKE in mesh and mesh.as_pointer() not in linked:
-            removed.append(mesh.name)
-            _remove_baked_mesh(mesh)
+    # Chosen before anything is removed: removing one also removes its texels' mesh, which a
+    # loop over bpy.data.meshes would reach afterwards.
+    unlinked = [mesh for mesh in bpy.data.meshes
+                if mesh.library is None and BAKE in mesh and mesh.as_pointer() not in linked]
+    removed = [mesh.name for mesh in unlinked]
+    for mesh in unlinked:
+        _remove_baked_mesh(mesh)
     return removed
 
 

@@ -128,7 +128,7 @@ py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normal
                           int transfer_order, const IndexPair& design_orders,
                           const std::optional<DoubleArray>& occluder_vertices, const py::object& occluder_triangles,
                           const py::object& progress, int threads, bool return_rays, bool common_rotation,
-                          bool offset_origins) {
+                          bool offset_origins, bool horizon) {
   sd::TransferOptions options;
   options.rays = rays;
   options.seed = seed;
@@ -140,6 +140,7 @@ py::dict py_bake_transfer(const DoubleArray& vertices, const DoubleArray& normal
   options.record_rays = return_rays;
   options.common_rotation = common_rotation;
   options.offset_origins = offset_origins;
+  options.horizon = horizon;
   return bake_dict(run_bake(vertices, normals, triangles, options, occluder_vertices, occluder_triangles, progress),
                    return_rays);
 }
@@ -233,6 +234,7 @@ void bind_visibility(py::module_& m) {
         py::arg("design_orders") = py::none(), py::arg("occluder_vertices") = py::none(),
         py::arg("occluder_triangles") = py::none(), py::arg("progress") = py::none(), py::arg("threads") = 0,
         py::arg("return_rays") = false, py::arg("common_rotation") = false, py::arg("offset_origins") = true,
+        py::arg("horizon") = false,
         R"doc(Per-vertex visibility and transfer precompute with Embree (ray casting over the whole sphere).
 
 For vertex p with unit normal n, `rays` rays x_r start at an origin q next to p in free space (off
@@ -272,6 +274,9 @@ common_rotation: every vertex traces vertex 0's directions (common random number
 offset_origins: False starts every vertex's rays as a vertex without faces does, a fixed fraction of
     the bounding-box diagonal along its normal, not off the walls (for measuring what the offset
     gains, not for a bake to store).
+horizon: True traces only the rays above the vertex's horizon (n.x > 0); those below count as
+    blocked. "transfer" is the same (its weight max(0, n.x) is 0 there) for about half the rays;
+    the other arrays become those of a surface closed below (a bake that stores only T uses it).
 
 Returns a dict: "ambient_occlusion" (N,); "visibility" (N, (s'+1)**2); "product_matrices"
 (N, (s+1)**2, (s'+1)**2); "transfer" (N, (s+1)**2); "design_offsets" int64 (N+1,) (vertex i's nodes

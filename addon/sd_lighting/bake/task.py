@@ -19,6 +19,14 @@ FIT_START = 0.8   # of a least-squares bake's progress: the rays before it, the 
 TEXELS_START = 0.1   # of a texture-space bake's progress: the vertices before it, the texels after
 
 
+def above_horizon(arguments):
+    """sdnative.bake_transfer's keywords with `horizon` set for a bake that asks for T alone: rays
+    below a vertex's horizon add nothing to T (eq. 2's max(0, n . x)), so about half the rays are
+    not traced; a bake of V~, M or designs, which need them, traces every ray."""
+    others = ("visibility_order", "product_orders", "design_orders")
+    return dict(arguments, horizon="transfer_order" in arguments and not any(key in arguments for key in others))
+
+
 def share(progress, start, end):
     """progress(done, total) moving [start, end] of the caller's progress(done, total)."""
     def shared(done, total):
@@ -195,8 +203,8 @@ class BakeTask:
         self.baked = self.geometry
         if not s.get("refine") or self.lightmap_size:
             return
-        kwargs = {"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
-                  "transfer_order": refine.CRITERION_ORDER, "common_rotation": True}
+        kwargs = above_horizon({"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
+                                "transfer_order": refine.CRITERION_ORDER, "common_rotation": True})
         levels = []
 
         def bake(vertices, normals, triangles, rest_vertices, rest_triangles):
@@ -223,7 +231,7 @@ class BakeTask:
         kwargs = {"rays": int(s["rays"]), "seed": int(s["seed"])}
         kwargs.update(method.bake_arguments(int(s["light_order"]), int(s["visibility_order"])))
         kwargs.update(self.occluders())
-        return kwargs
+        return above_horizon(kwargs)
 
     def record(self):
         """The BakeRecord of the finished bake: its settings and what it found (the floats per

@@ -74,6 +74,11 @@ struct TransferOptions {
   /// were chosen before they moved into the faces. For measuring what that move gains (blender_tests/benchmark_refine.py);
   /// a bake to store keeps true.
   bool offset_origins = true;
+  /// true: rays below the vertex's horizon (n·x <= 0) are not traced and count as blocked. The
+  /// transfer T is the same (its cosine weight is 0 there) for about half the rays; ambient
+  /// occlusion, V~, M and the designs become those of a surface closed below, so a bake that
+  /// stores only T (PRT eq. 2) is the one to use it.
+  bool horizon = false;
   /// Called from the calling thread only (which then bakes no vertex itself), once before the
   /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
   /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws

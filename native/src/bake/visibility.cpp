@@ -92,6 +92,7 @@ struct Plan {
   int design_degree = -1;
   bool record_rays = false;
   bool common_rotation = false;
+  bool horizon = false;  // TransferOptions::horizon
   std::uint64_t seed = 0;
   const std::vector<glm::dvec3>* fibonacci = nullptr;
 };
@@ -99,6 +100,7 @@ struct Plan {
 struct Scratch {
   std::vector<RTCRay> stream;          // one block of rays for rtcOccluded1M
   std::vector<glm::dvec3> directions;  // their directions in double
+  std::vector<int> traced;             // their indices in the ray set
   std::vector<glm::dvec3> escaped;
   std::vector<double> weights;
   std::vector<const SphericalDesign*> starts;  // the walk's candidates' designs (weighted_design)
@@ -131,18 +133,25 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   s.escaped.clear();
   for (int start = 0; start < rays; start += kStreamBlock) {
     const int count = std::min(kStreamBlock, rays - start);
-    s.directions.resize(count);
-    s.stream.resize(count);
+    s.directions.clear();
+    s.stream.clear();
+    s.traced.clear();
     for (int i = 0; i < count; ++i) {
       const glm::dvec3 x = rotation * base[start + i];
-      s.directions[i] = x;
-      s.stream[i] = occlusion_ray(origin, x);
+      if (plan.horizon && glm::dot(n, x) <= 0.0) {  // blocked by the surface closed below
+        if (record) record[start + i] = 0;
+        continue;
+      }
+      s.directions.push_back(x);
+      s.stream.push_back(occlusion_ray(origin, x));
+      s.traced.push_back(start + i);
     }
-    rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(count), sizeof(RTCRay));
-    for (int i = 0; i < count; ++i) {
-      const bool escapes = !is_occluded(s.stream[i]);
-      if (escapes) s.escaped.push_back(s.directions[i]);
-      if (record) record[start + i] = escapes ? 1 : 0;
+    if (s.stream.empty()) continue;
+    rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(s.stream.size()), sizeof(RTCRay));
+    for (std::size_t k = 0; k < s.stream.size(); ++k) {
+      const bool escapes = !is_occluded(s.stream[k]);
+      if (escapes) s.escaped.push_back(s.directions[k]);
+      if (record) record[s.traced[k]] = escapes ? 1 : 0;
     }
   }
 
@@ -279,6 +288,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   plan.fibonacci = &fibonacci;
   plan.record_rays = options.record_rays;
   plan.common_rotation = options.common_rotation;
+  plan.horizon = options.horizon;
   plan.basis_order = std::max({options.visibility_order, options.product_order, options.product_visibility_order,
                                options.transfer_order});
   if (options.visibility_order >= 0) plan.visibility_count = sh_count(options.visibility_order);

@@ -291,6 +291,34 @@ TEST(VisibilityExact, OutputsEqualTheDirectSumsOverTheRays) {
   EXPECT_LT(min_ao, 0.45);  // the bumps do occlude
 }
 
+TEST(VisibilityExact, HorizonTracesTheRaysAboveAndKeepsTheTransfer) {
+  const Mesh m = bumpy_sphere(2);
+  const TransferOptions full = requesting(recorded_rays(512, 9), -1, {-1, -1}, 5, {-1, -1});
+  TransferOptions above = full;
+  above.horizon = true;
+  const TransferBake a = bake(m, full), b = bake(m, above);
+  for (std::size_t i = 0; i < a.transfer.size(); ++i) EXPECT_NEAR(b.transfer[i], a.transfer[i], kExact);
+  std::size_t below = 0;
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    const auto dirs = vertex_ray_directions(full.rays, full.seed, v);
+    const glm::dvec3 n = glm::normalize(m.normals[v]);
+    int escaping = 0;
+    for (int r = 0; r < full.rays; ++r) {
+      const std::size_t k = v * full.rays + r;
+      if (glm::dot(n, dirs[r]) <= 0.0) {
+        EXPECT_EQ(b.ray_visibility[k], 0) << "vertex " << v << ", ray " << r;  // blocked, not traced
+        ++below;
+      } else {
+        EXPECT_EQ(b.ray_visibility[k], a.ray_visibility[k]) << "vertex " << v << ", ray " << r;
+        escaping += b.ray_visibility[k];
+      }
+    }
+    EXPECT_NEAR(b.ambient_occlusion[v], escaping / 512.0, kExact);  // a surface closed below
+  }
+  EXPECT_GT(below, m.vertices.size() * 200);  // about half the rays were not traced
+  EXPECT_GT(a.transfer[0], 0.0);
+}
+
 TEST(VisibilityExact, ProductMatrixColumnZeroIsTheVisibility) {
   const Mesh m = bumpy_sphere(1);
   TransferOptions options;

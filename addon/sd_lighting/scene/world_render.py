@@ -3,8 +3,10 @@ the environment is what Cycles sees (issue 32, item 3).
 
 Read directly (scene/environment.py): the active World Output's Surface fed by a Background node
 whose Strength is a number, and whose Color is a colour or an Environment Texture (equirectangular)
-whose Vector is unlinked or a Mapping node's on Generated coordinates (or none). Any other world - a
-Sky Texture, a Mix, a gradient, a Strength or colour computed by nodes, two Backgrounds added - is
+whose Vector is unlinked or a Mapping node's (a rotation only) on Generated coordinates (or none),
+nothing muted. Any other world - a Sky Texture, a Mix, a gradient, a Strength or colour computed by
+nodes, two Backgrounds added, a Mapping's location or scale, a Light Path node (lit then as camera
+rays see it), muted nodes or links - is
 `rendered`: a temporary scene with this world alone and a panoramic equirectangular camera at the
 origin, turned so that the image has the Environment Texture's orientation (+X at the centre, +Z up,
 -Y to the right), Cycles on the CPU at WIDTH x WIDTH/2 and SAMPLES samples (every camera ray sees

@@ -150,7 +150,8 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     for obj in objects:
         reason = _refusal(obj)
         if reason is None:
-            shape, to_bake_space = transforms.bake_space(obj.evaluated_get(depsgraph).matrix_world)
+            placement = np.array(obj.evaluated_get(depsgraph).matrix_world)
+            shape, to_bake_space = transforms.bake_space(placement)
             if np.linalg.matrix_rank(shape) < 3:
                 reason = "%s has a zero scale" % obj.name
         if reason is None:
@@ -164,7 +165,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
                                          for world, faces in occluders_of(obj))
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
-        settings["placement"] = [float(x) for x in np.array(obj.evaluated_get(depsgraph).matrix_world).ravel()]
+        settings["placement"] = [float(x) for x in placement.ravel()]
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph)
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
         if unwrap:

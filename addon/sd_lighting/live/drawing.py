@@ -93,14 +93,15 @@ def baked_instances(scene, objects, view_layer=None):
     geometry nodes' Object Info - to draw its bake there."""
     import bpy
     global _instances
-    if not objects or not _instances_something(scene):
+    if not objects:
         return []
     drawn = {obj.name_full: obj for obj in objects}
     key = (staleness.generation, scene.name_full, tuple(sorted(drawn)))
     if _instances[0] == key:   # the same depsgraph as the last draw: the same instances
         return _instances[1]
     out = []
-    for instance in (view_layer or bpy.context.view_layer).depsgraph.object_instances:
+    instances = (view_layer or bpy.context.view_layer).depsgraph.object_instances if _instances_something(scene) else ()
+    for instance in instances:
         if not instance.is_instance:
             continue
         original = instance.object.original

@@ -1,6 +1,7 @@
 // Bindings of the visibility / transfer precompute (sdlighting/visibility.h): bake_transfer,
-// bake_visibility, the ray-direction hook and the BakeCancelled exception; and the least-squares
-// vertex fit of baked values (sdlighting/vertex_fit.h).
+// bake_visibility, the ray-direction hook and the BakeCancelled exception; the sides of the faces
+// to bake (sdlighting/face_sides.h); and the least-squares vertex fit of baked values
+// (sdlighting/vertex_fit.h).
 //
 // Arrays are checked here (shapes, dtypes, finiteness) so that bad input raises ValueError naming the
 // argument; the library's std::invalid_argument surfaces as ValueError too. The bake runs without
@@ -8,6 +9,7 @@
 #include "array_checks.h"
 #include "mesh_arrays.h"
 #include "bindings.h"
+#include "sdlighting/face_sides.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/vertex_fit.h"
 #include "sdlighting/visibility.h"
@@ -161,6 +163,27 @@ py::array py_bake_visibility(const DoubleArray& vertices, const DoubleArray& nor
   return adopt(std::move(bake.visibility), {n, py::ssize_t(sd::sh_count(order))});
 }
 
+py::array py_face_sides(const DoubleArray& vertices, const py::object& triangles,
+                        const std::optional<DoubleArray>& occluder_vertices, const py::object& occluder_triangles,
+                        const py::object& progress, int threads) {
+  if (threads < 0) value_error("threads must be >= 0 (0: every hardware thread), got " + std::to_string(threads));
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) value_error("progress must be callable or None");
+  const std::vector<glm::dvec3> v = read_points("vertices", vertices);
+  const std::vector<sd::Triangle> t = read_triangles("triangles", triangles);
+  const sd::OccluderMesh occluders = read_occluders(occluder_vertices, occluder_triangles);
+  sd::FaceSidesOptions options;
+  options.threads = threads;
+  options.progress = progress_function(&progress);
+  std::vector<sd::FaceSides> sides;
+  {
+    py::gil_scoped_release release;
+    sides = sd::face_sides(v, t, occluders, options);
+  }
+  std::vector<std::uint8_t> codes(sides.size());
+  for (std::size_t i = 0; i < sides.size(); ++i) codes[i] = static_cast<std::uint8_t>(sides[i]);
+  return adopt(std::move(codes), {static_cast<py::ssize_t>(codes.size())});
+}
+
 py::array_t<double> py_vertex_ray_directions(int rays, std::uint64_t seed, py::ssize_t vertex) {
   check_range("rays", rays, 1, sd::kMaxRaysPerVertex);
   if (vertex < 0) value_error("vertex must be >= 0, got " + std::to_string(vertex));
@@ -296,6 +319,23 @@ cancelled, RuntimeError naming the vertex if a design cannot be certified. Relea
         R"doc(Visibility V~ of order `order` (s' in [0, MAX_VISIBILITY_ORDER]) for every vertex: the same
 bake as bake_transfer(..., visibility_order=order)["visibility"], shape (N, (order+1)**2). Its
 column 0 is the ambient occlusion. Arguments as for bake_transfer. Releases the GIL.)doc");
+
+  m.def("face_sides", &py_face_sides, py::arg("vertices"), py::arg("triangles"),
+        py::arg("occluder_vertices") = py::none(), py::arg("occluder_triangles") = py::none(),
+        py::arg("progress") = py::none(), py::arg("threads") = 0,
+        R"doc(What the baked copy needs of each triangle so that every side a viewer can see is baked
+(sdlighting/face_sides.h), uint8 (T,): FACE_FRONT (as wound), FACE_FLIPPED (reverse it: its front is
+inside the solid it bounds), FACE_BOTH (add a reverse copy: the back can be seen too) or FACE_SHEET
+(its reverse is already a triangle of the mesh). Closed orientable pieces are told by their signed
+volume; the back of any other face by FACE_SIDE_RAYS rays from just behind it, hidden when every one
+meets a surface from behind. occluders: other surfaces that can hide a back. progress(done, total)
+over the faces looked at, as bake_transfer's. Raises ValueError on bad input, BakeCancelled.
+Releases the GIL.)doc");
+  m.attr("FACE_FRONT") = static_cast<int>(sd::FaceSides::kFront);
+  m.attr("FACE_FLIPPED") = static_cast<int>(sd::FaceSides::kFlipped);
+  m.attr("FACE_BOTH") = static_cast<int>(sd::FaceSides::kBoth);
+  m.attr("FACE_SHEET") = static_cast<int>(sd::FaceSides::kSheet);
+  m.attr("FACE_SIDE_RAYS") = sd::kSideRays;
 
   m.def("fit_vertex_values", &py_fit_vertex_values, py::arg("vertex_count"), py::arg("sample_triangles"),
         py::arg("sample_barycentric"), py::arg("sample_weights"), py::arg("values"),

@@ -106,7 +106,8 @@ EmbreeScene::~EmbreeScene() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles) {
+int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
+                     std::vector<std::uint8_t> two_sided) {
   if (triangles.empty()) return -1;
   RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
   check("rtcNewGeometry");
@@ -139,6 +140,8 @@ int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<
   check("building the geometry");
   if (face_normals_.size() <= id) face_normals_.resize(id + 1);
   face_normals_[id] = std::move(normals);
+  if (two_sided_.size() <= id) two_sided_.resize(id + 1);
+  two_sided_[id] = std::move(two_sided);
   return static_cast<int>(id);
 }
 
@@ -161,6 +164,8 @@ namespace {
 struct ProbeContext {
   RTCIntersectContext context;
   const std::vector<std::vector<glm::vec3>>* face_normals;
+  const std::vector<std::vector<std::uint8_t>>* two_sided;
+  bool other_side;
   int skipped_geometry;
   const std::vector<unsigned>* skipped;
   float tolerance;
@@ -184,7 +189,9 @@ void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
     const glm::vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
                         RTCRayN_dir_z(args->ray, args->N, i));
     const float t = RTCRayN_tfar(args->ray, args->N, i);  // the candidate hit's distance
-    const float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
+    float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
+    const std::vector<std::uint8_t>& sheets = (*probe->two_sided)[geometry];
+    if (probe->other_side && !sheets.empty() && sheets[primitive] != 0) facing = -facing;
     const Side side = facing > 0.0f ? Side::kBack : (facing < 0.0f ? Side::kFront : Side::kNothing);
     if (side == Side::kNothing) continue;  // the segment runs in the triangle's plane
     if (probe->first_side == Side::kNothing || t < probe->first_t - probe->tolerance) {
@@ -197,10 +204,13 @@ void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
 }
 
 EmbreeScene::Side EmbreeScene::first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
-                                          int skipped_geometry, const std::vector<unsigned>& skipped) const {
+                                          int skipped_geometry, const std::vector<unsigned>& skipped,
+                                          bool other_side) const {
   ProbeContext probe;
   rtcInitIntersectContext(&probe.context);
   probe.face_normals = &face_normals_;
+  probe.two_sided = &two_sided_;
+  probe.other_side = other_side;
   probe.skipped_geometry = skipped_geometry;
   probe.skipped = &skipped;
   probe.tolerance = static_cast<float>(1e-4 * t_max);

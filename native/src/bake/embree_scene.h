@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -58,8 +59,10 @@ class EmbreeScene {
   ~EmbreeScene();
 
   /// Adds a triangle mesh (indices already checked); returns its geometry ID, or -1 when it has no
-  /// triangles (nothing is added).
-  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles);
+  /// triangles (nothing is added). two_sided: per triangle (or empty: none), the sheets whose
+  /// other side a probe may ask about (first_side's `other_side`).
+  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
+          std::vector<std::uint8_t> two_sided = {});
   /// Builds the BVH; call once, after every add().
   void commit();
   RTCScene scene() const { return scene_; }
@@ -73,9 +76,10 @@ class EmbreeScene {
   /// is the side its normal points to by the right-hand rule of its winding (Blender's). Triangles
   /// met at the same t (coplanar ones: a box standing on a floor) count as kBack when any of them
   /// is met from behind. Triangles `skipped` of geometry `skipped_geometry` are not seen.
-  /// Thread-safe after commit().
+  /// other_side: the probe is for the back of a sheet, which sees every two-sided triangle wound
+  /// the other way (coincidence.h). Thread-safe after commit().
   Side first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
-                  const std::vector<unsigned>& skipped = {}) const;
+                  const std::vector<unsigned>& skipped = {}, bool other_side = false) const;
 
  private:
   static std::string error_name(RTCError code);
@@ -87,6 +91,7 @@ class EmbreeScene {
   RTCScene scene_ = nullptr;
   std::string error_;
   std::vector<std::vector<glm::vec3>> face_normals_;  // per geometry ID, per triangle (unnormalised)
+  std::vector<std::vector<std::uint8_t>> two_sided_;  // per geometry ID, per triangle, or empty
 };
 
 }  // namespace sd

@@ -1,5 +1,7 @@
 #include "bake/traced_scene.h"
 
+#include "bake/coincidence.h"
+
 #include "util/parallel_for.h"
 
 #include <glm/geometric.hpp>
@@ -64,28 +66,6 @@ struct Fans {
   }
 };
 
-// Each vertex's representative among the vertices at exactly its point (the first by index): a
-// mesh split at hard edges or seams (glTF, the add-on's corner copies) has several vertices at p,
-// and every face through p bounds the free space next to it, whichever copy it belongs to.
-std::vector<unsigned> coincident_representatives(const std::vector<glm::dvec3>& points) {
-  std::vector<unsigned> order(points.size());
-  std::iota(order.begin(), order.end(), 0u);
-  auto less = [&](unsigned a, unsigned b) {
-    const glm::dvec3 &p = points[a], &q = points[b];
-    if (p.x != q.x) return p.x < q.x;
-    if (p.y != q.y) return p.y < q.y;
-    if (p.z != q.z) return p.z < q.z;
-    return a < b;
-  };
-  std::sort(order.begin(), order.end(), less);
-  std::vector<unsigned> representative(points.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const bool same = i > 0 && points[order[i]] == points[order[i - 1]];
-    representative[order[i]] = same ? representative[order[i - 1]] : order[i];
-  }
-  return representative;
-}
-
 }  // namespace
 
 TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
@@ -94,7 +74,30 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
     : centre_(BoundingBox(vertices).centre()) {
   const std::vector<glm::dvec3> points = shifted(vertices, centre_);
   const OccluderMesh shifted_occluders{shifted(occluders.vertices, centre_), occluders.triangles};
-  const int object = scene_.add(points, triangles);
+  const std::vector<unsigned> representative = coincident_representatives(points);
+  const std::vector<Triangle> welded = welded_triangles(triangles, representative);
+
+  // A sheet (a face and its reverse) is traced once, as its first copy; the vertices of the second
+  // copy only are its back's, whose probes see every sheet the other way round.
+  const std::vector<std::int64_t> twin = reversed_twins(welded);
+  auto hidden = [&](std::size_t t) { return twin[t] >= 0 && static_cast<std::size_t>(twin[t]) < t; };
+  std::vector<Triangle> traced;
+  std::vector<std::uint8_t> sheet;
+  std::vector<unsigned> traced_id(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (hidden(t)) continue;
+    traced_id[t] = static_cast<unsigned>(traced.size());
+    traced.push_back(triangles[t]);
+    sheet.push_back(twin[t] >= 0 ? 1 : 0);
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (hidden(t)) traced_id[t] = traced_id[twin[t]];
+  }
+  std::vector<std::uint8_t> on_back(points.size(), 0), on_front(points.size(), 0);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) (hidden(t) ? on_back : on_front)[triangles[t][k]] = 1;
+  }
+  const int object = scene_.add(points, traced, std::move(sheet));
   scene_.add(shifted_occluders.vertices, shifted_occluders.triangles);
   scene_.commit();
 
@@ -106,24 +109,26 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
     areas[t] = glm::length(area_normals[t]);
     centroids[t] = (a + b + c) / 3.0;
   }
-  const std::vector<unsigned> representative = coincident_representatives(points);
-  std::vector<Triangle> welded(triangles);
-  for (Triangle& t : welded) {
-    for (int k = 0; k < 3; ++k) t[k] = representative[t[k]];
-  }
-  const Fans fans(points.size(), welded, areas);  // the faces through each vertex's point
+  // The faces through each vertex's point, on each side of the sheets there (one side elsewhere).
+  std::vector<double> front_areas(areas), back_areas(areas);
+  for (std::size_t t = 0; t < triangles.size(); ++t) (hidden(t) ? front_areas : back_areas)[t] = 0.0;
+  const Fans front_fans(points.size(), welded, front_areas), back_fans(points.size(), welded, back_areas);
   const double faceless = faceless_offset(points, shifted_occluders);
   const std::vector<glm::dvec3> fibonacci = spherical_fibonacci(kCandidateDirections);
 
   origins_.resize(points.size());
   const ParallelOutcome outcome = parallel_for(points.size(), 64, [&](std::size_t begin, std::size_t end) {
-    std::vector<unsigned> fan, probed;
+    std::vector<unsigned> fan, probed, skipped;
     std::vector<std::size_t> order(fibonacci.size());
     for (std::size_t v = begin; v < end; ++v) {
       const glm::dvec3& p = points[v];
       const glm::dvec3& n = unit_normals[v];
       const unsigned r = representative[v];
+      const bool back = on_back[v] != 0 && on_front[v] == 0;
+      const Fans& fans = back ? back_fans : front_fans;
       fan.assign(fans.triangles.begin() + fans.offsets[r], fans.triangles.begin() + fans.offsets[r + 1]);
+      skipped.resize(fan.size());
+      for (std::size_t i = 0; i < fan.size(); ++i) skipped[i] = traced_id[fan[i]];
       const double floor = kOriginFloat * largest_coordinate(p);
       if (fan.empty() || !offset_origins) {
         origins_[v] = p + std::max(faceless, floor) * n;
@@ -149,7 +154,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       auto passes = [&](const glm::dvec3& q) {
         const glm::dvec3 to_p = p - q;
         const double distance = glm::length(to_p);
-        if (scene_.first_side(q, to_p / distance, 2.0 * distance, object, fan) == EmbreeScene::Side::kBack) {
+        if (scene_.first_side(q, to_p / distance, 2.0 * distance, object, skipped, back) == EmbreeScene::Side::kBack) {
           return false;
         }
         // In front of every face around p, a segment from q to a face's centroid can meet those
@@ -165,7 +170,9 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
         for (unsigned t : probed) {
           const glm::dvec3 to_face = centroids[t] - q;
           const double length = glm::length(to_face);
-          if (scene_.first_side(q, to_face / length, 1.01 * length) == EmbreeScene::Side::kBack) return false;
+          if (scene_.first_side(q, to_face / length, 1.01 * length, -1, {}, back) == EmbreeScene::Side::kBack) {
+            return false;
+          }
         }
         return true;
       };

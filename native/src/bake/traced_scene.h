@@ -25,6 +25,10 @@
 //   When no candidate passes (an enclosed vertex, a mesh with inconsistent winding) the first is used.
 //   A vertex without faces (a probe point) starts at p + η n, η = kFacelessOffset × the diagonal of
 //   the object's bounding box (of the occluders' when the object is one point), at least the floor.
+// A two-sided sheet (a face and its reverse over the same points: coincidence.h) is one surface to
+// the rays; a vertex of the reverse copy alone is on the sheet's back, where its faces are the
+// reverse copies and every sheet's winding reads the other way round, so its origin is found on
+// that side as any other vertex's is on its own.
 // The traced space is the object's space shifted by the centre of its vertices' bounding box, so
 // Embree's float32 keeps the object's own precision however far from the origin it sits.
 #pragma once

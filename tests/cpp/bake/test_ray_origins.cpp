@@ -92,6 +92,29 @@ TEST(RayOrigins, CornerCopiesOfAFlatShadedBoxAreNeverBlack) {
   }
 }
 
+TEST(RayOrigins, ASheetIsOneSurfaceWithAnOriginOnEachSide) {
+  // One object: a box standing on a floor given with both windings (a sheet, as the add-on bakes
+  // a floor seen from below: the reverse copy with its own vertices and normals). The box's
+  // bottom corners see 1/2 − 1/8 as on a one-sided floor; traced as two surfaces, the reverse copy
+  // read as met from behind at every corner and its origin fell below the floor (1/2). The floor's
+  // copies start on their own sides.
+  Mesh mesh = test::solid_box({10, 10, 0}, {11, 11, 1});
+  const Mesh up = test::square_fan(1000.0, 0.0), down = test::square_fan(1000.0, 0.0, false);
+  for (const Mesh* floor : {&up, &down}) {
+    const auto base = static_cast<std::int64_t>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), floor->vertices.begin(), floor->vertices.end());
+    mesh.normals.insert(mesh.normals.end(), floor->normals.begin(), floor->normals.end());
+    for (const Triangle& t : floor->triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  TransferOptions options;
+  options.rays = kRays;
+  const TransferBake bake = bake_transfer(mesh.vertices, mesh.normals, mesh.triangles, options);
+  for (int corner = 0; corner < 4; ++corner) EXPECT_NEAR(bake.ambient_occlusion[corner], 0.375, kFraction) << corner;
+  for (int v = 8; v < 13; ++v) EXPECT_GT(bake.ray_origins[v].z, 0.0) << "front copy " << v;
+  for (int v = 13; v < 18; ++v) EXPECT_LT(bake.ray_origins[v].z, 0.0) << "back copy " << v;
+  EXPECT_NEAR(bake.ambient_occlusion[13], 0.5, kFraction) << "the back copy's centre";
+}
+
 TEST(RayOrigins, ThinSlabBlocksItsLowerHalf) {
   // Two plates 1e-3 of their edge apart, facing away from each other: from the centre of the top
   // one, the lower half-space is blocked; an origin between the plates would see only the gap.

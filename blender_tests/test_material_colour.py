@@ -100,7 +100,7 @@ def main():
     checks.check(len(ball.data.vertices) < len(baked.vertices) <= expected,
                  "the smooth sphere splits only along the material boundary and UV seams",
                  "%d of %d vertices (at most %d)" % (len(baked.vertices), len(ball.data.vertices), expected))
-    slots, uvs = package.store.attributes.read_surface(baked)
+    slots, uvs, _ = package.store.attributes.read_surface(baked)
     checks.check(slots is not None and uvs is not None and set(np.unique(slots)) == {0.0, 1.0},
                  "the baked sphere keeps its slots and UVs")
 

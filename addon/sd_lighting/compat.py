@@ -13,7 +13,7 @@ blender_tests/bpy_versions.txt:
 | built-in shader '3D_UNIFORM_COLOR'| 'UNIFORM_COLOR' since 3.5, the 3D_ name gone in 4.0: uniform_color_shader() |
 | World/Material.use_nodes          | deprecated in 5.0 (node trees always used, gone in 6.0): uses_nodes() |
 | Principled BSDF                   | 4.0+ layers its specular over the diffuse, and renames its inputs: principled_layered(), PRINCIPLED_LAYERS |
-| GPUVertFormat                     | 4.5 deprecates, 5.0 rejects non-F32 fetch modes; 3.4's batch_for_shader misreads some programs: make_batch() |
+| GPUVertFormat                     | 4.5 deprecates, 5.0 rejects non-F32 fetch modes; 3.4's batch_for_shader misreads some programs: vertex_buffer() |
 | bpy.props on IDs                  | 5.0 keeps them apart from id["..."]: properties.py reads and writes them as attributes |
 """
 
@@ -96,8 +96,8 @@ PRINCIPLED_LAYERS = (("transmission", ("Transmission Weight", "Transmission")),
                      ("subsurface", ("Subsurface Weight", "Subsurface")))
 
 
-def make_batch(primitive, content, indices=None):
-    """A GPUBatch of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
+def vertex_buffer(content):
+    """A GPUVertBuf of float attributes (name -> float32 [N, k], k <= 4) with the vertex format built
     here: gpu_extras' batch_for_shader asks the shader for its attributes, which Blender 3.4
     reports wrongly for some programs (names and types out of order). Only F32 x 1-4 with fetch
     mode FLOAT: 4.5 deprecates formats that are not 4-byte aligned, wider than 4 components or
@@ -113,13 +113,21 @@ def make_batch(primitive, content, indices=None):
         arrays[name] = values
         vertex_format.attr_add(id=name, comp_type='F32', len=values.shape[1], fetch_mode='FLOAT')
     count = len(next(iter(arrays.values())))
-    vertex_buffer = gpu.types.GPUVertBuf(vertex_format, count)
+    buffer = gpu.types.GPUVertBuf(vertex_format, count)
     for name, values in arrays.items():
-        vertex_buffer.attr_fill(name, values)
+        buffer.attr_fill(name, values)
+    return buffer
+
+
+def make_batch(primitive, content, indices=None):
+    """A GPUBatch of a vertex_buffer(content) or of an existing GPUVertBuf, indexed when indices
+    are given."""
+    import gpu
+    buffer = content if isinstance(content, gpu.types.GPUVertBuf) else vertex_buffer(content)
     if indices is None:
-        return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer)
+        return gpu.types.GPUBatch(type=primitive, buf=buffer)
     index_buffer = gpu.types.GPUIndexBuf(type=primitive, seq=np.ascontiguousarray(indices, dtype=np.int32))
-    return gpu.types.GPUBatch(type=primitive, buf=vertex_buffer, elem=index_buffer)
+    return gpu.types.GPUBatch(type=primitive, buf=buffer, elem=index_buffer)
 
 
 def equirectangular_camera(camera):

@@ -5,7 +5,9 @@ A mesh vertex is split where its corners (loops) differ in
 - the corner normal (flat faces, sharp edges, custom normals: what Cycles interpolates), by more
   than NORMAL_TOLERANCE_DEGREES;
 - the material slot (its colour is looked up per vertex: materials.py);
-- the UV coordinate of the albedo texture (a UV seam), when the bake keeps one.
+- the UV coordinate of the albedo texture (a UV seam), when the bake keeps one;
+- the side it is drawn from (bake/sides.py: a face seen from both sides and its reverse copy
+  never share a vertex with a face drawn from both sides by one copy).
 On a smooth mesh with one material and no seam nothing is split, and the vertex order is kept:
 new vertices are sorted by their original vertex, then by their first loop.
 """
@@ -38,12 +40,13 @@ class CornerSplit:
         return len(self.origin)
 
 
-def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
+def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None, loop_sides=None):
     """Groups the loops of each vertex that shade alike (see the module's doc).
 
     loop_vertices: int [L] each loop's vertex; corner_normals: [L, 3] (unit or zero);
     loop_materials: int [L] each loop's material slot, or None (one material);
-    loop_uvs: [L, 2] or None (no texture). Returns a CornerSplit.
+    loop_uvs: [L, 2] or None (no texture); loop_sides: int [L] (sides.SINGLE or TWO_SIDED) or
+    None (all single). Returns a CornerSplit.
 
     Each vertex's loops are taken in loop order: the first one not yet grouped leads a new copy,
     which takes every loop that agrees with it. So the copies and their order depend only on the
@@ -58,6 +61,7 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
     units = normals / np.where(lengths > 0.0, lengths, 1.0)[:, None]
     slots = None if loop_materials is None else np.asarray(loop_materials, dtype=np.int64)
     uvs = None if loop_uvs is None else np.asarray(loop_uvs, dtype=np.float64).reshape(-1, 2)
+    sides = None if loop_sides is None else np.asarray(loop_sides, dtype=np.int64)
     copy = np.zeros(len(loop_vertices), dtype=np.int64)     # each loop's copy, per vertex: 0, 1, ...
     remaining = np.argsort(loop_vertices, kind="stable")    # by vertex, then loop order
     rank = 0
@@ -69,6 +73,8 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None):
         same |= (lengths[remaining] == 0.0) & (lengths[leader] == 0.0)   # no normal: one copy
         if slots is not None:
             same &= slots[remaining] == slots[leader]
+        if sides is not None:
+            same &= sides[remaining] == sides[leader]
         if uvs is not None:
             same &= np.all(np.abs(uvs[remaining] - uvs[leader]) <= _UV_TOLERANCE, axis=1)
         same |= remaining == leader

@@ -1,6 +1,7 @@
-"""The baked copy's geometry: the evaluated mesh as arrays in the object's bake space, split
-where its corners shade differently (corners.py) and optionally refined (refine.py), and the
-other objects' triangles that occlude it, joined into one mesh.
+"""The baked copy's geometry: the evaluated mesh as arrays in the object's bake space, its faces
+turned or doubled where a viewer sees them from behind (sides.py), split where its corners shade
+differently (corners.py) and optionally refined (refine.py), and the other objects' triangles
+that occlude it, joined into one mesh.
 
 The bake space is the object's local space with its scale K applied (scene/transforms.bake_space):
 the rays of a non-uniformly scaled object are traced in the shape it is shown with.
@@ -11,10 +12,10 @@ import functools
 
 import numpy as np
 
-from .. import compat
+from .. import compat, native
 from ..scene import materials, transforms
 from ..store import attributes, source as source_module
-from . import corners, refine
+from . import corners, refine, sides as sides_module
 
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
 
@@ -38,7 +39,11 @@ class Geometry:
     reads an image texture, its UV (`material_slots`, `uvs`: per vertex, or None). A vertex whose
     corners have no normal (Blender finds none for degenerate faces: docs/blender-notes.md, "Zero
     vertex normals") keeps a zero one: the native bake gives it its faces' normal and lists it.
-    Loose vertices (no face) are left out: nothing draws them."""
+    Loose vertices (no face) are left out: nothing draws them.
+
+    Faces are turned or doubled as sides.py says, against `occluders` ((vertices, triangles) in
+    the bake space, or (None, None)); with `backs` False (every material culls back faces) no
+    face gets a reverse copy."""
 
     def __init__(self, mesh, shape, uv_map=None):
         """mesh: a temporary mesh (Object.to_mesh()), which this scales by K; uv_map: the name of
@@ -46,10 +51,10 @@ class Geometry:
         self._local_positions = attributes.read_positions(mesh)
         self._loop_vertices = np.empty(len(mesh.loops), dtype=np.int32)
         mesh.loops.foreach_get('vertex_index', self._loop_vertices)
-        self.loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
-        mesh.polygons.foreach_get('loop_start', self.loop_starts)
-        self.loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
-        mesh.polygons.foreach_get('loop_total', self.loop_totals)
+        self._loop_starts = np.empty(len(mesh.polygons), dtype=np.int32)
+        mesh.polygons.foreach_get('loop_start', self._loop_starts)
+        self._loop_totals = np.empty(len(mesh.polygons), dtype=np.int32)
+        mesh.polygons.foreach_get('loop_total', self._loop_totals)
         self._loop_slots = attributes.read_loop_material_slots(mesh) if len(mesh.materials) > 1 else None
         self._loop_uvs = attributes.read_loop_uvs(mesh, uv_map) if uv_map is not None else None
         # The scale applied as Object > Apply > Scale does (normals recomputed from the scaled
@@ -63,19 +68,21 @@ class Geometry:
         self._scaled_positions = attributes.read_positions(mesh).astype(np.float64)
         self._triangle_loops = attributes.read_triangle_loops(mesh)
         self.triangle_count = len(self._triangle_loops)
+        self.occluders = (None, None)
+        self.backs = True
         self.lightmap_uvs = None   # each loop's lightmap UV [L, 2], for texture-space data (lightmap_uvs)
         self.unwrap_seconds = 0.0  # what finding them took
 
     def inputs(self):
         """What was read from the mesh: everything the other arrays are computed from."""
-        return (self._local_positions, self._loop_vertices, self.loop_starts, self.loop_totals,
+        return (self._local_positions, self._loop_vertices, self._loop_starts, self._loop_totals,
                 self._loop_slots, self._loop_uvs, np.array(self._mirrored), self._corner_normals,
-                self._scaled_positions, self._triangle_loops)
+                self._scaled_positions, self._triangle_loops, np.array(self.backs))
 
     @functools.cached_property
     def source(self):
         """The digest of the mesh as read (store/source.py): what a bake of it was baked from."""
-        return source_module.digest(self._local_positions, self._loop_vertices, self.loop_totals)
+        return source_module.digest(self._local_positions, self._loop_vertices, self._loop_totals)
 
     @property
     def mesh_positions(self):
@@ -90,19 +97,56 @@ class Geometry:
     @property
     def lightmap_corner_uvs(self):
         """Each triangle corner's lightmap UV [T, 3, 2], as `triangles`."""
-        return self.lightmap_uvs[self._wound_triangle_loops]
+        return self.lightmap_uvs[self.triangle_loops]
 
     @property
     def mesh_triangles(self):
         """`triangles` over the mesh's own vertices: the same faces, without computing the split."""
         return self._loop_vertices[self._wound_triangle_loops]
 
-    # The split and what follows from it are computed when first read - for a bake from the UI in
-    # its worker thread (BakeJob.run), not on the main thread, except for a texture-space bake's
-    # unwrap (lightmap_uvs) - and kept.
+    # The sides, the split and what follows from them are computed when first read - for a bake
+    # from the UI in its worker thread (BakeJob.run), not on the main thread, except for a
+    # texture-space bake's unwrap (lightmap_uvs) - and kept.
+    @functools.cached_property
+    def _sided(self):
+        wound = self._wound_triangle_loops
+        vertices, triangles = self.occluders
+        extra = {} if vertices is None else {"occluder_vertices": vertices, "occluder_triangles": triangles}
+        codes = sides_module.polygon_codes(
+            native.get().face_sides(self._scaled_positions, self._loop_vertices[wound], **extra),
+            wound, self._loop_starts, self._loop_totals)
+        if not self.backs:
+            codes[codes == sides_module.BOTH] = sides_module.FRONT
+        return sides_module.apply(codes, self._loop_starts, self._loop_totals, wound)
+
+    @property
+    def loop_starts(self):
+        return self._sided.loop_starts
+
+    @property
+    def loop_totals(self):
+        return self._sided.loop_totals
+
+    @property
+    def triangle_loops(self):
+        """Each triangle's loops [T, 3] (of the turned and doubled faces), as the bake winds them."""
+        return self._sided.triangle_loops
+
+    @property
+    def faces_flipped(self):
+        """The polygons turned round (their front inside the solid they bound)."""
+        return self._sided.flipped
+
+    @property
+    def faces_doubled(self):
+        """The polygons given a reverse copy (seen from behind too)."""
+        return self._sided.doubled
+
     @functools.cached_property
     def _split(self):
-        return corners.split(self._loop_vertices, self._corner_normals, self._loop_slots, self._loop_uvs)
+        sided = self._sided
+        return corners.split(sided.gather(self._loop_vertices), sided.normals(self._corner_normals),
+                             sided.gather(self._loop_slots), sided.gather(self._loop_uvs), sided.loop_sides)
 
     @functools.cached_property
     def positions(self):
@@ -122,15 +166,21 @@ class Geometry:
 
     @functools.cached_property
     def triangles(self):
-        return self._split.loop_vertex[self._wound_triangle_loops]
+        return self._split.loop_vertex[self.triangle_loops]
 
     @functools.cached_property
     def material_slots(self):
-        return None if self._loop_slots is None else corners.vertex_values(self._split, self._loop_slots)
+        return None if self._loop_slots is None else corners.vertex_values(self._split, self._sided.gather(self._loop_slots))
 
     @functools.cached_property
     def uvs(self):
-        return None if self._loop_uvs is None else corners.vertex_values(self._split, self._loop_uvs)
+        return None if self._loop_uvs is None else corners.vertex_values(self._split, self._sided.gather(self._loop_uvs))
+
+    @functools.cached_property
+    def sides(self):
+        """Each vertex's side (sides.SINGLE or TWO_SIDED), or None when every vertex is single."""
+        loop_sides = self._sided.loop_sides
+        return corners.vertex_values(self._split, loop_sides) if loop_sides.any() else None
 
     def build_mesh(self, name):
         """A new mesh datablock with this geometry in the local space, vertices in the same order."""
@@ -143,19 +193,21 @@ class Geometry:
         triangle soup, as some exporters write), so that the split stays conforming there too."""
         weld = np.unique(self.vertices, axis=0, return_inverse=True)[1].reshape(-1)
         return refine.Surface(self.vertices, self.normals, self.positions, weld, self.triangles,
-                              self.material_slots, self.uvs)
+                              self.material_slots, self.uvs, self.sides)
 
     def refined(self, surface):
         """The geometry of a refined copy (refine.refine's surface from this one's)."""
-        return RefinedGeometry(surface, self._mirrored)
+        return RefinedGeometry(surface, self._mirrored, self.faces_flipped, self.faces_doubled)
 
 
 class RefinedGeometry:
     """A baked copy refined (bake/refine.py): the Geometry arrays of its surface, all triangles."""
 
-    def __init__(self, surface, mirrored):
+    def __init__(self, surface, mirrored, faces_flipped, faces_doubled):
         self.vertices, self.normals, self.positions = surface.vertices, surface.normals, surface.positions
         self.triangles, self.material_slots, self.uvs = surface.triangles, surface.slots, surface.uvs
+        self.sides = surface.sides
+        self.faces_flipped, self.faces_doubled = faces_flipped, faces_doubled
         self._mirrored = mirrored
 
     def build_mesh(self, name):

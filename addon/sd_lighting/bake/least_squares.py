@@ -47,7 +47,9 @@ def centroid_split(vertices, normals, triangles):
     (p, c, a) around its centroid p - the same surface, winding kept."""
     vertices, normals = np.asarray(vertices, np.float64), np.asarray(normals, np.float64)
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
-    centroids = vertices[triangles].mean(axis=1)
+    # each coordinate summed in sorted order: a face and its reverse copy (bake/sides.py) get the
+    # same centroid to the bit, so that the bake still finds them one sheet
+    centroids = np.sort(vertices[triangles], axis=1).sum(axis=1) / 3.0
     mean = normals[triangles].sum(axis=1)
     length = np.linalg.norm(mean, axis=1, keepdims=True)
     centroid_normals = np.divide(mean, length, out=np.zeros_like(mean), where=length > 0.0)

@@ -163,6 +163,8 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
             continue
         occluders = geometry_module.join((transforms.transform_points(to_bake_space, world), faces)
                                          for world, faces in occluders_of(obj))
+        geometry.occluders = occluders
+        geometry.backs = not materials.culls_back_faces(obj)
         settings = settings_of(scene, obj, env_source)
         settings["shape"] = [float(x) for x in shape.ravel()]
         settings["placement"] = [float(x) for x in placement.ravel()]

@@ -34,7 +34,7 @@ each triangle is kept, halved (one side marked) or cut into four (all sides). Ea
 only the edges the last one made; refinement stops when E is within its share, no edge is over
 the target, after MAX_LEVELS levels, or at the vertex budget. Shading follows the mesh: a midpoint gets the normalised mean of
 its ends' normals (Blender and Cycles interpolate smooth normals across the face), their mean
-UV and their material slot (a corner copy carries one slot).
+UV, and their material slot and side (a corner copy carries one of each).
 
 This module is bpy-free: `Surface` holds the arrays, `refine` takes the bake as a callback.
 """
@@ -55,7 +55,8 @@ DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity
 class Surface:
     """A triangle mesh as the bake and the baked copy see it; per vertex: `vertices` (bake space),
     `normals` (unit or zero), `positions` (the object's local space), `weld` (vertices at the same
-    place share it), `slots` and `uvs` (or None); `triangles` [T, 3] in the bake's winding."""
+    place share it), `slots`, `uvs` and `sides` (bake/sides.py; or None); `triangles` [T, 3] in
+    the bake's winding."""
     vertices: np.ndarray
     normals: np.ndarray
     positions: np.ndarray
@@ -63,6 +64,7 @@ class Surface:
     triangles: np.ndarray
     slots: object = None
     uvs: object = None
+    sides: object = None
 
     def with_midpoints(self, edges, welded_edges):
         """This surface with one vertex appended at the middle of each edge [E, 2]; midpoints of
@@ -81,7 +83,7 @@ class Surface:
         return replace(self, vertices=mean(self.vertices), positions=mean(self.positions),
                        normals=np.concatenate([self.normals, normals]),
                        weld=np.concatenate([self.weld, self.weld.max(initial=-1) + 1 + welded_edges]),
-                       slots=first(self.slots), uvs=mean(self.uvs))
+                       slots=first(self.slots), uvs=mean(self.uvs), sides=first(self.sides))
 
 
 def edges_of(triangles):

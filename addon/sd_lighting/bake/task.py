@@ -245,6 +245,8 @@ class BakeTask:
             "inputs": self.inputs_hash(),
             "source": self.geometry.source,
             "occluder_triangles": 0 if self.occluder_triangles is None else int(len(self.occluder_triangles)),
+            "faces_flipped": int(self.baked.faces_flipped),
+            "faces_doubled": int(self.baked.faces_doubled),
         }
         refinement = self.refinement
         if refinement is not None:

@@ -61,7 +61,7 @@ def lightmap_uvs(context, geometry, size):
             if layer_uv is None or len(mesh.loops) != loops:
                 raise BakeError("Smart UV Project gave no UV map of the baked copy's %d face corners" % loops)
             uvs = attributes.read_loop_uvs(mesh, layer_uv.name)
-            scale = lightmap.uv_scale(uvs[geometry._wound_triangle_loops], 1.0)
+            scale = lightmap.uv_scale(uvs[geometry.triangle_loops], 1.0)
             if lightmap.gap_texels(margin, scale, size) >= lightmap.MARGIN_TEXELS:
                 break
         return uvs

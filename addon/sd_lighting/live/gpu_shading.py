@@ -269,7 +269,7 @@ def lobe_design_status():
 
 
 class ObjectData:
-    """GPU data of one baked mesh: batch, per-vertex texture, shader variant, lobe constants."""
+    """GPU data of one baked mesh: batches, per-vertex texture, shader variant, lobe constants."""
 
     def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False):
         record = baked.mesh_record(mesh)
@@ -315,7 +315,7 @@ class ObjectData:
 
         positions = attributes.read_positions(mesh)
         normals = attributes.read_normals(mesh)
-        slots, uvs = attributes.read_surface(mesh)
+        slots, uvs, sides = attributes.read_surface(mesh)
         self.slot_count = int(slots.max()) + 1 if slots is not None and len(slots) else 1
         self.has_uvs = uvs is not None
         self.albedo_image = None
@@ -324,6 +324,8 @@ class ObjectData:
             surface["material_slot"] = slots
         if uvs is not None and not vertex_target:
             surface["uv"] = uvs
+        self.batches = []   # (GPUBatch, whether its back faces are culled)
+        self.mirrored = False   # the model matrix of the last frame_block turns the winding
         if vertex_target:
             content = {"pos": positions, "nrm": normals}
             if per_pixel:
@@ -331,23 +333,29 @@ class ObjectData:
                 content["corners"] = np.repeat(index[:, None], 3, axis=1)
                 content["bary"] = np.tile(np.array([[1.0, 0.0, 0.0]], dtype=np.float32),
                                           (self.vertex_count, 1))
-            self.batch = compat.make_batch('POINTS', content)
+            self.batches.append((compat.make_batch('POINTS', content), False))
         else:
             triangles = attributes.read_triangles(mesh)
+            # faces seen from both sides (bake/sides.py): each copy is drawn from its own side only
+            own_side = np.zeros(len(triangles), bool) if sides is None else sides[triangles[:, 0]] > 0.5
+            subsets = [(culled, chosen) for culled, chosen in ((False, ~own_side), (True, own_side)) if chosen.any()]
             if per_pixel:
-                corners = triangles.reshape(-1)
-                content = {"pos": positions[corners], "nrm": normals[corners]}
-                if self.lightmap:
-                    loops = attributes.read_triangle_loops(mesh).reshape(-1)
-                    content["lightmap_uv"] = attributes.read_loop_uvs(mesh, LIGHTMAP_UV)[loops]
-                else:
-                    content.update(corners=np.repeat(triangles.astype(np.float32), 3, axis=0),
-                                   bary=np.tile(np.eye(3, dtype=np.float32), (len(triangles), 1)))
-                content.update({name: values[corners] for name, values in surface.items()})
-                self.batch = compat.make_batch('TRIS', content)
+                loops = attributes.read_triangle_loops(mesh) if self.lightmap else None
+                lightmap_uvs = attributes.read_loop_uvs(mesh, LIGHTMAP_UV) if self.lightmap else None
+                for culled, chosen in subsets:
+                    corners = triangles[chosen].reshape(-1)
+                    content = {"pos": positions[corners], "nrm": normals[corners]}
+                    if self.lightmap:
+                        content["lightmap_uv"] = lightmap_uvs[loops[chosen].reshape(-1)]
+                    else:
+                        content.update(corners=np.repeat(triangles[chosen].astype(np.float32), 3, axis=0),
+                                       bary=np.tile(np.eye(3, dtype=np.float32), (int(chosen.sum()), 1)))
+                    content.update({name: values[corners] for name, values in surface.items()})
+                    self.batches.append((compat.make_batch('TRIS', content), culled))
             else:
-                self.batch = compat.make_batch('TRIS', dict({"pos": positions, "nrm": normals}, **surface),
-                                        indices=triangles)
+                shared = compat.vertex_buffer(dict({"pos": positions, "nrm": normals}, **surface))
+                self.batches = [(compat.make_batch('TRIS', shared, indices=triangles[chosen]), culled)
+                                for culled, chosen in subsets]
         self.ubo = None
 
     def _designs(self):
@@ -399,6 +407,7 @@ class ObjectData:
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
         surface_rows = self._use_albedos(list(albedos))
+        self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:
             camera[:3] -= np.asarray(model, dtype=np.float64)[:3, 3]
@@ -429,7 +438,12 @@ class ObjectData:
             textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
         for _, name in self.variant.samplers():
             self.shader.uniform_sampler(name, textures[name])
-        self.batch.draw(self.shader)
+        gpu.state.front_facing_set(self.mirrored)   # the local winding is the world's turned
+        for batch, culled in self.batches:
+            gpu.state.face_culling_set('BACK' if culled else 'NONE')
+            batch.draw(self.shader)
+        gpu.state.face_culling_set('NONE')
+        gpu.state.front_facing_set(False)
 
     def refresh_design(self):
         """Swaps the final lobe designs in for the Gauss rules standing in, once they are built: a

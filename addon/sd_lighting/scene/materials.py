@@ -165,6 +165,13 @@ def texture_image(albedos):
     return next((a.image for a in albedos if a.image is not None), None)
 
 
+def culls_back_faces(obj):
+    """Whether every material slot of the object holds a material with Backface Culling on
+    (Material > Settings): its faces are meant to be seen from the front only."""
+    slots = list(getattr(obj, "material_slots", ()))
+    return bool(slots) and all(slot.material is not None and slot.material.use_backface_culling for slot in slots)
+
+
 def albedo_uv_map(obj):
     """The UV map the object's albedo texture is read through ("": the active render one), or None
     without a texture: the bake keeps these UVs per vertex."""

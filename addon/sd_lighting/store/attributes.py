@@ -157,20 +157,26 @@ def read_loop_uvs(mesh, name):
     return uvs.reshape(-1, 2)
 
 
-def write_surface(mesh, material_slots, uvs):
-    """Stores what the shading reads besides the bake: each vertex's material slot and albedo-texture
-    UV (either may be None: one material, no texture)."""
+def write_surface(mesh, material_slots, uvs, sides):
+    """Stores what the shading reads besides the bake: each vertex's material slot, albedo-texture
+    UV and side (bake/sides.py); any may be None: one material, no texture, every vertex single."""
     if material_slots is not None:
         _new(mesh, bake_data.MATERIAL_SLOT, 'FLOAT', 'value', material_slots)
     if uvs is not None:
         _new(mesh, bake_data.UV, 'FLOAT2', 'vector', uvs)
+    if sides is not None:
+        _new(mesh, bake_data.SIDE, 'FLOAT', 'value', sides)
+
+
+def _read_optional(mesh, name, prop, width):
+    return _read(mesh, name, prop, width) if name in mesh.attributes else None
 
 
 def read_surface(mesh):
-    """(material slots float32 [N] or None, UVs float32 [N, 2] or None) as write_surface stored them."""
-    slots = _read(mesh, bake_data.MATERIAL_SLOT, 'value', 1) if bake_data.MATERIAL_SLOT in mesh.attributes else None
-    uvs = _read(mesh, bake_data.UV, 'vector', 2) if bake_data.UV in mesh.attributes else None
-    return slots, uvs
+    """(material slots float32 [N], UVs float32 [N, 2], sides float32 [N]) as write_surface stored
+    them, each None when not stored."""
+    return (_read_optional(mesh, bake_data.MATERIAL_SLOT, 'value', 1), _read_optional(mesh, bake_data.UV, 'vector', 2),
+            _read_optional(mesh, bake_data.SIDE, 'value', 1))
 
 
 def read(mesh, record=None):

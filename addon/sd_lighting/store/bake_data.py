@@ -18,6 +18,7 @@ PREFIX = "sd_"
 NORMAL = PREFIX + "normal"          # FLOAT_VECTOR: the normal a vertex was baked and is shaded with
 MATERIAL_SLOT = PREFIX + "material_slot"  # FLOAT: the vertex's material slot (objects with several)
 UV = PREFIX + "uv"                  # FLOAT2: the vertex's UV for the albedo texture (when one is read)
+SIDE = PREFIX + "side"              # FLOAT: bake/sides.py's TWO_SIDED for a vertex drawn from its own side only
 BAKE = PREFIX + "bake"              # custom property: the bake's settings and summary
 BAKED_MESH = PREFIX + "baked_mesh"  # custom property of an object: its baked mesh
 LIGHTMAP = PREFIX + "lightmap"      # custom property of a baked mesh: its texels' mesh (texture space)

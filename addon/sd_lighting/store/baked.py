@@ -51,7 +51,7 @@ def store(bakes):
             mesh = bake.geometry.build_mesh(MESH_PREFIX + bake.object_name)
             built.append((obj, mesh))
             floats = attributes.write(mesh, bake.result["normals"], bake.result)
-            attributes.write_surface(mesh, bake.geometry.material_slots, bake.geometry.uvs)
+            attributes.write_surface(mesh, bake.geometry.material_slots, bake.geometry.uvs, bake.geometry.sides)
             if "lightmap" in bake.result:
                 mesh.uv_layers.new(name=LIGHTMAP_UV).data.foreach_set("uv", bake.geometry.lightmap_uvs.ravel())
                 mesh[LIGHTMAP] = _lightmap_mesh(LIGHTMAP_PREFIX + bake.object_name, bake.result["lightmap"])

@@ -61,6 +61,8 @@ class BakeRecord:
     inputs: str = _found("")     # digest of everything the result depends on (BakeTask.inputs_hash)
     source: str = _found("")     # digest of the evaluated mesh baked (store/source.py; before it: "")
     occluder_triangles: int = _found(0)   # the other objects' triangles it was baked against
+    faces_flipped: int = _found(0)   # faces turned round, faces given a reverse copy (bake/sides.py)
+    faces_doubled: int = _found(0)
     seconds: float = _found(0.0)
     vertices: int = _found(0)
     floats_per_vertex: int = _found(0)

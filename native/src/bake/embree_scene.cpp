@@ -88,7 +88,7 @@ EmbreeScene::EmbreeScene() {
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw std::runtime_error("Embree: cannot create a device (" + error_name(rtcGetDeviceError(nullptr)) + ")");
   rtcSetDeviceErrorFunction(device_, &EmbreeScene::on_error, this);
-  // first_side needs every hit on both sides: an Embree built without filter functions or with
+  // first_hit needs every hit on both sides: an Embree built without filter functions or with
   // back-face culling would let every ray-origin candidate pass unseen.
   if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) == 0 ||
       rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_BACKFACE_CULLING_ENABLED) != 0) {
@@ -106,8 +106,7 @@ EmbreeScene::~EmbreeScene() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
-                     std::vector<std::uint8_t> two_sided) {
+int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles) {
   if (triangles.empty()) return -1;
   RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
   check("rtcNewGeometry");
@@ -131,7 +130,7 @@ int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<
     const glm::dvec3& a = vertices[triangles[t][0]];
     normals[t] = glm::vec3(glm::cross(vertices[triangles[t][1]] - a, vertices[triangles[t][2]] - a));
   }
-  // Only rtcIntersect1 (first_side) calls it: the bake's rtcOccluded1M rays run without a filter.
+  // Only rtcIntersect1 (first_hit) calls it: the bake's rtcOccluded1M rays run without a filter.
   rtcSetGeometryIntersectFilterFunction(geometry, &EmbreeScene::probe_filter);
   rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
   rtcCommitGeometry(geometry);
@@ -140,9 +139,12 @@ int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<
   check("building the geometry");
   if (face_normals_.size() <= id) face_normals_.resize(id + 1);
   face_normals_[id] = std::move(normals);
-  if (two_sided_.size() <= id) two_sided_.resize(id + 1);
-  two_sided_[id] = std::move(two_sided);
+  if (orientation_.size() <= id) orientation_.resize(id + 1);
   return static_cast<int>(id);
+}
+
+void EmbreeScene::orient(int geometry, std::vector<std::int8_t> orientation) {
+  if (geometry >= 0) orientation_.at(static_cast<std::size_t>(geometry)) = std::move(orientation);
 }
 
 void EmbreeScene::commit() {
@@ -164,8 +166,7 @@ namespace {
 struct ProbeContext {
   RTCIntersectContext context;
   const std::vector<std::vector<glm::vec3>>* face_normals;
-  const std::vector<std::vector<std::uint8_t>>* two_sided;
-  bool other_side;
+  const std::vector<std::vector<std::int8_t>>* orientation;
   int skipped_geometry;
   const std::vector<unsigned>* skipped;
   float tolerance;
@@ -189,28 +190,26 @@ void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
     const glm::vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
                         RTCRayN_dir_z(args->ray, args->N, i));
     const float t = RTCRayN_tfar(args->ray, args->N, i);  // the candidate hit's distance
-    float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
-    const std::vector<std::uint8_t>& sheets = (*probe->two_sided)[geometry];
-    if (probe->other_side && !sheets.empty() && sheets[primitive] != 0) facing = -facing;
-    const Side side = facing > 0.0f ? Side::kBack : (facing < 0.0f ? Side::kFront : Side::kNothing);
-    if (side == Side::kNothing) continue;  // the segment runs in the triangle's plane
+    const std::vector<std::int8_t>& orientation = (*probe->orientation)[geometry];
+    const int sign = orientation.empty() ? 1 : orientation[primitive];
+    const float facing = glm::dot((*probe->face_normals)[geometry][primitive], dir);
+    if (facing == 0.0f) continue;  // the segment runs in the triangle's plane
+    const Side side = sign == 0 ? Side::kSheet : (facing * static_cast<float>(sign) > 0.0f ? Side::kBack : Side::kFront);
     if (probe->first_side == Side::kNothing || t < probe->first_t - probe->tolerance) {
       probe->first_t = t;
       probe->first_side = side;
-    } else if (t <= probe->first_t + probe->tolerance && side == Side::kBack) {
-      probe->first_side = Side::kBack;
+    } else if (t <= probe->first_t + probe->tolerance && side != Side::kFront && probe->first_side != Side::kBack) {
+      probe->first_side = side;  // at one t a back outranks a sheet, a sheet a front
     }
   }
 }
 
-EmbreeScene::Side EmbreeScene::first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
-                                          int skipped_geometry, const std::vector<unsigned>& skipped,
-                                          bool other_side) const {
+EmbreeScene::Hit EmbreeScene::first_hit(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
+                                        int skipped_geometry, const std::vector<unsigned>& skipped) const {
   ProbeContext probe;
   rtcInitIntersectContext(&probe.context);
   probe.face_normals = &face_normals_;
-  probe.two_sided = &two_sided_;
-  probe.other_side = other_side;
+  probe.orientation = &orientation_;
   probe.skipped_geometry = skipped_geometry;
   probe.skipped = &skipped;
   probe.tolerance = static_cast<float>(1e-4 * t_max);
@@ -221,7 +220,7 @@ EmbreeScene::Side EmbreeScene::first_side(const glm::dvec3& origin, const glm::d
   query.ray.tfar = static_cast<float>(t_max);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &probe.context, &query);
-  return probe.first_side;
+  return {probe.first_side, static_cast<double>(probe.first_t)};
 }
 
 std::string EmbreeScene::error_name(RTCError code) {

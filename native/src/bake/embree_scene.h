@@ -59,27 +59,33 @@ class EmbreeScene {
   ~EmbreeScene();
 
   /// Adds a triangle mesh (indices already checked); returns its geometry ID, or -1 when it has no
-  /// triangles (nothing is added). two_sided: per triangle (or empty: none), the sheets whose
-  /// other side a probe may ask about (first_side's `other_side`).
-  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
-          std::vector<std::uint8_t> two_sided = {});
+  /// triangles (nothing is added).
+  int add(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles);
   /// Builds the BVH; call once, after every add().
   void commit();
   RTCScene scene() const { return scene_; }
 
+  /// How probes read geometry `geometry`'s triangles from now on, per triangle: +1 as wound (the
+  /// default), -1 wound the other way, 0 a sheet, which has no inside (face_sides.h). Not
+  /// thread-safe: call before the probes.
+  void orient(int geometry, std::vector<std::int8_t> orientation);
+
   /// Whether the ray origin + t dir, t in [0, ∞), hits a triangle; thread-safe after commit().
   bool occluded(const glm::dvec3& origin, const glm::dvec3& dir) const;
 
-  /// What a probe segment meets first.
-  enum class Side { kNothing, kFront, kBack };
-  /// The side of the first triangle the segment origin + t dir, t in [0, t_max], meets: the front
-  /// is the side its normal points to by the right-hand rule of its winding (Blender's). Triangles
-  /// met at the same t (coplanar ones: a box standing on a floor) count as kBack when any of them
-  /// is met from behind. Triangles `skipped` of geometry `skipped_geometry` are not seen.
-  /// other_side: the probe is for the back of a sheet, which sees every two-sided triangle wound
-  /// the other way (coincidence.h). Thread-safe after commit().
-  Side first_side(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
-                  const std::vector<unsigned>& skipped = {}, bool other_side = false) const;
+  /// What a probe segment meets first: a triangle's front (the side its normal points to by the
+  /// right-hand rule of its orientation, Blender's for +1), its back, or a sheet.
+  enum class Side { kNothing, kFront, kBack, kSheet };
+  struct Hit {
+    Side side = Side::kNothing;
+    double t = 0.0;  ///< where along the segment
+  };
+  /// The first triangle the segment origin + t dir, t in [0, t_max], meets. Triangles met at the
+  /// same t (coplanar ones: a box standing on a floor) count as kBack when any of them is met
+  /// from behind, else as kSheet when any is a sheet. Triangles `skipped` of geometry
+  /// `skipped_geometry` are not seen. Thread-safe after commit().
+  Hit first_hit(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
+                const std::vector<unsigned>& skipped = {}) const;
 
  private:
   static std::string error_name(RTCError code);
@@ -91,7 +97,7 @@ class EmbreeScene {
   RTCScene scene_ = nullptr;
   std::string error_;
   std::vector<std::vector<glm::vec3>> face_normals_;  // per geometry ID, per triangle (unnormalised)
-  std::vector<std::vector<std::uint8_t>> two_sided_;  // per geometry ID, per triangle, or empty
+  std::vector<std::vector<std::int8_t>> orientation_;  // per geometry ID, per triangle, or empty (+1)
 };
 
 }  // namespace sd

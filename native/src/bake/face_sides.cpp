@@ -2,8 +2,8 @@
 
 #include "sdlighting/visibility.h"
 
+#include "bake/classify_sides.h"
 #include "bake/coincidence.h"
-#include "bake/embree_scene.h"
 #include "bake/traced_scene.h"
 #include "util/parallel_for.h"
 
@@ -96,27 +96,10 @@ double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x),
 
 }  // namespace
 
-std::vector<FaceSides> face_sides(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
-                                  const OccluderMesh& occluders, const FaceSidesOptions& options) {
-  check_points("vertices", vertices);
-  check_triangles("triangles", triangles, vertices.size(), "vertices");
-  check_points("occluder_vertices", occluders.vertices);
-  check_triangles("occluder_triangles", occluders.triangles, occluders.vertices.size(), "occluder_vertices");
+std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, const std::vector<Triangle>& triangles,
+                                      const EmbreeScene& scene, const std::vector<SceneFace>& in_scene, double reach,
+                                      const ParallelOptions& parallel) {
   std::vector<FaceSides> sides(triangles.size(), FaceSides::kFront);
-  if (triangles.empty()) return sides;
-
-  // Centred, as the bake traces (traced_scene.h), so float32 keeps the object's precision.
-  glm::dvec3 lo = vertices[0], hi = vertices[0];
-  for (const auto& p : vertices) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  const glm::dvec3 centre = 0.5 * (lo + hi);
-  std::vector<glm::dvec3> points(vertices.size());
-  for (std::size_t i = 0; i < points.size(); ++i) points[i] = vertices[i] - centre;
-  std::vector<glm::dvec3> occluder_points(occluders.vertices.size());
-  for (std::size_t i = 0; i < occluder_points.size(); ++i) occluder_points[i] = occluders.vertices[i] - centre;
-
   const std::vector<Triangle> welded = welded_triangles(triangles, coincident_representatives(points));
   const std::vector<std::int64_t> twin = reversed_twins(welded);
   std::vector<glm::dvec3> area_normals(triangles.size());
@@ -153,31 +136,8 @@ std::vector<FaceSides> face_sides(const std::vector<glm::dvec3>& vertices, const
   }
   if (looked_at.empty()) return sides;
 
-  EmbreeScene scene;
-  std::vector<Triangle> traced;
-  std::vector<unsigned> traced_id(triangles.size(), 0);
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    if (twin[t] >= 0 && static_cast<std::size_t>(twin[t]) < t) {
-      traced_id[t] = traced_id[twin[t]];
-      continue;
-    }
-    traced_id[t] = static_cast<unsigned>(traced.size());
-    traced.push_back(triangles[t]);
-  }
-  const int object = scene.add(points, traced);
-  scene.add(occluder_points, occluders.triangles);
-  scene.commit();
-  glm::dvec3 scene_lo = lo - centre, scene_hi = hi - centre;
-  for (const auto& p : occluder_points) {
-    scene_lo = glm::min(scene_lo, p);
-    scene_hi = glm::max(scene_hi, p);
-  }
-  const double reach = 4.0 * glm::length(scene_hi - scene_lo) + 1.0;  // past every surface
   const std::vector<glm::dvec3> directions = spherical_fibonacci(2 * kSideRays);  // half of them behind
 
-  ParallelOptions parallel(options.threads);
-  parallel.progress = options.progress;
-  parallel.cancel = options.cancel;
   const ParallelOutcome outcome = parallel_for(looked_at.size(), 256, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = looked_at[i];
@@ -187,11 +147,11 @@ std::vector<FaceSides> face_sides(const std::vector<glm::dvec3>& vertices, const
       const glm::dvec3 n = glm::normalize(area_normals[t]);
       const double eta = std::max(kOriginOffset * shortest, kOriginFloat * largest_coordinate(centroid));
       const glm::dvec3 behind = centroid - eta * n;
-      const std::vector<unsigned> own{traced_id[t]};
+      const std::vector<unsigned> own{in_scene[t].primitive};
       bool hidden = true;
       for (const glm::dvec3& d : directions) {
         if (glm::dot(d, n) >= 0.0) continue;  // the back's hemisphere only
-        if (scene.first_side(behind, d, reach, object, own) != EmbreeScene::Side::kBack) {
+        if (scene.first_hit(behind, d, reach, in_scene[t].geometry, own).side != EmbreeScene::Side::kBack) {
           hidden = false;
           break;
         }
@@ -204,6 +164,47 @@ std::vector<FaceSides> face_sides(const std::vector<glm::dvec3>& vertices, const
                         std::to_string(looked_at.size()) + " faces)");
   }
   return sides;
+}
+
+std::int8_t probe_orientation(FaceSides sides) {
+  switch (sides) {
+    case FaceSides::kFront: return 1;
+    case FaceSides::kFlipped: return -1;
+    default: return 0;
+  }
+}
+
+std::vector<FaceSides> face_sides(const std::vector<glm::dvec3>& vertices, const std::vector<Triangle>& triangles,
+                                  const OccluderMesh& occluders, const FaceSidesOptions& options) {
+  check_points("vertices", vertices);
+  check_triangles("triangles", triangles, vertices.size(), "vertices");
+  check_points("occluder_vertices", occluders.vertices);
+  check_triangles("occluder_triangles", occluders.triangles, occluders.vertices.size(), "occluder_vertices");
+  if (triangles.empty()) return {};
+  // Centred, as the bake traces (traced_scene.h), so float32 keeps the object's precision.
+  glm::dvec3 lo = vertices[0], hi = vertices[0];
+  for (const auto& p : vertices) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  std::vector<glm::dvec3> points(vertices.size()), occluder_points(occluders.vertices.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = vertices[i] - centre;
+  for (std::size_t i = 0; i < occluder_points.size(); ++i) {
+    occluder_points[i] = occluders.vertices[i] - centre;
+    lo = glm::min(lo, occluders.vertices[i]);
+    hi = glm::max(hi, occluders.vertices[i]);
+  }
+  EmbreeScene scene;
+  const int object = scene.add(points, triangles);
+  scene.add(occluder_points, occluders.triangles);
+  scene.commit();
+  std::vector<SceneFace> in_scene(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) in_scene[t] = {object, static_cast<unsigned>(t)};
+  ParallelOptions parallel(options.threads);
+  parallel.progress = options.progress;
+  parallel.cancel = options.cancel;
+  return classify_sides(points, triangles, scene, in_scene, reach_past(lo, hi), parallel);
 }
 
 }  // namespace sd

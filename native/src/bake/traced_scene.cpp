@@ -1,5 +1,6 @@
 #include "bake/traced_scene.h"
 
+#include "bake/classify_sides.h"
 #include "bake/coincidence.h"
 
 #include "util/parallel_for.h"
@@ -66,6 +67,44 @@ struct Fans {
   }
 };
 
+// How the probes read every surface (classify_sides): the object's and the occluders' faces of a
+// closed solid by their outward winding, every other face as a sheet, whose both sides are free.
+void orient_surfaces(EmbreeScene& scene, const std::vector<glm::dvec3>& points, const std::vector<Triangle>& triangles,
+                     const std::vector<unsigned>& traced_id, int object, const OccluderMesh& occluders, int others,
+                     const ParallelOptions& parallel) {
+  std::vector<glm::dvec3> all(points);
+  all.insert(all.end(), occluders.vertices.begin(), occluders.vertices.end());
+  std::vector<Triangle> faces(triangles);
+  std::vector<SceneFace> in_scene;
+  for (std::size_t t = 0; t < triangles.size(); ++t) in_scene.push_back({object, traced_id[t]});
+  const auto base = static_cast<std::int64_t>(points.size());
+  for (std::size_t t = 0; t < occluders.triangles.size(); ++t) {
+    const Triangle& o = occluders.triangles[t];
+    faces.push_back({o[0] + base, o[1] + base, o[2] + base});
+    in_scene.push_back({others, static_cast<unsigned>(t)});
+  }
+  glm::dvec3 lo = all[0], hi = all[0];
+  for (const auto& p : all) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  ParallelOptions unreported(parallel.threads);  // quick beside the origins, which report progress
+  unreported.cancel = parallel.cancel;
+  const std::vector<FaceSides> sides = classify_sides(all, faces, scene, in_scene, reach_past(lo, hi), unreported);
+  std::vector<std::int8_t> object_orientation(traced_id.empty() ? 0 : *std::max_element(traced_id.begin(), traced_id.end()) + 1);
+  std::vector<std::int8_t> other_orientation(occluders.triangles.size());
+  for (std::size_t t = 0; t < faces.size(); ++t) {
+    const std::int8_t orientation = probe_orientation(sides[t]);
+    if (t < triangles.size()) {
+      object_orientation[traced_id[t]] = orientation;
+    } else {
+      other_orientation[t - triangles.size()] = orientation;
+    }
+  }
+  scene.orient(object, std::move(object_orientation));
+  scene.orient(others, std::move(other_orientation));
+}
+
 }  // namespace
 
 TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vector<glm::dvec3>& unit_normals,
@@ -78,17 +117,15 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
   const std::vector<Triangle> welded = welded_triangles(triangles, representative);
 
   // A sheet (a face and its reverse) is traced once, as its first copy; the vertices of the second
-  // copy only are its back's, whose probes see every sheet the other way round.
+  // copy only are its back's.
   const std::vector<std::int64_t> twin = reversed_twins(welded);
   auto hidden = [&](std::size_t t) { return twin[t] >= 0 && static_cast<std::size_t>(twin[t]) < t; };
   std::vector<Triangle> traced;
-  std::vector<std::uint8_t> sheet;
   std::vector<unsigned> traced_id(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     if (hidden(t)) continue;
     traced_id[t] = static_cast<unsigned>(traced.size());
     traced.push_back(triangles[t]);
-    sheet.push_back(twin[t] >= 0 ? 1 : 0);
   }
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     if (hidden(t)) traced_id[t] = traced_id[twin[t]];
@@ -97,9 +134,10 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) (hidden(t) ? on_back : on_front)[triangles[t][k]] = 1;
   }
-  const int object = scene_.add(points, traced, std::move(sheet));
-  scene_.add(shifted_occluders.vertices, shifted_occluders.triangles);
+  const int object = scene_.add(points, traced);
+  const int others = scene_.add(shifted_occluders.vertices, shifted_occluders.triangles);
   scene_.commit();
+  orient_surfaces(scene_, points, triangles, traced_id, object, shifted_occluders, others, parallel);
 
   std::vector<double> areas(triangles.size());
   std::vector<glm::dvec3> centroids(triangles.size()), area_normals(triangles.size());
@@ -124,7 +162,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       const glm::dvec3& p = points[v];
       const glm::dvec3& n = unit_normals[v];
       const unsigned r = representative[v];
-      const bool back = on_back[v] != 0 && on_front[v] == 0;
+      const bool back = on_back[v] != 0 && on_front[v] == 0;   // the sheet's back copy alone
       const Fans& fans = back ? back_fans : front_fans;
       fan.assign(fans.triangles.begin() + fans.offsets[r], fans.triangles.begin() + fans.offsets[r + 1]);
       skipped.resize(fan.size());
@@ -154,12 +192,19 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       auto passes = [&](const glm::dvec3& q) {
         const glm::dvec3 to_p = p - q;
         const double distance = glm::length(to_p);
-        if (scene_.first_side(q, to_p / distance, 2.0 * distance, object, skipped, back) == EmbreeScene::Side::kBack) {
-          return false;
+        const EmbreeScene::Hit through = scene_.first_hit(q, to_p / distance, 2.0 * distance, object, skipped);
+        if (through.side == EmbreeScene::Side::kBack) return false;
+        // A sheet between q and p separates them; one through p (a floor under the vertex) has no
+        // inside to tell q's side by: the probes towards the faces do.
+        bool sheet_at_p = false;
+        if (through.side == EmbreeScene::Side::kSheet) {
+          if (through.t < (1.0 - kSheetTolerance) * distance) return false;
+          sheet_at_p = through.t <= (1.0 + kSheetTolerance) * distance;
         }
         // In front of every face around p, a segment from q to a face's centroid can meet those
         // faces only from the front: the probes towards them can fail only at concave vertices.
-        if (std::all_of(fan.begin(), fan.end(), [&](unsigned t) { return glm::dot(q - p, area_normals[t]) > 0.0; })) {
+        if (!sheet_at_p &&
+            std::all_of(fan.begin(), fan.end(), [&](unsigned t) { return glm::dot(q - p, area_normals[t]) > 0.0; })) {
           return true;
         }
         if (probed.empty()) {
@@ -170,9 +215,9 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
         for (unsigned t : probed) {
           const glm::dvec3 to_face = centroids[t] - q;
           const double length = glm::length(to_face);
-          if (scene_.first_side(q, to_face / length, 1.01 * length, -1, {}, back) == EmbreeScene::Side::kBack) {
-            return false;
-          }
+          const EmbreeScene::Hit hit = scene_.first_hit(q, to_face / length, 1.01 * length);
+          if (hit.side == EmbreeScene::Side::kBack) return false;
+          if (hit.side == EmbreeScene::Side::kSheet && hit.t < (1.0 - kSheetTolerance) * length) return false;
         }
         return true;
       };

@@ -17,18 +17,21 @@
 //       faces' own area-weighted normal m (by their winding: it survives a flipped n), then
 //       kCandidateDirections spherical-Fibonacci directions by decreasing u·m;
 //   q fails a probe when the first surface a segment from q meets is met from behind (the side
-//       opposite its normal by the right-hand rule of its winding): q is then inside a solid or under
-//       a surface. The probes run from q through p to 2|q − p| with p's own faces skipped (other
+//       opposite its outward normal: q is then inside a solid or under a surface) or is a sheet
+//       crossed before the segment's end (q is on its other side). Which faces bound a solid and
+//       which way they face is classify_sides' answer (face_sides.h): closed pieces by their
+//       volume, open faces whose back is hidden inside a solid by their winding; every other face
+//       (a ground plane, a wall, a leaf, whatever its winding) is a sheet, free on both sides.
+//       The probes run from q through p to 2|q − p| with p's own faces skipped (other
 //       surfaces through p: a floor the object stands on) and, unless q is in front of every face
-//       around p (then no segment from q can meet them from behind), from q to the centroid of
-//       each face around p (the largest kProbedFaces).
+//       around p (then no segment from q can meet them from behind) with no sheet through p, from
+//       q to the centroid of each face around p (the largest kProbedFaces).
 //   When no candidate passes (an enclosed vertex, a mesh with inconsistent winding) the first is used.
 //   A vertex without faces (a probe point) starts at p + η n, η = kFacelessOffset × the diagonal of
 //   the object's bounding box (of the occluders' when the object is one point), at least the floor.
-// A two-sided sheet (a face and its reverse over the same points: coincidence.h) is one surface to
-// the rays; a vertex of the reverse copy alone is on the sheet's back, where its faces are the
-// reverse copies and every sheet's winding reads the other way round, so its origin is found on
-// that side as any other vertex's is on its own.
+// A face given with both windings (a face and its reverse over the same points: coincidence.h) is
+// one sheet to the rays; a vertex of the reverse copy alone is on the sheet's back, its faces
+// the reverse copies, so its origin is found on that side.
 // The traced space is the object's space shifted by the centre of its vertices' bounding box, so
 // Embree's float32 keeps the object's own precision however far from the origin it sits.
 #pragma once
@@ -53,6 +56,9 @@ constexpr double kOriginFloat = 1e-5;
 constexpr int kProbedFaces = 16;
 /// η of a vertex without faces, relative to the object's bounding-box diagonal.
 constexpr double kFacelessOffset = 1e-4;
+/// A sheet met within this fraction of a probe's length from its end is at the end (float32
+/// rounding of the hit; the probes are η long).
+constexpr double kSheetTolerance = 0.05;
 /// Spherical-Fibonacci candidates tried after n + (c − p)/h, n and the faces' normal.
 constexpr int kCandidateDirections = 64;
 

@@ -56,6 +56,14 @@ TEST(RayOrigins, SplitVertexAtTheFootOfAWallSeesTheOpenQuarter) {
   EXPECT_NEAR(ambient_occlusion(floor_plate(), wall_at_x0())[0], 0.25, kFraction);
 }
 
+TEST(RayOrigins, AWallFacingAwayIsASheetToo) {
+  // The same wall wound the other way (facing away from the plate): an open surface is free on
+  // both sides whatever its winding, so the quarter-space behind it is not read as inside a solid.
+  OccluderMesh wall = wall_at_x0();
+  for (Triangle& t : wall.triangles) std::swap(t[1], t[2]);
+  EXPECT_NEAR(ambient_occlusion(floor_plate(), wall)[0], 0.25, kFraction);
+}
+
 TEST(RayOrigins, WithoutTheOffsetTheFailuresAboveReturn) {
   // TransferOptions::offset_origins = false (what benchmark_refine measures the offset against):
   // p + ηn for every vertex leaks under the box and blocks the open quarter at the wall's foot.

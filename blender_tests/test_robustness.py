@@ -180,6 +180,9 @@ def check_zero_normals(checks, package, scene):
     mesh.from_pydata([(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0.25), (0, 0.25, 0), (0, 0, 0)], [],
                      [(0, 1, 2), (0, 3, 4)])
     mesh.polygons.foreach_set("use_smooth", [True, True])
+    culled = sdtest.diffuse_material("Front only")
+    culled.use_backface_culling = True   # one side: no reverse copies (bake/sides.py)
+    mesh.materials.append(culled)
     mesh.update()
     fan = sdtest.add_object(scene, "Fan", mesh)
     fan.location = (3.0, 0.0, 0.5)

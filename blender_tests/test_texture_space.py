@@ -41,8 +41,8 @@ def ground_pixels(view):
 
 
 def lightmap_uv(mesh, package, local_points):
-    """The ground's lightmap UV at points of its plane: the UVs of the triangle holding each point,
-    blended by its barycentric coordinates there."""
+    """The ground's lightmap UV at points of its plane: the UVs of the upward triangle holding each
+    point (not its reverse copy: bake/sides.py), blended by its barycentric coordinates there."""
     positions = package.store.attributes.read_positions(mesh).astype(np.float64)
     loops = package.store.attributes.read_triangle_loops(mesh)
     corners = package.store.attributes.read_triangles(mesh)
@@ -52,6 +52,8 @@ def lightmap_uv(mesh, package, local_points):
         a, b, c = positions[triangle][:, :2]
         d, e, q = b - a, c - a, local_points[:, :2] - a
         area = d[0] * e[1] - d[1] * e[0]
+        if area <= 0.0:
+            continue
         b1 = (q[:, 0] * e[1] - q[:, 1] * e[0]) / area
         b2 = (d[0] * q[:, 1] - d[1] * q[:, 0]) / area
         inside = (b1 >= 0) & (b2 >= 0) & (b1 + b2 <= 1)

@@ -43,7 +43,7 @@ def test_a_polygon_seen_from_both_sides_gets_a_reverse_copy():
     vertices = np.arange(10, 17)
     corners = sided.gather(vertices)[sided.triangle_loops]
     assert corners.tolist() == [[10, 11, 12], [10, 12, 13], [14, 15, 16], [16, 15, 14]]
-    assert sided.loop_sides.tolist() == [sides.SINGLE] * 4 + [sides.TWO_SIDED] * 6
+    assert sided.loop_sides.tolist() == [sides.SINGLE] * 4 + [sides.FRONT_SIDE] * 3 + [sides.BACK_SIDE] * 3
     assert sided.doubled == 1
     normals = np.tile([[0.0, 0.0, 1.0]], (7, 1))
     assert sided.normals(normals)[:, 2].tolist() == [1.0] * 7 + [-1.0] * 3
@@ -52,7 +52,7 @@ def test_a_polygon_seen_from_both_sides_gets_a_reverse_copy():
 def test_a_sheet_is_drawn_from_its_own_side_without_a_copy():
     sided = sides.apply([sides.SHEET, sides.FRONT], STARTS, TOTALS, TRIANGLE_LOOPS)
     assert len(sided.loop_order) == 7
-    assert sided.loop_sides.tolist() == [sides.TWO_SIDED] * 4 + [sides.SINGLE] * 3
+    assert sided.loop_sides.tolist() == [sides.FRONT_SIDE] * 4 + [sides.SINGLE] * 3
 
 
 def test_codes_match_the_native_module(sdnative):

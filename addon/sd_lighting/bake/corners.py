@@ -45,7 +45,7 @@ def split(loop_vertices, corner_normals, loop_materials=None, loop_uvs=None, loo
 
     loop_vertices: int [L] each loop's vertex; corner_normals: [L, 3] (unit or zero);
     loop_materials: int [L] each loop's material slot, or None (one material);
-    loop_uvs: [L, 2] or None (no texture); loop_sides: int [L] (sides.SINGLE or TWO_SIDED) or
+    loop_uvs: [L, 2] or None (no texture); loop_sides: int [L] (sides.SINGLE, FRONT_SIDE or BACK_SIDE) or
     None (all single). Returns a CornerSplit.
 
     Each vertex's loops are taken in loop order: the first one not yet grouped leads a new copy,

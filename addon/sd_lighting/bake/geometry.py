@@ -178,7 +178,7 @@ class Geometry:
 
     @functools.cached_property
     def sides(self):
-        """Each vertex's side (sides.SINGLE or TWO_SIDED), or None when every vertex is single."""
+        """Each vertex's side (sides.SINGLE, FRONT_SIDE or BACK_SIDE), or None when every vertex is single."""
         loop_sides = self._sided.loop_sides
         return corners.vertex_values(self._split, loop_sides) if loop_sides.any() else None
 

@@ -8,8 +8,8 @@ solid wound inward (a flipped face, a mesh turned inside out) is turned round - 
 reversed and their normals negated - and a face whose back can be seen (a ground plane, a wall, a
 leaf) gets a reverse copy after the mesh's own faces, with its own corners, normals negated. The
 two copies of a face are a sheet to the bake (one surface, an origin on each side), and the live
-shading draws each copy only from its own side: their vertices are marked two-sided
-(`loop_sides`, stored per vertex), and the draw culls the back faces of those triangles alone. A
+shading draws each copy only from its own side: their vertices are marked (`loop_sides`, stored
+per vertex), and the draw culls the back faces of those triangles alone. A
 face turned round is drawn from both sides, as before.
 
 A polygon is treated as a whole (its triangles share its answer: the largest code among them).
@@ -21,7 +21,9 @@ import dataclasses
 import numpy as np
 
 FRONT, FLIPPED, BOTH, SHEET = 0, 1, 2, 3   # sdnative.FACE_FRONT ... FACE_SHEET
-SINGLE, TWO_SIDED = 0, 1                    # a loop's side: drawn from both sides, or from its own
+# A loop's side: drawn from both sides; the front of a face drawn from its own side only; a back
+# copy (drawn from its own side only). The corner split keeps the three apart.
+SINGLE, FRONT_SIDE, BACK_SIDE = 0, 1, 2
 
 
 @dataclasses.dataclass
@@ -29,7 +31,7 @@ class SidedLoops:
     """A mesh's loop arrays with its polygons turned or doubled: the polygons in their order,
     then the reverse copies. `loop_order`: each new loop's old loop; `negated`: whether its
     normal is negated; `triangle_loops` [T', 3] in the new loops, wound as the bake winds them;
-    `loop_sides`: SINGLE or TWO_SIDED per new loop; `flipped`, `doubled`: the polygons turned
+    `loop_sides`: SINGLE, FRONT_SIDE or BACK_SIDE per new loop; `flipped`, `doubled`: the polygons turned
     round and copied."""
     loop_order: np.ndarray
     negated: np.ndarray
@@ -101,6 +103,6 @@ def apply(codes, loop_starts, loop_totals, triangle_loops):
         loop_starts=np.concatenate([loop_starts, copy_starts]).astype(np.int32),
         loop_totals=np.concatenate([loop_totals, copy_totals]).astype(np.int32),
         triangle_loops=np.concatenate([front_triangles, copy_of_loop[copies][:, ::-1]]).astype(np.int64),
-        loop_sides=np.concatenate([np.where(two_sided[polygon_of_loop], TWO_SIDED, SINGLE),
-                                   np.full(len(copy_loops), TWO_SIDED)]).astype(np.int8),
+        loop_sides=np.concatenate([np.where(two_sided[polygon_of_loop], FRONT_SIDE, SINGLE),
+                                   np.full(len(copy_loops), BACK_SIDE)]).astype(np.int8),
         flipped=int(np.count_nonzero(codes == FLIPPED)), doubled=len(copied))

@@ -401,6 +401,10 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
             _value(col, context, "Nodes", "%.1f per vertex" % record.design_nodes_mean)
             _value(col, context, "Max Nodes", "%d" % record.design_nodes_max)
         _value(col, context, "Bake Time", "%.2f s" % record.seconds)
+        if record.faces_doubled:    # bake/sides.py
+            _value(col, context, "Both Sides", "%d faces" % record.faces_doubled)
+        if record.faces_flipped:
+            _value(col, context, "Turned Out", "%d faces" % record.faces_flipped)
         if record.least_squares and method is not None and method.data is not None:
             _value(col, context, "Fit", "least squares" if least_squares.applies(method) else "kept as baked")
             if not least_squares.applies(method):

@@ -9,12 +9,15 @@
 //   shows. The outside is the side the winding points to when the signed volume is positive; a
 //   face wound the other way (a flipped face, a mesh turned inside out) is kFlipped: its winding
 //   and normals are to be reversed, and it is baked and drawn once, as before.
-// - any other face (an open surface: a ground plane, a wall, a leaf; a non-manifold or
-//   non-orientable piece) has a front and possibly a visible back. Its back is looked at by
-//   kSideRays rays from a point just behind its centroid: when every one of them meets a surface
-//   from behind (by that surface's winding), the point lies inside a solid and the back is hidden
-//   (kFront); otherwise the face is kBoth: it gets a reverse copy with the normals turned (a
-//   sheet, coincidence.h), and each copy is drawn only from its own side.
+// - any other piece (an open surface: a ground plane, a wall, a leaf, a cup without thickness; a
+//   non-manifold or non-orientable piece) has fronts and possibly visible backs. Up to kSideFaces
+//   of its faces, spread over it, look at their backs, each with the rays of kSideRays directions
+//   from a point just behind its centroid (in the face's own frame, so that turning or mirroring
+//   the mesh changes nothing). A ray met from behind by the first surface it meets (by that
+//   surface's winding) starts inside a solid; when at least kSeenShare of the piece's rays do not,
+//   its backs can be seen and every face of it is kBoth: it gets a reverse copy with the normals
+//   turned (a sheet, coincidence.h), and each copy is drawn only from its own side. Otherwise
+//   (a head open only at its eyes, a face inside a solid) its faces are kFront.
 // - a face whose reverse is already in the mesh (a user's back-to-back faces) is kSheet.
 // - a face without area is kFront: it has no side.
 #pragma once
@@ -38,8 +41,14 @@ enum class FaceSides : std::uint8_t {
   kSheet = 3,    ///< both, already: the reverse is another triangle of the mesh
 };
 
-/// Rays that look at the back of a face of an open surface.
+/// The rays that look at the back of a face of an open piece: the back half of a Fibonacci set
+/// of this size and its mirror image.
 constexpr int kSideRays = 16;
+/// The faces of an open piece that look at their backs, at most.
+constexpr int kSideFaces = 64;
+/// The share of an open piece's back rays that must start outside every solid for its backs to be
+/// seen.
+constexpr double kSeenShare = 0.1;
 
 /// How face_sides runs.
 struct FaceSidesOptions {

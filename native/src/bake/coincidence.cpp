@@ -45,6 +45,18 @@ std::vector<Triangle> welded_triangles(const std::vector<Triangle>& triangles,
   return welded;
 }
 
+std::vector<std::int64_t> first_copies(const std::vector<Triangle>& welded) {
+  std::vector<std::pair<Triangle, std::int64_t>> keyed(welded.size());
+  for (std::size_t t = 0; t < welded.size(); ++t) keyed[t] = {rotated_to_smallest(welded[t]), static_cast<std::int64_t>(t)};
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::int64_t> first(welded.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) {
+    const bool repeat = i > 0 && keyed[i].first == keyed[i - 1].first;
+    first[keyed[i].second] = repeat ? first[keyed[i - 1].second] : keyed[i].second;
+  }
+  return first;
+}
+
 std::vector<std::int64_t> reversed_twins(const std::vector<Triangle>& welded) {
   std::vector<std::pair<Triangle, std::int64_t>> keyed;  // (the winding's key, triangle), sorted
   keyed.reserve(welded.size());

@@ -23,6 +23,11 @@ std::vector<unsigned> coincident_representatives(const std::vector<glm::dvec3>& 
 std::vector<Triangle> welded_triangles(const std::vector<Triangle>& triangles,
                                        const std::vector<unsigned>& representative);
 
+/// For each triangle of `welded` (indices already welded), the first triangle over the same three
+/// points in the same winding: itself, or the one it repeats (a face given twice: the add-on's
+/// samples joined with the whole mesh as occluders).
+std::vector<std::int64_t> first_copies(const std::vector<Triangle>& welded);
+
 /// For each triangle of `welded` (indices already welded), the index of the triangle over the
 /// same three points in the opposite winding, or -1. Triangles pair one to one (of three copies
 /// two pair and the third keeps -1); a triangle with a repeated point has no twin.

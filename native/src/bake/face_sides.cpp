@@ -101,7 +101,17 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
                                       const ParallelOptions& parallel) {
   std::vector<FaceSides> sides(triangles.size(), FaceSides::kFront);
   const std::vector<Triangle> welded = welded_triangles(triangles, coincident_representatives(points));
-  const std::vector<std::int64_t> twin = reversed_twins(welded);
+  // A face given twice in one winding is one face: only its first copy is looked at (and its
+  // repeats take its answer at the end), so that it joins no piece twice.
+  const std::vector<std::int64_t> first = first_copies(welded);
+  std::vector<Triangle> unique;
+  std::vector<std::int64_t> unique_index(triangles.size(), -1);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (first[t] != static_cast<std::int64_t>(t)) continue;
+    unique_index[t] = static_cast<std::int64_t>(unique.size());
+    unique.push_back(welded[t]);
+  }
+  const std::vector<std::int64_t> unique_twin = reversed_twins(unique);
   std::vector<glm::dvec3> area_normals(triangles.size());
   std::vector<std::uint8_t> left_out(triangles.size(), 0);
   for (std::size_t t = 0; t < triangles.size(); ++t) {
@@ -109,8 +119,9 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
     area_normals[t] = 0.5 * glm::cross(b - a, c - a);
     const Triangle& w = welded[t];
     const bool degenerate = !(glm::length(area_normals[t]) > 0.0) || w[0] == w[1] || w[1] == w[2] || w[2] == w[0];
-    if (twin[t] >= 0) sides[t] = FaceSides::kSheet;
-    left_out[t] = degenerate || twin[t] >= 0;
+    const bool sheet = unique_index[t] >= 0 && unique_twin[unique_index[t]] >= 0;
+    if (sheet) sides[t] = FaceSides::kSheet;
+    left_out[t] = degenerate || sheet || unique_index[t] < 0;
   }
 
   // Closed pieces: the outside is where the signed volume says. A closed piece without volume
@@ -123,7 +134,8 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
     volume[pieces.piece[t]] += pieces.reversed[t] ? -signed_volume : signed_volume;
     area[pieces.piece[t]] += glm::length(area_normals[t]);
   }
-  std::vector<std::uint32_t> looked_at;  // faces whose back the rays look at
+  // Open pieces: a sample of each one's faces looks at its backs.
+  std::vector<std::vector<std::uint32_t>> open_faces(pieces.closed.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     if (left_out[t]) continue;
     const std::int64_t p = pieces.piece[t];
@@ -131,14 +143,29 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
       const bool outward = (pieces.reversed[t] != 0) == (volume[p] < 0.0);
       sides[t] = outward ? FaceSides::kFront : FaceSides::kFlipped;
     } else {
-      looked_at.push_back(static_cast<std::uint32_t>(t));
+      open_faces[p].push_back(static_cast<std::uint32_t>(t));
     }
   }
-  if (looked_at.empty()) return sides;
+  std::vector<std::uint32_t> looked_at, looked_piece;  // the sampled faces (evenly over each piece)
+  for (std::size_t p = 0; p < open_faces.size(); ++p) {
+    const std::vector<std::uint32_t>& faces = open_faces[p];
+    const std::size_t count = std::min(faces.size(), static_cast<std::size_t>(kSideFaces));
+    for (std::size_t i = 0; i < count; ++i) {
+      looked_at.push_back(faces[i * faces.size() / count]);
+      looked_piece.push_back(static_cast<std::uint32_t>(p));
+    }
+  }
+  // The back hemisphere's half of a Fibonacci set and its mirror image across the face frame's
+  // (tangent, normal) plane: a mirrored mesh, whose frames are mirrored, then traces the mirrored rays.
+  std::vector<glm::dvec3> directions;
+  for (const glm::dvec3& d : spherical_fibonacci(kSideRays)) {
+    if (d.z >= 0.0) continue;
+    directions.push_back(d);
+    directions.emplace_back(d.x, -d.y, d.z);
+  }
 
-  const std::vector<glm::dvec3> directions = spherical_fibonacci(2 * kSideRays);  // half of them behind
-
-  const ParallelOutcome outcome = parallel_for(looked_at.size(), 256, [&](std::size_t begin, std::size_t end) {
+  std::vector<std::uint32_t> free_rays(looked_at.size(), 0);  // per sampled face: not met from behind
+  const ParallelOutcome outcome = parallel_for(looked_at.size(), 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = looked_at[i];
       const glm::dvec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
@@ -147,22 +174,35 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
       const glm::dvec3 n = glm::normalize(area_normals[t]);
       const double eta = std::max(kOriginOffset * shortest, kOriginFloat * largest_coordinate(centroid));
       const glm::dvec3 behind = centroid - eta * n;
+      // The rays in the face's own frame, from its first point (the lowest welded index): turning
+      // or mirroring the mesh turns them with it, so it does not change the answer.
+      const Triangle& w = welded[t];
+      const int corner = static_cast<int>(std::min_element(w.begin(), w.end()) - w.begin());
+      const glm::dvec3 tangent = glm::normalize(points[triangles[t][corner]] - centroid);
+      const glm::dvec3 bitangent = glm::cross(n, tangent);
       const std::vector<unsigned> own{in_scene[t].primitive};
-      bool hidden = true;
-      for (const glm::dvec3& d : directions) {
-        if (glm::dot(d, n) >= 0.0) continue;  // the back's hemisphere only
+      for (const glm::dvec3& local : directions) {
+        const glm::dvec3 d = local.x * tangent + local.y * bitangent + local.z * n;
         if (scene.first_hit(behind, d, reach, in_scene[t].geometry, own).side != EmbreeScene::Side::kBack) {
-          hidden = false;
-          break;
+          ++free_rays[i];
         }
       }
-      if (!hidden) sides[t] = FaceSides::kBoth;
     }
   }, parallel);
   if (!outcome.completed) {
     throw BakeCancelled("cancelled while looking at the faces' backs (" + std::to_string(outcome.done) + " of " +
                         std::to_string(looked_at.size()) + " faces)");
   }
+  std::vector<double> free_share(open_faces.size(), 0.0), sampled(open_faces.size(), 0.0);
+  for (std::size_t i = 0; i < looked_at.size(); ++i) {
+    free_share[looked_piece[i]] += free_rays[i];
+    sampled[looked_piece[i]] += static_cast<double>(directions.size());
+  }
+  for (std::size_t p = 0; p < open_faces.size(); ++p) {
+    const bool seen = sampled[p] > 0.0 && free_share[p] >= kSeenShare * sampled[p];
+    for (std::uint32_t t : open_faces[p]) sides[t] = seen ? FaceSides::kBoth : FaceSides::kFront;
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) sides[t] = sides[first[t]];
   return sides;
 }
 

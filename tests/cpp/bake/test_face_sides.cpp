@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace sd {
@@ -52,6 +53,38 @@ TEST(FaceSidesClosed, OnlyTheFacesWoundInwardAreFlipped) {
   for (std::size_t t = 0; t < sides.size(); ++t) {
     EXPECT_EQ(sides[t], t % 2 == 0 ? FaceSides::kFlipped : FaceSides::kFront) << "triangle " << t;
   }
+}
+
+TEST(FaceSidesClosed, AFaceGivenTwiceIsOneFace) {
+  // A closed solid with some of its faces repeated (as the add-on joins sampled faces with the
+  // whole mesh): still closed, nothing looked at by rays.
+  Mesh sphere = test::icosphere(2);
+  const std::size_t count = sphere.triangles.size();
+  for (std::size_t t = 0; t < count; t += 3) sphere.triangles.push_back(sphere.triangles[t]);
+  EXPECT_EQ(face_sides(sphere.vertices, sphere.triangles), all(sphere.triangles.size(), FaceSides::kFront));
+}
+
+TEST(FaceSidesOpen, AHollowOpenAtASmallHoleKeepsItsFronts) {
+  // A ball with one face missing (a head open at its eyes): its inside is seen through the hole
+  // by few of its rays, and nothing gets a reverse copy - nor in a turned and mirrored copy.
+  Mesh ball = test::icosphere(2);
+  ball.triangles.pop_back();
+  EXPECT_EQ(face_sides(ball.vertices, ball.triangles), all(ball.triangles.size(), FaceSides::kFront));
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  for (glm::dvec3& p : ball.vertices) p = glm::dvec3(-(c * p.x - s * p.y), s * p.x + c * p.y, p.z);
+  for (Triangle& t : ball.triangles) std::swap(t[1], t[2]);
+  EXPECT_EQ(face_sides(ball.vertices, ball.triangles), all(ball.triangles.size(), FaceSides::kFront));
+}
+
+TEST(FaceSidesOpen, AHollowOpenWideIsSeenInside) {
+  // The ball without its top (a bowl): every face of it, also those deep inside, gets a reverse copy.
+  Mesh bowl = test::icosphere(2);
+  std::vector<Triangle> kept;
+  for (const Triangle& t : bowl.triangles) {
+    if (bowl.vertices[t[0]].z + bowl.vertices[t[1]].z + bowl.vertices[t[2]].z < 1.5) kept.push_back(t);
+  }
+  bowl.triangles = kept;
+  EXPECT_EQ(face_sides(bowl.vertices, bowl.triangles), all(bowl.triangles.size(), FaceSides::kBoth));
 }
 
 TEST(FaceSidesOpen, APlaneIsSeenFromBothSides) {

@@ -2,6 +2,7 @@
 #include "array_checks.h"
 #include "bindings.h"
 #include "mesh_arrays.h"
+#include "progress.h"
 #include "sdlighting/environment.h"
 #include "sdlighting/reference.h"
 #include "sdlighting/shading.h"
@@ -26,7 +27,7 @@ py::tuple reference(const sd::Environment& environment, const DoubleArray& verti
                     const py::object& triangles, const std::optional<DoubleArray>& views,
                     const std::optional<DoubleArray>& rotation, const std::string& lobe, double exponent, int samples,
                     std::uint64_t seed, const std::optional<DoubleArray>& occluder_vertices,
-                    const py::object& occluder_triangles, int threads) {
+                    const py::object& occluder_triangles, int threads, const py::object& progress) {
   const std::vector<glm::dvec3> points = read_points("vertices", vertices);
   const std::vector<glm::dvec3> normal_rows = read_points("normals", normals);
   const sd::Material material = sd::Material::from_name(lobe, exponent);
@@ -43,6 +44,8 @@ py::tuple reference(const sd::Environment& environment, const DoubleArray& verti
   options.samples = samples;
   options.seed = seed;
   options.threads = threads;
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) value_error("progress must be callable or None");
+  options.progress = progress_function(&progress);
   sd::ReferenceResult result;
   {
     py::gil_scoped_release release;
@@ -62,7 +65,7 @@ void bind_reference(py::module_& m) {
         py::arg("triangles"), py::arg("views") = py::none(), py::arg("rotation") = py::none(),
         py::arg("lobe") = "lambert", py::arg("exponent") = 1.0, py::arg("samples") = 4096, py::arg("seed") = 0,
         py::arg("occluder_vertices") = py::none(), py::arg("occluder_triangles") = py::none(),
-        py::arg("threads") = 0,
+        py::arg("threads") = 0, py::arg("progress") = py::none(),
         R"doc(The reference: eq. (1) by Monte Carlo with the full-resolution environment, ray-traced V and the
 exact lobe — what every method is measured against.
 
@@ -72,7 +75,8 @@ views (N, 3): unit vectors to the eye (phong only); rotation g (3, 3) as in shad
 samples: sample pairs per vertex, one from the environment (∝ luminance) and one from the lobe,
 combined by the balance heuristic; seed makes it deterministic (independent of threads).
 Returns (radiance, standard_error), both (N, 3): the estimate and its Monte Carlo standard
-error. Rays start at the bake's ray origins. Releases the GIL.)doc");
+error. Rays start at the bake's ray origins. progress(done, total) over the vertices, as bake_transfer's
+(False cancels: BakeCancelled). Releases the GIL.)doc");
 }
 
 }  // namespace sdpy

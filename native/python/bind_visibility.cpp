@@ -8,6 +8,7 @@
 // the GIL; the progress callback is called with the GIL re-acquired, from the calling thread only.
 #include "array_checks.h"
 #include "mesh_arrays.h"
+#include "progress.h"
 #include "bindings.h"
 #include "sdlighting/face_sides.h"
 #include "sdlighting/spherical_harmonics.h"
@@ -40,22 +41,6 @@ py::array adopt(std::vector<T>&& values, std::vector<py::ssize_t> shape, const p
   auto* heap = new std::vector<T>(std::move(values));
   py::capsule owner(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
   return py::array(dtype, std::move(shape), {}, heap->data(), owner);
-}
-
-// The progress callback seen by the library: calls `progress` (when not None) with the GIL held (None
-// or any true value continues, a false value cancels) and checks for signals (Ctrl-C cancels the bake with KeyboardInterrupt). A Python exception propagates
-// as py::error_already_set, which cancels the bake and is re-raised.
-std::function<bool(size_t, size_t)> progress_function(const py::object* progress) {
-  return [progress](size_t done, size_t total) -> bool {
-    py::gil_scoped_acquire gil;
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    if (progress->is_none()) return true;
-    const py::object answer = (*progress)(done, total);
-    if (answer.is_none()) return true;
-    const int truth = PyObject_IsTrue(answer.ptr());
-    if (truth < 0) throw py::error_already_set();
-    return truth != 0;
-  };
 }
 
 // An (s, s') pair of orders: None leaves both -1 (not requested); a pair must hold two valid orders.
@@ -122,6 +107,7 @@ py::dict bake_dict(sd::TransferBake&& bake, bool return_rays) {
   out["seed"] = bake.seed;
   out["ray_origins"] = points_array(bake.ray_origins);
   out["seconds"] = bake.seconds;
+  out["setup_seconds"] = bake.setup_seconds;
   return out;
 }
 
@@ -307,7 +293,7 @@ are design_nodes[design_offsets[i]:design_offsets[i+1]]), "design_nodes" (total,
 "design_weights" (total,), "design_residuals" (N,) (certified moment residual / mass, 0 for an empty
 design), "design_degree" (int); each only when requested; plus "rays", "seed", "ray_origins"
 (N, 3) (where each vertex's rays start: about 1e-3 of the shortest edge around it away from p) and
-"seconds" (wall time), "fallback_normals" int64 (K,) (the vertices baked with a fallback normal) and
+"seconds" (wall time), "setup_seconds" (of it, the part before the rays: scene and origins), "fallback_normals" int64 (K,) (the vertices baked with a fallback normal) and
 "normals" (N, 3) (the unit normals the vertices were baked with, fallbacks included).
 Raises ValueError on bad input (and, before allocating, when the bake would need more than
 MAX_CALL_BYTES), BakeCancelled when

@@ -35,13 +35,13 @@ def test_sample_mesh_keeps_its_triangles():
     assert len(bake_time.sample_mesh(vertices, normals, triangles[:5], 16)[2]) == 5
 
 
-def test_extrapolation_separates_setup_from_vertices():
-    rounds = [(6, 0.5 + 6 * 0.01), (48, 0.5 + 48 * 0.01)]
+def test_extrapolation_adds_the_vertices_to_the_setup():
+    # rounds (vertices, the bake's setup seconds, its seconds): the largest one's time per vertex
+    rounds = [(6, 0.5, 0.5 + 6 * 0.02), (48, 0.5, 0.5 + 48 * 0.01)]
     assert bake_time.extrapolate(rounds, 10000) == pytest.approx(0.5 + 100.0)
-    # one round, or a noisy pair whose setup comes out negative: through the origin
-    assert bake_time.extrapolate([(10, 2.0)], 1000) == pytest.approx(200.0)
-    assert bake_time.extrapolate([(10, 2.0), (40, 3.0)], 400) == pytest.approx(2.0 - 10 / 30 + 400 / 30)
-    assert bake_time.extrapolate([(10, 1.0), (40, 8.0)], 400) == pytest.approx(400 * 8.0 / 40)
+    # a setup of seconds against a large mesh does not count as vertices' time
+    assert bake_time.extrapolate([(6, 5.0, 5.06)], 2_000_000) == pytest.approx(5.0 + 0.01 * 2_000_000)
+    assert bake_time.extrapolate([(10, 1.0, 0.9)], 1000) == pytest.approx(1.0)
 
 
 def test_lower_bound_counts_the_vertices_in_flight():
@@ -71,13 +71,15 @@ class FakeNative:
 
     def bake_transfer(self, vertices, normals, triangles, progress=None, **kwargs):
         self.calls.append((len(vertices), kwargs))
-        self.gate.wait(30)
+        start = time.perf_counter()
         time.sleep(self.SETUP)
+        setup = time.perf_counter() - start
         for done in range(len(vertices)):
             time.sleep(self.PER_VERTEX)
             if progress is not None and not progress(done + 1, len(vertices)):
                 raise RuntimeError("cancelled")
-        return {}
+            self.gate.wait(30)   # closed: the rays stall after their first vertex
+        return {"setup_seconds": setup, "seconds": time.perf_counter() - start}
 
 
 def test_predictor_recovers_setup_and_per_vertex_time():
@@ -90,7 +92,9 @@ def test_predictor_recovers_setup_and_per_vertex_time():
     expected = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices)
     assert predicted.final and not predicted.lower_bound
     assert predicted.seconds == pytest.approx(expected, rel=0.3)
-    assert [kwargs for _, kwargs in sd.calls] == [{"rays": 64}] * len(bake_time.ROUNDS)
+    # a first round, then the largest one within the budget
+    assert [kwargs for _, kwargs in sd.calls] == [{"rays": 64}] * 2
+    assert [count for count, _ in sd.calls][1] > [count for count, _ in sd.calls][0]
 
 
 def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
@@ -103,7 +107,8 @@ def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
     time.sleep(0.3)
     bound = predictor.prediction()
     assert bound.lower_bound and not bound.final
-    assert bound.seconds >= 0.25 * len(vertices)   # 0.3 s and nothing done: over 0.3 s per vertex
+    # about 0.25 s since the first vertex, the second not done: over 0.25 s for each two vertices
+    assert bound.seconds >= 0.2 * len(vertices) / 2
     sd.gate.set()
     assert predictor.join(30)
     total = predictor.prediction()
@@ -167,7 +172,7 @@ def test_what_follows_the_rays_is_added_once_from_a_sample_result():
     for predictor in (plain, fitted):
         predictor.start()
         assert predictor.join(30)
-    assert seen == [{}]   # FakeNative's bake result
+    assert len(seen) == 1 and set(seen[0]) == {"setup_seconds", "seconds"}   # FakeNative's bake result
     assert fitted.prediction().seconds == pytest.approx(plain.prediction().seconds + 100.0, rel=0.2)
 
 
@@ -179,4 +184,17 @@ def test_extra_points_are_predicted_at_the_vertices_cost():
     for predictor in (plain, texels):
         predictor.start()
         assert predictor.join(30)
-    assert texels.prediction().seconds == pytest.approx(3.0 * plain.prediction().seconds, rel=0.2)
+    setup = FakeNative.SETUP
+    assert texels.prediction().seconds - setup == pytest.approx(3.0 * (plain.prediction().seconds - setup), rel=0.2)
+
+
+def test_a_refinement_adds_its_points_at_their_cost():
+    vertices, normals, triangles = grid(30)
+    plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
+    refined = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {},
+                                                         refinement=lambda: (400, 0.5))], threads=1)
+    for predictor in (plain, refined):
+        predictor.start()
+        assert predictor.join(30)
+    added = refined.prediction().seconds - plain.prediction().seconds
+    assert added == pytest.approx(FakeNative.SETUP + 0.5 * 400 * FakeNative.PER_VERTEX, rel=0.3)

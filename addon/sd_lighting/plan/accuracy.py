@@ -30,7 +30,6 @@ from . import bake_time
 
 SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
 REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
-REFERENCE_TRIANGLES = 16     # sampled triangles per reference call (cancel granularity)
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
 
 
@@ -123,7 +122,7 @@ class ErrorTable:
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
         measured = [method_table.get(m) for m in sorted({method_table.get(m).measured_as for m in self.methods})]
-        bakes = [self._bake(measured, seed + k, stop) for k in (0, 1)]
+        bakes = self._bakes(measured, seed, stop)
         # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
         # T_00 of the same rays with nothing in their way (the vertices as probes).
         free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
@@ -141,38 +140,42 @@ class ErrorTable:
                     self.measured[(method.id, s, sv)] = Measured(
                         float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays)
     def _reference(self, environment, seed, stop):
-        """sdnative.reference on the sample, a few triangles at a time so that a cancel (stop)
-        takes effect within about a second."""
+        """sdnative.reference on the sample (one scene: against a large mesh its build is most of
+        the time), cancelled within a few vertices by stop."""
         sample = self._sample
-        radiance, error = np.zeros((len(sample.vertices), 3)), np.zeros((len(sample.vertices), 3))
-        for first in range(0, len(sample.triangles), REFERENCE_TRIANGLES):
-            if stop is not None and stop():
-                raise InterruptedError("cancelled")
-            used, local = np.unique(sample.triangles[first:first + REFERENCE_TRIANGLES],
-                                    return_inverse=True)
-            # a vertex shared with an earlier group is computed again, to the same values
+        progress = None if stop is None else (lambda done, total: not stop())
+        try:
             parts = [(weight, self._sd.reference(
-                environment, sample.vertices[used], sample.normals[used],
-                local.reshape(-1, 3).astype(np.int32), views=self._lobe_views(lobe, used),
+                environment, sample.vertices, sample.normals, sample.triangles, views=self._lobe_views(lobe),
                 rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
-                seed=seed, **sample.occluders)) for lobe, exponent, weight in self._lobes]
-            radiance[used] = sum(weight * np.asarray(value) for weight, (value, _) in parts)
-            error[used] = np.sqrt(sum((weight * np.asarray(e)) ** 2 for weight, (_, e) in parts))
+                seed=seed, progress=progress, **sample.occluders)) for lobe, exponent, weight in self._lobes]
+        except self._sd.BakeCancelled as exc:
+            raise InterruptedError("cancelled") from exc
+        radiance = sum(weight * np.asarray(value) for weight, (value, _) in parts)
+        error = np.sqrt(sum((weight * np.asarray(e)) ** 2 for weight, (_, e) in parts))
         return radiance, error
 
-    def _lobe_views(self, lobe, used=slice(None)):
+    def _lobe_views(self, lobe):
         """The sampled views a lobe reads (Lambert: none)."""
-        return self._views[used] if lobe != "lambert" else None
+        return self._views if lobe != "lambert" else None
 
-    def _bake(self, methods, seed, stop):
+    def _bakes(self, methods, seed, stop):
+        """Two independent bakes of the sample (their difference is the rays' noise), as one call:
+        the sample twice over, each vertex's copy with rays of its own rotation (one scene: against
+        a large mesh its build is most of the time)."""
         arguments = {}
         for method in methods:
             arguments.update(method.bake_arguments(self.max_order, MAX_VISIBILITY_ORDER))
         arguments.setdefault("transfer_order", 0)     # for lit_fraction
         progress = None if stop is None else (lambda done, total: not stop())
-        return dict(self._sd.bake_transfer(self._sample.vertices, self._sample.normals,
-                                           self._sample.triangles, rays=self.rays, seed=seed,
-                                           progress=progress, **arguments, **self._sample.occluders))
+        sample, count = self._sample, len(self._sample.vertices)
+        twice = dict(self._sd.bake_transfer(
+            np.concatenate([sample.vertices] * 2), np.concatenate([sample.normals] * 2),
+            np.concatenate([sample.triangles, sample.triangles + count]), rays=self.rays, seed=seed,
+            progress=progress, **arguments, **sample.occluders))
+        return [{key: value[half * count:(half + 1) * count]
+                 for key, value in twice.items() if isinstance(value, np.ndarray) and len(value) == 2 * count}
+                for half in (0, 1)]
 
     def _shade(self, method, s, sv, bake):
         data = {}

@@ -1,14 +1,19 @@
 """The predicted time of a bake, from timed bakes of a few sampled triangles (issue: orders that
 cannot be baked in reasonable time are not offered blindly).
 
-A bake costs a setup (the Embree scene of the mesh and its occluders) plus a time per vertex that
-depends on the method and orders - MSD (13) builds a design per vertex, milliseconds at degree 6,
-tens of seconds at 18 - and on how much of the sky the vertex sees. The sample: a few triangles
-drawn at random (seeded) with their own vertices, baked by sdnative.bake_transfer with the bake's
-own options against the whole mesh and its occluders, so a sampled vertex sees what it sees in
-the bake, on as many threads. Rounds of increasing size separate the setup from the per-vertex
-time; a round is skipped when the previous one predicts it would take over SAMPLE_BUDGET. While a
-round runs, its progress gives a lower bound, so a bake that takes hours says so within a second.
+A bake costs a setup (the Embree scene of the mesh and its occluders, which faces bound a solid)
+plus a time per vertex that depends on the method and orders - MSD (13) builds a design per
+vertex, milliseconds at degree 6, tens of seconds at 18 - and on how much of the sky the vertex
+sees. The sample: a few triangles drawn at random (seeded) with their own vertices, baked by
+sdnative.bake_transfer with the bake's own options against the whole mesh and its occluders, so a
+sampled vertex sees what it sees in the bake and the setup is the bake's own, on as many threads.
+The bake reports its setup (`setup_seconds`); the rest of a round's time is its vertices'. A
+first small round measures both; then the largest round that the first predicts within
+SAMPLE_BUDGET measures the vertices' time (each round builds the scene again, seconds for a mesh
+of millions of triangles). A refinement before the bake (bake/refine.py) is predicted as its
+first level: every vertex and an edge midpoint for each (about three per vertex), at its rays.
+While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
+so within a second of them.
 
 Nothing here needs Blender; the sdnative module is passed in.
 """
@@ -22,7 +27,7 @@ import numpy as np
 from ..background import Worker
 
 CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
-ROUNDS = (2, 16)             # triangles per sample round (about 3 vertices each)
+ROUNDS = (2, 16, 128)        # triangles per sample round (about 3 vertices each): the first, then one more
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
 
 
@@ -38,23 +43,14 @@ def sample_mesh(vertices, normals, triangles, count, seed=0):
 
 
 def extrapolate(rounds, vertex_count):
-    """Seconds for `vertex_count` vertices from timed rounds [(vertices, seconds)]: the line through
-    the two largest rounds (setup + time per vertex), or through the origin from the largest when
-    there is one round or the line's setup comes out negative (noise)."""
-    rounds = sorted(rounds)
-    n2, t2 = rounds[-1]
-    if len(rounds) > 1:
-        n1, t1 = rounds[-2]
-        if n2 > n1:
-            per_vertex = (t2 - t1) / (n2 - n1)
-            setup = t1 - per_vertex * n1
-            if per_vertex > 0.0 and setup >= 0.0:
-                return setup + per_vertex * vertex_count
-    return t2 * vertex_count / n2
+    """Seconds for `vertex_count` vertices from timed rounds [(vertices, setup seconds, seconds)]:
+    the setup of the largest round plus its time per vertex (the rest of its seconds)."""
+    n, setup, seconds = max(rounds)
+    return setup + max(seconds - setup, 0.0) * vertex_count / n
 
 
 def lower_bound(elapsed, done, threads, vertex_count):
-    """Seconds that `vertex_count` vertices take at least, from a round that ran `elapsed` seconds
+    """Seconds that `vertex_count` vertices take at least, from rays that ran `elapsed` seconds
     and finished `done` vertices on `threads` threads: the threads' time went into those vertices
     and at most one more each."""
     return elapsed * vertex_count / (done + threads)
@@ -96,12 +92,15 @@ class SampleJob:
     a function of (sdnative, a sample bake's result) returning the seconds the bake spends after
     its rays (the least-squares fit), called in the worker; `extra_points`: points baked beside
     the mesh's vertices at the same cost per point (texels), a count or a function returning one,
-    called in the worker after the keywords."""
+    called in the worker after the keywords; `refinement`: None, or a function returning None or
+    (points, the cost of one against one of the bake's) of a refinement before the bake, called
+    in the worker after the keywords."""
     mesh: object
     bake_arguments: object
     task: object = None
     after_rays: object = None
     extra_points: object = 0
+    refinement: object = None
 
     def points(self):
         return int(self.extra_points() if callable(self.extra_points) else self.extra_points)
@@ -125,7 +124,7 @@ class BakeTimePredictor(Worker):
         self._threads = max(int(threads), 1)
         self._lock = threading.Lock()
         self._estimates = [None] * len(jobs)   # per job: seconds from its finished rounds
-        self._running = None                   # (job index, vertices, round start, done, round vertices)
+        self._running = None                   # (job index, vertices, rays' start or None, done, round vertices)
         self.finished = False
         self.error = None
 
@@ -140,7 +139,7 @@ class BakeTimePredictor(Worker):
             estimates = list(self._estimates)
             running = self._running
         total = sum(e for e in estimates if e is not None)
-        bound = running is not None and estimates[running[0]] is None
+        bound = running is not None and estimates[running[0]] is None and running[2] is not None
         if bound:
             _, count, start, done, _ = running
             total += lower_bound(time.perf_counter() - start, done, self._threads, count)
@@ -169,26 +168,38 @@ class BakeTimePredictor(Worker):
         mesh = job.traced_mesh()
         count = len(mesh[0]) + job.points()
         rounds = []
-        for triangles in ROUNDS:
-            vertices, normals, sample_triangles = sample_mesh(*mesh, triangles, seed=index)
-            if rounds and extrapolate(rounds, len(vertices)) > SAMPLE_BUDGET:
-                break
+        sizes = list(ROUNDS[:1])
+        while sizes:
+            vertices, normals, sample_triangles = sample_mesh(*mesh, sizes.pop(), seed=index)
             start = time.perf_counter()
             with self._lock:
-                self._running = (index, count, start, 0, len(vertices))
+                self._running = (index, count, None, 0, len(vertices))
 
-            def progress(done, total, start=start):
+            def progress(done, total):
+                # the rays' start: the first vertex done (before it, the setup: no bound yet)
                 with self._lock:
-                    self._running = (index, count, start, done, total)
+                    rays = self._running[2]
+                    if rays is None and done > 0:
+                        rays = time.perf_counter()
+                    self._running = (index, count, rays, done if rays is not None else 0, total)
                 return not self.cancel_requested
 
             result = self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,
                                             **arguments)
-            rounds.append((len(vertices), time.perf_counter() - start))
+            elapsed = time.perf_counter() - start
+            # the call's own setup, and the arrays' way into it (the occluders: seconds for millions)
+            setup = float(result["setup_seconds"]) + max(elapsed - float(result["seconds"]), 0.0)
+            rounds.append((len(vertices), setup, elapsed))
             with self._lock:
                 self._estimates[index] = extrapolate(rounds, count)
-            if len(vertices) == len(mesh[0]):   # the whole mesh sampled
-                break
+            if len(rounds) == 1 and len(vertices) < len(mesh[0]):   # the mesh not all sampled yet
+                sizes = [size for size in ROUNDS[1:] if extrapolate(rounds, 3 * size) <= SAMPLE_BUDGET][-1:]
+        refinement = job.refinement() if job.refinement is not None else None
+        if refinement is not None:   # (points, their cost against the bake's per point)
+            points, share = refinement
+            with self._lock:
+                self._estimates[index] += extrapolate(rounds, 0) + share * (
+                    extrapolate(rounds, points) - extrapolate(rounds, 0))
         if job.after_rays is not None:
             after = job.after_rays(self._sd, result)
             with self._lock:

@@ -10,7 +10,7 @@ import os
 import time
 
 from .. import native, redraw
-from ..bake import geometry as geometry_module, least_squares, lightmap, prepare
+from ..bake import geometry as geometry_module, least_squares, lightmap, prepare, refine
 from ..errors import BakeError
 from ..plan import bake_time
 from ..store.record import BakeRecord
@@ -65,9 +65,19 @@ def sample_jobs(tasks):
             return 0.0
         return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
 
+    def refinement(task):
+        """The refinement's first level (bake/refine.py): every vertex and a midpoint of each edge
+        (about three per vertex), at its rays (at most the bake's)."""
+        settings = task.settings
+        if not settings.get("refine") or task.lightmap_size:
+            return None
+        rays = int(settings["rays"])
+        return 4 * len(task.geometry.vertices), min(rays, refine.CRITERION_RAYS) / rays
+
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
                                 lambda sd, result, task=task: fit_seconds(task, sd, result),
-                                lambda task=task: lightmap.expected_texels(task.lightmap_size))
+                                lambda task=task: lightmap.expected_texels(task.lightmap_size),
+                                lambda task=task: refinement(task))
             for task in tasks]
 
 

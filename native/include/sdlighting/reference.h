@@ -9,7 +9,10 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include <atomic>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace sd {
@@ -19,6 +22,10 @@ struct ReferenceOptions {
   int samples = 4096;       ///< sample pairs per vertex (each pair traces up to two rays)
   std::uint64_t seed = 0;   ///< the estimate depends on (seed, vertex) only, not on threads
   int threads = 0;          ///< 0: every hardware thread
+  /// As TransferOptions::progress, over the vertices (the calling thread then only reports);
+  /// returning false cancels (BakeCancelled).
+  std::function<bool(std::size_t done, std::size_t total)> progress;
+  const std::atomic<bool>* cancel = nullptr;  ///< true cancels (BakeCancelled)
 };
 
 /// B per vertex and the Monte Carlo standard error of each value (both vertex_count × 3).

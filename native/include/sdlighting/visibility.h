@@ -102,6 +102,10 @@ struct TransferBake {
   std::uint64_t seed = 0;
   std::vector<glm::dvec3> ray_origins;  ///< [N] where each vertex's rays start, object space
   double seconds = 0.0;  ///< wall time of the whole bake (scene build included)
+  /// Of `seconds`, the part before the rays: the checks, the Embree scene of the object and its
+  /// occluders, which faces bound a solid, the ray origins. A bake of a few vertices against a
+  /// large mesh spends nearly all its time here (the add-on's bake-time prediction).
+  double setup_seconds = 0.0;
 
   std::vector<double> ambient_occlusion;  ///< [N]
 

@@ -324,6 +324,7 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, n); };
   const TracedScene traced(vertices, units, triangles, occluders, parallel, options.offset_origins);
   bake.ray_origins = traced.object_space_origins();
+  bake.setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // ---- the workers; with a progress callback the calling thread only reports ----
   parallel.progress = options.progress;

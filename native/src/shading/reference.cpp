@@ -44,7 +44,11 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
     }
   }
 
-  const TracedScene traced(vertices, unit, triangles, occluders, ParallelOptions(options.threads));  // the bake's origins
+  ParallelOptions parallel(options.threads);
+  parallel.cancel = options.cancel;
+  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, vertices.size()); };
+  const TracedScene traced(vertices, unit, triangles, occluders, parallel);  // the bake's origins
+  parallel.progress = options.progress;
   const EnvironmentSampler sampler(environment);
   // The integrand reads L at g x (rotated_sh, sh_rotation.h, states the convention); a direction y
   // drawn from the map is therefore the object-space direction x = gᵀ y.
@@ -54,7 +58,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
   result.samples = options.samples;
   result.radiance.assign(3 * vertices.size(), 0.0);
   result.standard_error.assign(3 * vertices.size(), 0.0);
-  parallel_for(vertices.size(), 4, [&](size_t begin, size_t end) {
+  const ParallelOutcome outcome = parallel_for(vertices.size(), 4, [&](size_t begin, size_t end) {
     for (size_t p = begin; p < end; ++p) {
       std::mt19937_64 rng(options.seed * 0x9e3779b97f4a7c15ULL + p);
       std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -94,7 +98,11 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
         result.standard_error[3 * p + c] = std::sqrt(variance[c]);
       }
     }
-  }, ParallelOptions(options.threads));
+  }, parallel);
+  if (!outcome.completed) {
+    throw BakeCancelled("reference cancelled after " + std::to_string(outcome.done) + " of " +
+                        std::to_string(vertices.size()) + " vertices");
+  }
   return result;
 }
 

@@ -81,6 +81,7 @@ TESTS = [
     ("test_world_render", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_instances", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_two_sided", BACKGROUND, 300, [], [], (3, 4, 0)),
+    ("test_large_bakes", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_viewport", WINDOW, 600, ["--enable-event-simulate"], [], (3, 4, 0)),
     # the accuracy-cost report's quick variant and its invariants (issue 11)
     ("accuracy_report", BACKGROUND, 600, [], ["--quick"], (3, 4, 0)),

@@ -6,8 +6,19 @@ import time
 from .. import native
 from ..background import Worker
 from ..errors import BakeError
+from ..plan import cost
 from ..store import baked
-from .task import share
+from .task import SharedChoices, share
+
+
+CHOICE_SHARE = 0.1   # of an automatic task's progress: the choice's measurement
+
+
+def memory_refusal(name, needed, free):
+    """The message of a bake refused for its memory."""
+    return ("%s: the bake needs about %s of memory and %s are free: bake fewer or smaller objects, with "
+            "a lower vertex budget, order or without Least Squares (from a script: go_ahead=True bakes "
+            "anyway)" % (name, cost.memory_text(needed), cost.memory_text(free)))
 
 
 class BakeJob(Worker):
@@ -16,9 +27,10 @@ class BakeJob(Worker):
 
     thread_name = "sd_lighting bake"
 
-    def __init__(self, tasks, warnings=()):
+    def __init__(self, tasks, warnings=(), go_ahead=False):
         super().__init__()
         self.tasks = tasks
+        self.go_ahead = go_ahead      # bake even where the memory predicted is over the free memory
         self.warnings = list(warnings)   # for the user, with the result (prepare's, run's)
         self.current = 0              # index of the task being baked
         self.fraction = 0.0           # overall progress in [0, 1]
@@ -46,6 +58,7 @@ class BakeJob(Worker):
         try:
             sd = native.get()
             count = len(self.tasks)
+            choices = SharedChoices()
             for index, task in enumerate(self.tasks):
                 self.current = index
                 if self.cancel_requested:
@@ -55,17 +68,22 @@ class BakeJob(Worker):
                     self.fraction = (index + (done / total if total else 1.0)) / count
                     return not self.cancel_requested
 
+                self.check_memory(task)
+                # The automatic choice takes the first CHOICE_SHARE of the task's bar, when it runs;
+                # the refinement the rest of the first half, when it runs.
+                chosen = CHOICE_SHARE if task.automatic else 0.0
                 if task.automatic:
                     self.choosing = True
-                    task.choose(lambda: self.cancel_requested)
+                    choices.choose(task, lambda: self.cancel_requested,
+                                   lambda fraction, progress=task_progress: progress(chosen * fraction, 1.0))
                     self.choosing = False
-                # Refinement takes the first half of the task's bar, when it runs.
-                halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else 0.0
+                halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else chosen
                 t0 = time.perf_counter()
                 self.refining = True
-                task.refine(sd, share(task_progress, 0.0, halfway))
+                task.refine(sd, share(task_progress, chosen, halfway))
                 self.refining = False
                 task.refine_seconds = time.perf_counter() - t0
+                self.check_memory(task)   # now of the copy to bake, with its method
                 t0 = time.perf_counter()
                 result = task.bake(sd, share(task_progress, halfway, 1.0))
                 result["seconds"] = time.perf_counter() - t0   # the least-squares fit included
@@ -85,10 +103,18 @@ class BakeJob(Worker):
             elif self.cancel_requested:
                 self.cancelled = True
             else:
-                self.error = "%s: %s" % (type(exc).__name__, exc)
+                self.error = str(exc) if isinstance(exc, BakeError) else "%s: %s" % (type(exc).__name__, exc)
         finally:
             self.seconds = time.perf_counter() - start
             self.finished = True
+
+    def check_memory(self, task):
+        """Raises BakeError when the task's bake is predicted to need more memory than is free
+        (unless go_ahead)."""
+        free = cost.available_bytes()
+        needed = task.predicted_bytes()
+        if not self.go_ahead and free is not None and needed > free:
+            raise BakeError(memory_refusal(task.object_name, needed, free))
 
     # -- step 3
     def apply(self):

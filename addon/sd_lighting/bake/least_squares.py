@@ -27,6 +27,10 @@ import time
 import numpy as np
 
 SMOOTHNESS = 0.01
+# Above this many vertices the fit is skipped: such a mesh is dense against the shading's signal,
+# where the fit gains least, and its factorization takes minutes and gigabytes (a 2M-vertex
+# Suzanne: over 7 minutes and 17 GB before it was stopped).
+MAX_VERTICES = 300_000
 FITTED = ("ambient_occlusion", "visibility", "transfer", "product_matrices")
 CENTROID_WEIGHT = 0.75      # of a triangle's area, at its centroid (the rule above)
 CORNER_WEIGHT = 1.0 / 12.0  # at each of its corners

@@ -146,6 +146,16 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         return ((part.vertices, part.triangles) for part in parts
                 if part.instance or part.name != obj.name_full)
 
+    boxes = [(part, part.vertices.min(axis=0), part.vertices.max(axis=0)) for part in parts if len(part.vertices)]
+
+    def surrounded(obj, world_positions):
+        """Whether another object's box comes within the object's size of its box: the
+        surroundings can shadow it (a lone object high above everything: no)."""
+        lo, hi = world_positions.min(axis=0), world_positions.max(axis=0)
+        reach = np.linalg.norm(hi - lo)
+        return any(np.all(b_lo <= hi + reach) and np.all(b_hi >= lo - reach)
+                   for part, b_lo, b_hi in boxes if part.instance or part.name != obj.name_full)
+
     tasks, skipped = [], []
     for obj in objects:
         reason = _refusal(obj)
@@ -169,7 +179,14 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         settings["shape"] = [float(x) for x in shape.ravel()]
         settings["placement"] = [float(x) for x in placement.ravel()]
         inputs = _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, depsgraph)
-        tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs))
+        share_key = None
+        if settings["method"] == analysis.AUTOMATIC:   # what the choice depends on (task.SharedChoices)
+            lobe = tuple(settings[k] for k in ("lobe", "exponent", "diffuse_lobe", "lobe_weights", "diffuse_share"))
+            share_key = (geometry.source, np.round(inputs.rotation, 6).tobytes(), np.round(shape, 6).tobytes(),
+                         lobe, tuple(sorted(inputs.fixed.items())),
+                         surrounded(obj, transforms.transform_points(placement, geometry.mesh_positions)),
+                         None if lobe[0] == "lambert" or inputs.eye is None else tuple(np.round(inputs.eye, 6)))
+        tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs, share_key))
         if unwrap:
             unwrap_lightmap(context, tasks[-1])
     if not tasks:

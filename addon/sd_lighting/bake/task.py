@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import methods
 from ..errors import BakeError
-from ..plan import analysis, automatic
+from ..plan import analysis, automatic, cost
 from ..scene import lobes
 from ..store.record import BakeRecord
 from . import geometry as geometry_module, least_squares, lightmap, refine
@@ -35,11 +35,35 @@ def share(progress, start, end):
 
 
 
-class BakeTask:
-    """One object to bake: inputs (arrays) and settings; the worker fills `result`."""
+class SharedChoices:
+    """The automatic choices made so far, by the tasks' share_key: identical meshes turned alike,
+    alike surrounded, with one material and the same overrides under the same light take the first
+    one's choice instead of measuring again - one choice, one setting (200 copies of a cube in a
+    grid got 20 settings from 20 noisy measurements)."""
 
-    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs):
+    def __init__(self):
+        self._leaders = {}
+
+    def choose(self, task, stop, progress=None):
+        """task.choose, or the choice of an earlier task with its share key."""
+        leader = self._leaders.get(task.share_key) if task.share_key is not None else None
+        if leader is None:
+            task.choose(stop, progress)
+            if task.share_key is not None:
+                self._leaders[task.share_key] = task
+            return
+        task.adopt(leader.settings, leader.predicted_error)
+        task.settings["automatic"] = "%s\nShared: measured on %s (the same mesh, turned alike, alike " \
+            "surrounded, under the same light)" % (leader.settings["automatic"], leader.object_name)
+
+
+class BakeTask:
+    """One object to bake: inputs (arrays) and settings; the worker fills `result`. share_key:
+    what an automatic choice depends on besides the surroundings' details (SharedChoices), or None."""
+
+    def __init__(self, obj_name, geometry, occluders, settings, analysis_inputs, share_key=None):
         self.object_name = obj_name
+        self.share_key = share_key
         self.geometry = geometry
         self.occluder_vertices, self.occluder_triangles = occluders
         self.settings = settings      # dict, becomes the `sd_bake` property
@@ -87,12 +111,14 @@ class BakeTask:
         """The occluders as a list of (vertices, triangles) for geometry.join: [] without any."""
         return [] if self.occluder_vertices is None else [(self.occluder_vertices, self.occluder_triangles)]
 
-    def choose(self, stop):
-        """The automatic mode (any thread): measures, chooses and puts the choice in settings."""
+    def choose(self, stop, progress=None):
+        """The automatic mode (any thread): measures, chooses and puts the choice in settings;
+        progress(fraction) as the measurement goes."""
         choice = analysis.choose(self.analysis, self.geometry, self.occluders(),
                                  lobes.Lobes.of_bake(self.settings), stop,
                                  fitted=bool(self.settings.get("least_squares")),
-                                 texels=lightmap.expected_texels(int(self.settings.get("lightmap", 0))))
+                                 texels=lightmap.expected_texels(int(self.settings.get("lightmap", 0))),
+                                 progress=progress)
         per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
             per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
@@ -126,12 +152,18 @@ class BakeTask:
         return self.lightmap_size > 0 and self.geometry.lightmap_uvs is not None
 
     @property
+    def _vertex_count(self):
+        """The copy's vertices once refined, else the evaluated mesh's (without computing the split)."""
+        return len(self.baked.vertices) if self.baked is not None else len(self.geometry.mesh_positions)
+
+    @property
     def fits_least_squares(self):
         """Whether the bake fits its data by least squares: Least Squares on, and a method it fits
         (once an automatic task has chosen one); not with texture-space data, which the shading
-        reads instead of the vertices'."""
+        reads instead of the vertices', nor over least_squares.MAX_VERTICES vertices."""
         return (bool(self.settings.get("least_squares")) and not self.lightmap_size
-                and least_squares.applies(methods.get(self.settings["method"])))
+                and least_squares.applies(methods.get(self.settings["method"]))
+                and self._vertex_count <= least_squares.MAX_VERTICES)
 
     def bake(self, sd, progress):
         """sdnative.bake_transfer of the baked copy (any thread), least-squares fitted when the
@@ -146,7 +178,11 @@ class BakeTask:
             result["lightmap"] = self.bake_lightmap(sd, plan, share(progress, TEXELS_START, 1.0))
             return result
         if not self.fits_least_squares:
-            return dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
+            result = dict(sd.bake_transfer(points, normals, triangles, progress=progress, **self.bake_arguments()))
+            if self.settings.get("least_squares") and self._vertex_count > least_squares.MAX_VERTICES:
+                result["least_squares_skipped"] = "{:,} vertices, over {:,}: the fit would take minutes".format(
+                    self._vertex_count, least_squares.MAX_VERTICES)
+            return result
         points, normals, triangles = least_squares.centroid_split(points, normals, triangles)
         result = dict(sd.bake_transfer(points, normals, triangles, progress=share(progress, 0.0, FIT_START),
                                        **self.bake_arguments()))
@@ -224,6 +260,29 @@ class BakeTask:
                                         float(s["refine_target"]), int(s["refine_max_vertices"]))
         if self.refinement.levels:
             self.baked = self.geometry.refined(self.refinement.surface)
+
+    def predicted_bytes(self):
+        """The peak memory of this object's bake (plan/cost.bake_bytes): of the copy to bake once it
+        is known (the worker, after the choice and the refinement), else of the evaluated mesh's
+        vertices and triangles as they are (the split and the faces seen from behind add more)."""
+        known = "baked" if self.baked is not None else None
+        geometry = self.baked if known else self.geometry
+        vertices = len(geometry.vertices) if known else len(self.geometry.mesh_positions)
+        triangles = len(geometry.triangles) if known else len(self.geometry.mesh_triangles)
+        s = self.settings
+        if self.automatic:   # not chosen yet: a fit and texels as asked, the largest transfer it may choose
+            fitted = bool(s.get("least_squares")) and self._vertex_count <= least_squares.MAX_VERTICES
+            texels = lightmap.expected_texels(int(s.get("lightmap", 0)))
+        else:
+            fitted, texels = self.fits_least_squares, lightmap.expected_texels(self.lightmap_size)
+        points = vertices + (triangles if fitted else 0) + texels
+        traced = 3 * triangles if fitted else triangles
+        if self.automatic:
+            floats = 1 + (self.analysis.max_order + 1) ** 2
+        else:
+            floats = cost.stored_floats(methods.get(s["method"]), int(s["light_order"]), int(s["visibility_order"]))
+        occluders = 0 if self.occluder_triangles is None else len(self.occluder_triangles)
+        return cost.bake_bytes(len(self.geometry.mesh_positions), points, traced + occluders, floats)
 
     def bake_arguments(self):
         s = self.settings

@@ -94,6 +94,16 @@ class Sample:
                    None if views is None else views(sample_vertices), joined)
 
 
+def _reporter(start, progress, stop):
+    """A native progress callback reporting start + half its share to progress(fraction), and
+    cancelling when stop() says so."""
+    def report(done, total):
+        if progress is not None:
+            progress(start + 0.5 * done / max(total, 1))
+        return stop is None or not stop()
+    return report
+
+
 class ErrorTable:
     """Every setting's measured error on one sample under one environment and lobe.
 
@@ -104,10 +114,11 @@ class ErrorTable:
     MAX_VISIBILITY_ORDER; rays: the bake's rays per vertex; stop: returns True to cancel (the
     measurement then raises InterruptedError); diffuse_share: with a Phong lobe, the share of a
     Lambert lobe shaded besides it (scene/lobes.Lobes): B and its reference are then the two
-    lobes' sum with these weights."""
+    lobes' sum with these weights; progress(fraction) is called as the reference (the first half)
+    and the bakes (the second) go."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
-                 max_order, rays, seed=0, stop=None, diffuse_share=0.0):
+                 max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None):
         self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
         self.max_order = int(max_order)
         self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
@@ -117,6 +128,7 @@ class ErrorTable:
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
         self._views = sample.views if sample.views is not None else sample.normals
+        self._progress = [_reporter(start, progress, stop) for start in (0.0, 0.5)]
         self.reference, error = self._reference(environment, seed, stop)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
@@ -143,12 +155,11 @@ class ErrorTable:
         """sdnative.reference on the sample (one scene: against a large mesh its build is most of
         the time), cancelled within a few vertices by stop."""
         sample = self._sample
-        progress = None if stop is None else (lambda done, total: not stop())
         try:
             parts = [(weight, self._sd.reference(
                 environment, sample.vertices, sample.normals, sample.triangles, views=self._lobe_views(lobe),
                 rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
-                seed=seed, progress=progress, **sample.occluders)) for lobe, exponent, weight in self._lobes]
+                seed=seed, progress=self._progress[0], **sample.occluders)) for lobe, exponent, weight in self._lobes]
         except self._sd.BakeCancelled as exc:
             raise InterruptedError("cancelled") from exc
         radiance = sum(weight * np.asarray(value) for weight, (value, _) in parts)
@@ -167,12 +178,11 @@ class ErrorTable:
         for method in methods:
             arguments.update(method.bake_arguments(self.max_order, MAX_VISIBILITY_ORDER))
         arguments.setdefault("transfer_order", 0)     # for lit_fraction
-        progress = None if stop is None else (lambda done, total: not stop())
         sample, count = self._sample, len(self._sample.vertices)
         twice = dict(self._sd.bake_transfer(
             np.concatenate([sample.vertices] * 2), np.concatenate([sample.normals] * 2),
             np.concatenate([sample.triangles, sample.triangles + count]), rays=self.rays, seed=seed,
-            progress=progress, **arguments, **sample.occluders))
+            progress=self._progress[1], **arguments, **sample.occluders))
         return [{key: value[half * count:(half + 1) * count]
                  for key, value in twice.items() if isinstance(value, np.ndarray) and len(value) == 2 * count}
                 for half in (0, 1)]

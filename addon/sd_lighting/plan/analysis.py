@@ -49,7 +49,7 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
                   triangle_pixels)
 
 
-def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop):
+def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None):
     eye = inputs.eye
 
     def views(points):
@@ -62,10 +62,10 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
                                      occluders, views)
     return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
                                lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
-                               stop=stop, diffuse_share=lobe_set.diffuse_share)
+                               stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress)
 
 
-def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0):
+def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None):
     """The automatic.Choice for one object (any thread): geometry a bake/geometry.Geometry, occluders
     bake_transfer's occluder keywords (or {}), lobe_set its scene/lobes.Lobes, fitted: whether the
     bake fits least squares (its rays then start at the face centres too); texels: the texels a
@@ -73,7 +73,7 @@ def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0):
     True cancels (InterruptedError)."""
     sd = native.get()
     table = _table(inputs, geometry, occluders, lobe_set, [m.id for m in methods.METHODS],
-                   inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop)
+                   inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop, progress)
     return automatic.choose(table, inputs.target_error, lambda s, sv: cost.gaunt_terms(sd, s, sv),
                             len(geometry.vertices), os.cpu_count() or 1, bake_time.CONFIRM_SECONDS,
                             inputs.fixed,

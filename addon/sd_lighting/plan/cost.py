@@ -9,6 +9,7 @@ Design node counts are the generic count of a design of degree t, ((t+1)^2 + 2) 
 """
 
 import math
+import os
 
 # Design build time per vertex per core by degree s+s' (ms; build/native/design_benchmarks 1024
 # 9 3 8, refitted designs): MSD (13)'s bake is dominated by it. Beyond the table: x4 per degree.
@@ -42,6 +43,43 @@ def stored_floats(method, s, sv):
     if data.packing == "design":
         return 1 + 4 * (s + sv + 1) ** 2
     return 1 + 4 * math.ceil(math.prod(data.shape(s, sv)) / 4)
+
+
+# The peak memory of a bake (native arrays are float64; blender_tests/benchmark_bake.py --memory
+# measures it against this model): per traced point its results and origin; per traced triangle
+# (the object's, after a least-squares split, and the occluders') Embree's scene and the bake's
+# record of which faces are sheets; per mesh vertex the add-on's arrays of the mesh.
+POINT_BYTES = 130              # besides 8 bytes per float of its results
+TRIANGLE_BYTES = 520
+MESH_VERTEX_BYTES = 500
+
+
+def bake_bytes(mesh_vertices, points, triangles, floats):
+    """The predicted peak bytes of a bake tracing `points` points (vertices, with least squares
+    also the face centres; texels) against `triangles` triangles (its own, split at the centres
+    with least squares, and the occluders'), each point getting `floats` floats (stored_floats)."""
+    return mesh_vertices * MESH_VERTEX_BYTES + points * (POINT_BYTES + 8 * floats) + triangles * TRIANGLE_BYTES
+
+
+def available_bytes():
+    """The memory a bake may take without pushing others out: Linux's MemAvailable, else the free
+    physical pages; None where neither is known."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def memory_text(count):
+    """Bytes for the user: "1.4 GB", "120 MB"."""
+    return "%.1f GB" % (count / 1e9) if count >= 1e9 else "%.0f MB" % (count / 1e6)
 
 
 def frame_milliseconds(frame_terms, vertices):

@@ -7,6 +7,7 @@ from .. import redraw
 from ..bake import prepare
 from ..bake.job import BakeJob
 from ..errors import BakeError
+from ..plan import cost
 from ..live import drawing, live_rebake, preview, staleness
 from ..store import baked
 from . import prediction
@@ -24,6 +25,10 @@ class SD_OT_bake(bpy.types.Operator):
     # starts the modal bake instead of the synchronous one.
     confirmed: BoolProperty(options={'HIDDEN', 'SKIP_SAVE'})
     predicted_time: StringProperty(options={'HIDDEN', 'SKIP_SAVE'})
+    predicted_memory: StringProperty(options={'HIDDEN', 'SKIP_SAVE'})
+    go_ahead: BoolProperty(name="Go Ahead", description="From a script: bake even when the bake is "
+                           "predicted to take over a minute or more memory than is free (the UI asks)",
+                           options={'SKIP_SAVE'})
 
     _timer = None
     _job = None
@@ -52,7 +57,7 @@ class SD_OT_bake(bpy.types.Operator):
         for task in tasks:   # what the prediction chose is not measured again
             if task.automatic and task.object_name in chosen:
                 task.adopt(*chosen[task.object_name])
-        return BakeJob(tasks, warnings)
+        return BakeJob(tasks, warnings, go_ahead=self.go_ahead or self.confirmed)
 
     def _finish(self, context, job):
         if job.cancelled:
@@ -78,6 +83,10 @@ class SD_OT_bake(bpy.types.Operator):
         long-bake dialog, the modal bake."""
         if self.confirmed:
             return self._start(context)
+        refusal = None if self.go_ahead else prediction.refusal(context)
+        if refusal is not None:
+            self.report({'ERROR'}, "Bake refused, nothing was changed: %s" % refusal)
+            return {'CANCELLED'}
         job = self._prepare(context)
         if job is None:
             return {'CANCELLED'}
@@ -86,15 +95,23 @@ class SD_OT_bake(bpy.types.Operator):
 
     def invoke(self, context, event):
         predicted = prediction.for_confirmation(context)
-        if predicted is not None and predicted.needs_confirmation:
+        memory = prediction.memory(context)
+        long = predicted is not None and predicted.needs_confirmation
+        large = memory is not None and memory[1] > memory[2]
+        if long or large:
             self.confirmed = True
-            self.predicted_time = predicted.text()
+            self.predicted_time = predicted.text() if predicted is not None else ""
+            self.predicted_memory = ("%s for %s, %s free" % (cost.memory_text(memory[1]), memory[0],
+                                                             cost.memory_text(memory[2])) if large else "")
             return context.window_manager.invoke_props_dialog(self, width=400)
         return self._start(context)
 
     def draw(self, context):
         if self.confirmed:
-            self.layout.label(text="Predicted bake time: " + self.predicted_time, icon='ERROR')
+            if self.predicted_time:
+                self.layout.label(text="Predicted bake time: " + self.predicted_time, icon='ERROR')
+            if self.predicted_memory:
+                self.layout.label(text="Predicted memory: " + self.predicted_memory, icon='ERROR')
             self.layout.label(text="Bake anyway? (Esc cancels it while it runs)")
 
     def _start(self, context):

@@ -9,12 +9,14 @@ bake/prepare.py in a timer (never in a draw), and the sample bakes run in a work
 import os
 import time
 
-from .. import native, redraw
-from ..bake import geometry as geometry_module, least_squares, lightmap, prepare, refine
+from .. import methods, native, redraw
+from ..bake import geometry as geometry_module, job as job_module, least_squares, lightmap, prepare, refine
+from ..bake import task as task_module
 from ..errors import BakeError
-from ..plan import bake_time
+from ..plan import analysis, bake_time, cost
 from ..store.record import BakeRecord
 
+CHECKED_VERTICES = 20_000   # a script's bake of more mesh vertices waits for its predicted time
 _predictors = {}          # settings key -> BakeTimePredictor (the latest few)
 _KEPT = 8
 _requested = None         # the key a timer will start, if any
@@ -43,9 +45,11 @@ def sample_jobs(tasks):
     worker, an automatic task chooses its settings (its reasons are then in task.settings) and
     a chosen method's are measured: either way task.predicted_error, for the panel. Texels are
     baked like vertices: a texture-space bake counts its expected texels as vertices."""
+    choices = task_module.SharedChoices()
+
     def arguments(task, stop):
         if task.automatic:
-            task.choose(stop)
+            choices.choose(task, stop)
         else:
             task.predict(stop)
         kwargs = task.bake_arguments()
@@ -104,18 +108,54 @@ def start(context):
 
 
 def for_confirmation(context, wait=3.0):
-    """The prediction the bake operator asks with (main thread): waits up to `wait` seconds for
-    the sample, less once it is clear that the bake takes over a minute; None when unknown."""
+    """The prediction the bake operator asks with (main thread): waits up to `wait` seconds (None:
+    until it is final) for the sample, less once it is clear that the bake takes over a minute;
+    None when unknown."""
     predictor = start(context)
     if predictor is None:
         return None
-    deadline = time.perf_counter() + wait
+    deadline = time.perf_counter() + (float("inf") if wait is None else wait)
     while _sampling(predictor) and time.perf_counter() < deadline:
         predicted = predictor.prediction()
         if predicted is not None and predicted.needs_confirmation:
             break
         predictor.join(0.05)
     return predictor.prediction()
+
+
+def memory(context):
+    """(the object of the selection whose bake needs the most memory, its predicted peak bytes,
+    the free bytes), or None when unknown (plan/cost.bake_bytes; before the choice and the
+    refinement, of the meshes as they are)."""
+    predictor = start(context)
+    free = cost.available_bytes()
+    if predictor is None or free is None or not predictor.jobs:
+        return None
+    needed, name = max((job.task.predicted_bytes(), job.task.object_name) for job in predictor.jobs)
+    return name, needed, free
+
+
+def refusal(context):
+    """Why a script's bake of the selection must be told to go ahead (None: it may run): memory
+    predicted over the free memory, or a time over a minute - predicted by sampling only where
+    the selection is large (CHECKED_VERTICES) or the method builds designs, so that small bakes
+    start at once."""
+    predicted_memory = memory(context)
+    if predicted_memory is not None and predicted_memory[1] > predicted_memory[2]:
+        return job_module.memory_refusal(*predicted_memory)
+    predictor = start(context)
+    if predictor is None:
+        return None
+    settings = context.scene.sd_lighting
+    vertices = sum(len(job.task.geometry.mesh_positions) for job in predictor.jobs)
+    designs = settings.method != analysis.AUTOMATIC and methods.get(settings.method).designs_per_vertex
+    if vertices <= CHECKED_VERTICES and not designs:
+        return None
+    predicted = for_confirmation(context, wait=None)
+    if predicted is not None and predicted.needs_confirmation:
+        return ("the bake is predicted to take %s, over a minute: go_ahead=True bakes anyway"
+                % predicted.text())
+    return None
 
 
 def current(context):

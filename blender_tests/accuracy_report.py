@@ -430,7 +430,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
     for label, method, automatic, s, sv, rays in CYCLES_SETTINGS:
         sdtest.bake_settings(scene, method, 'LAMBERT', s, sv, rays=rays, select=objects)
         settings.automatic_orders = automatic
-        if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+        if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
             raise RuntimeError("the bake of %s failed (%s)" % (name, label))
         info = dict(objects[0]["sd_bake"])
         method = info["method"]          # the automatic mode's choice for the object measured
@@ -476,7 +476,7 @@ def glossy_case(package, name, scene, objects, config, work, progress, rows):
     cycles, noise = sdtest.cycles_pair(scene, os.path.join(work, name + "_glossy"), size,
                                        4 * config["cycles_samples"], BLOCK)
     sdtest.bake_settings(scene, "msd_visibility", 'MATERIAL', 4, 2, rays=256, select=objects)
-    if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+    if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
         raise RuntimeError("the glossy bake failed")
     info = dict(objects[0]["sd_bake"])
     for shading, per_pixel in (("vertex", False), ("pixel", True)):
@@ -507,7 +507,7 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
     settings = scene.sd_lighting
     for method in package.methods.METHODS:
         sdtest.bake_settings(scene, method.id, 'LAMBERT', 4, 2, rays=256, select=objects[:1])
-        if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+        if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
             raise RuntimeError("the bake of %s failed (%s)" % (name, method.id))
         info = dict(objects[0]["sd_bake"])
         for texture in ((False, True) if method.band_limited_texture else (False,)):

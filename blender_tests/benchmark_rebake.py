@@ -87,7 +87,7 @@ def main():
         if bpy.context.object.mode != 'OBJECT':
             bpy.ops.object.mode_set(mode='OBJECT')
         start = time.perf_counter()
-        assert bpy.ops.sd_lighting.bake() == {'FINISHED'}
+        assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}
         bake = time.perf_counter() - start
         settings.live_rebake = True
         bpy.ops.object.mode_set(mode='EDIT')

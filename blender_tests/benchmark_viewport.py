@@ -146,7 +146,7 @@ def design_node_counts_of_a_real_bake(package, scene):
     ball = sdtest.ico_sphere(scene, subdivisions=2, location=(0.0, 0.0, 0.8), radius=0.7)
     ground = sdtest.grid(scene, cuts=10, size=4.0)
     sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 4, 2, rays=256, select=[ball, ground])
-    assert bpy.ops.sd_lighting.bake() == {'FINISHED'}
+    assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}
     counts = []
     for obj in (ball, ground):
         counts.append(np.diff(package.store.attributes.read(package.store.baked.baked_mesh(obj))["design_offsets"]))

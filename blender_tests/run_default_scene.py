@@ -97,7 +97,7 @@ def main():
     scene, mapping, monkey, ground = build_scene(opts)
     print("sd_lighting: baking %s and %s (the automatic mode, target error %.0f %%)..."
           % (monkey.name, ground.name, 100 * scene.sd_lighting.target_error), flush=True)
-    if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+    if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
         raise RuntimeError("the bake failed")
     for obj in (monkey, ground):
         info = dict(obj["sd_bake"])

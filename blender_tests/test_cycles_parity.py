@@ -118,7 +118,7 @@ def preview(scene, obj, refine, path, least_squares=True, lightmap=0):
     if lightmap:
         settings.lightmap_size = str(lightmap)
     sdtest.select_only([obj])
-    if bpy.ops.sd_lighting.bake() != {'FINISHED'}:
+    if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
         raise RuntimeError("the bake of %s failed" % obj.name)
     settings.live_shading = True
     if bpy.ops.sd_lighting.render_preview(filepath=path, width=SIZE, height=SIZE) != {'FINISHED'}:

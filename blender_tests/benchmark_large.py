@@ -1,0 +1,96 @@
+"""Large and many at the panel's defaults (issue 32, item 5): the predicted bake time and memory
+against the bake's own, for one large mesh and for many identical small ones.
+
+- large: Suzanne with a Subdivision Surface modifier (--levels, 6: about 2M vertices) over a
+  ground;
+- many: --copies copies of a cube (one mesh each, equal) in a grid on a ground.
+Each scene at the panel's defaults (Automatic, Refine, Least Squares): printed are how long the
+prediction took to be final and what it says (the time, and the predicted memory against the free
+memory), whether a script's bake is refused without go_ahead, then the bake with go_ahead=True:
+its seconds, the process's peak memory so far (ru_maxrss), its settings (how many different ones
+among the objects) and the ratio of the bake's time to the predicted one.
+
+Run: blender -b --factory-startup --python blender_tests/benchmark_large.py -- --zip build/sd_lighting.zip
+         [--scene large|many] [--levels 6] [--copies 200]
+Not part of the test suite (minutes).
+"""
+
+import argparse
+import os
+import resource
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+
+
+def options():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--zip", default="build/sd_lighting.zip")
+    parser.add_argument("--scene", choices=("large", "many"), default="large")
+    parser.add_argument("--levels", type=int, default=6)
+    parser.add_argument("--copies", type=int, default=200)
+    return parser.parse_args(argv)
+
+
+def large_scene(scene, levels):
+    bpy.ops.mesh.primitive_monkey_add(location=(0.0, 0.0, 1.0))
+    monkey = bpy.context.active_object
+    monkey.data.polygons.foreach_set("use_smooth", [True] * len(monkey.data.polygons))
+    modifier = monkey.modifiers.new("Subdivision", 'SUBSURF')
+    modifier.levels = modifier.render_levels = levels
+    return [monkey]
+
+
+def many_scene(scene, copies):
+    side = int(copies ** 0.5 + 0.999)
+    cubes = []
+    for k in range(copies):
+        cube = sdtest.flat_cube(scene, name="Cube %03d" % k, size=0.6,
+                                location=(1.0 * (k % side) - 0.5 * side, 1.0 * (k // side) - 0.5 * side, 0.3))
+        if cubes:
+            cube.data = cubes[0].data.copy()
+        cubes.append(cube)
+    return cubes
+
+
+def main():
+    opts = options()
+    package = sdtest.install_addon(opts.zip)
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    sdtest.grid(scene, cuts=10, size=30.0 if opts.scene == "many" else 6.0)
+    objects = large_scene(scene, opts.levels) if opts.scene == "large" else many_scene(scene, opts.copies)
+    sdtest.camera(scene, location=(0.0, -14.0, 9.0), target=(0.0, 0.0, 0.0))
+    sdtest.select_only(objects)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    vertices = sum(len(o.evaluated_get(depsgraph).data.vertices) for o in objects)
+    print("scene: %s, %d objects, %d mesh vertices" % (opts.scene, len(objects), vertices))
+
+    prediction = package.ui.prediction
+    start = time.perf_counter()
+    predicted = prediction.for_confirmation(bpy.context, wait=None)
+    memory = prediction.memory(bpy.context)
+    print("prediction: final after %.1f s: %s; memory %s for %s, %s free"
+          % (time.perf_counter() - start, predicted.text(), package.plan.cost.memory_text(memory[1]), memory[0],
+             package.plan.cost.memory_text(memory[2])))
+    result, reports = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
+    print("script bake without go_ahead: %s" % sorted(result))
+
+    start = time.perf_counter()
+    result, reports = sdtest.operator_reports(bpy.ops.sd_lighting.bake, go_ahead=True)
+    seconds = time.perf_counter() - start
+    settings = {tuple(o["sd_bake"][k] for k in ("method", "light_order", "visibility_order", "rays"))
+                for o in objects if "sd_bake" in o}
+    print("bake with go_ahead: %s in %.1f s (%.2f x the prediction), peak memory %.1f GB; %d setting(s) %s"
+          % (sorted(result), seconds, seconds / predicted.seconds,
+             resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6, len(settings), sorted(settings)))
+    return 0
+
+
+if __name__ == "__main__":
+    sdtest.run(main)

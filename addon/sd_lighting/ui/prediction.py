@@ -73,10 +73,11 @@ def sample_jobs(tasks):
         """The refinement's first level (bake/refine.py): every vertex and a midpoint of each edge
         (about three per vertex), at its rays (at most the bake's)."""
         settings = task.settings
-        if not settings.get("refine") or task.lightmap_size:
-            return None
+        vertices = len(task.geometry.vertices)
+        if not settings.get("refine") or task.lightmap_size or vertices >= int(settings["refine_max_vertices"]):
+            return None   # a copy at its vertex budget already is not refined
         rays = int(settings["rays"])
-        return 4 * len(task.geometry.vertices), min(rays, refine.CRITERION_RAYS) / rays
+        return 4 * vertices, min(rays, refine.CRITERION_RAYS) / rays
 
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
                                 lambda sd, result, task=task: fit_seconds(task, sd, result),

@@ -8,7 +8,8 @@ Each scene at the panel's defaults (Automatic, Refine, Least Squares): printed a
 prediction took to be final and what it says (the time, and the predicted memory against the free
 memory), whether a script's bake is refused without go_ahead, then the bake with go_ahead=True:
 its seconds, the process's peak memory so far (ru_maxrss), its settings (how many different ones
-among the objects) and the ratio of the bake's time to the predicted one.
+among the objects), the ratio of the bake's time to the predicted one, and the automatic mode's
+own cost estimate for the first object.
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_large.py -- --zip build/sd_lighting.zip
          [--scene large|many] [--levels 6] [--copies 200]
@@ -89,6 +90,8 @@ def main():
     print("bake with go_ahead: %s in %.1f s (%.2f x the prediction), peak memory %.1f GB; %d setting(s) %s"
           % (sorted(result), seconds, seconds / predicted.seconds,
              resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6, len(settings), sorted(settings)))
+    print("the automatic mode's own estimate: %s" % next(
+        (line for line in objects[0]["sd_bake"].get("automatic", "").splitlines() if "bake about" in line), "none"))
     return 0
 
 

@@ -89,7 +89,7 @@ def test_predictor_recovers_setup_and_per_vertex_time():
     predictor.start()
     assert predictor.join(30)
     predicted = predictor.prediction()
-    expected = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices)
+    expected = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices) + bake_time.TASK_SECONDS
     assert predicted.final and not predicted.lower_bound
     assert predicted.seconds == pytest.approx(expected, rel=0.3)
     # a first round, then the largest one within the budget
@@ -113,7 +113,7 @@ def test_predictor_sums_objects_and_gives_a_lower_bound_while_sampling():
     assert predictor.join(30)
     total = predictor.prediction()
     assert total.final and not total.lower_bound
-    one = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices)
+    one = FakeNative.SETUP + FakeNative.PER_VERTEX * len(vertices) + bake_time.TASK_SECONDS
     assert total.seconds == pytest.approx(2 * one, rel=0.3)
 
 
@@ -192,9 +192,9 @@ def test_a_refinement_adds_its_points_at_their_cost():
     vertices, normals, triangles = grid(30)
     plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
     refined = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {},
-                                                         refinement=lambda: (400, 0.5))], threads=1)
+                                                         refinement=lambda: (400, 0.5, 3))], threads=1)
     for predictor in (plain, refined):
         predictor.start()
         assert predictor.join(30)
     added = refined.prediction().seconds - plain.prediction().seconds
-    assert added == pytest.approx(FakeNative.SETUP + 0.5 * 400 * FakeNative.PER_VERTEX, rel=0.3)
+    assert added == pytest.approx(3 * FakeNative.SETUP + 0.5 * 400 * FakeNative.PER_VERTEX, rel=0.3)

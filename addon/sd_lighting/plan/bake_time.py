@@ -10,8 +10,9 @@ sampled vertex sees what it sees in the bake and the setup is the bake's own, on
 The bake reports its setup (`setup_seconds`); the rest of a round's time is its vertices'. A
 first small round measures both; then the largest round that the first predicts within
 SAMPLE_BUDGET measures the vertices' time (each round builds the scene again, seconds for a mesh
-of millions of triangles). A refinement before the bake (bake/refine.py) is predicted as its
-first level: every vertex and an edge midpoint for each (about three per vertex), at its rays.
+of millions of triangles). A refinement before the bake (bake/refine.py) is predicted as a setup
+per level and its first level's points: every vertex and an edge midpoint for each (about three
+per vertex), at its rays. Each object adds TASK_SECONDS of work around its bake.
 While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
 so within a second of them.
 
@@ -28,6 +29,10 @@ from ..background import Worker
 
 CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
 RUN = 16                     # consecutive triangles sampled together
+# An object's work besides what its sampled bakes measure (its copy, the refinement's levels and
+# fit beyond their setups, storing): blender_tests/benchmark_large.py --scene many bakes 200 cubes
+# of 8 vertices at the defaults in 12.7 s, of which the rounds predicted 2 s.
+TASK_SECONDS = 0.05
 ROUNDS = (2, 16, 128)        # triangles per sample round (about 3 vertices each): the first, then one more
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
 
@@ -101,8 +106,8 @@ class SampleJob:
     its rays (the least-squares fit), called in the worker; `extra_points`: points baked beside
     the mesh's vertices at the same cost per point (texels), a count or a function returning one,
     called in the worker after the keywords; `refinement`: None, or a function returning None or
-    (points, the cost of one against one of the bake's) of a refinement before the bake, called
-    in the worker after the keywords."""
+    (points, the cost of one against one of the bake's, levels) of a refinement before the bake,
+    called in the worker after the keywords."""
     mesh: object
     bake_arguments: object
     task: object = None
@@ -203,11 +208,13 @@ class BakeTimePredictor(Worker):
             if len(rounds) == 1 and len(vertices) < len(mesh[0]):   # the mesh not all sampled yet
                 sizes = [size for size in ROUNDS[1:] if extrapolate(rounds, 3 * size) <= SAMPLE_BUDGET][-1:]
         refinement = job.refinement() if job.refinement is not None else None
-        if refinement is not None:   # (points, their cost against the bake's per point)
-            points, share = refinement
+        if refinement is not None:   # (points, their cost against the bake's per point, levels)
+            points, share, levels = refinement
+            setup = extrapolate(rounds, 0)
             with self._lock:
-                self._estimates[index] += extrapolate(rounds, 0) + share * (
-                    extrapolate(rounds, points) - extrapolate(rounds, 0))
+                self._estimates[index] += levels * setup + share * (extrapolate(rounds, points) - setup)
+        with self._lock:
+            self._estimates[index] += TASK_SECONDS
         if job.after_rays is not None:
             after = job.after_rays(self._sd, result)
             with self._lock:

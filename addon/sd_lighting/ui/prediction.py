@@ -77,7 +77,7 @@ def sample_jobs(tasks):
         if not settings.get("refine") or task.lightmap_size or vertices >= int(settings["refine_max_vertices"]):
             return None   # a copy at its vertex budget already is not refined
         rays = int(settings["rays"])
-        return 4 * vertices, min(rays, refine.CRITERION_RAYS) / rays
+        return 4 * vertices, min(rays, refine.CRITERION_RAYS) / rays, refine.MAX_LEVELS
 
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
                                 lambda sd, result, task=task: fit_seconds(task, sd, result),
@@ -110,15 +110,15 @@ def start(context):
 
 def for_confirmation(context, wait=3.0):
     """The prediction the bake operator asks with (main thread): waits up to `wait` seconds (None:
-    until it is final) for the sample, less once it is clear that the bake takes over a minute;
-    None when unknown."""
+    until it is final) for the sample, less once a lower bound says that the bake takes over a
+    minute (an estimate from the first round alone may still come down); None when unknown."""
     predictor = start(context)
     if predictor is None:
         return None
     deadline = time.perf_counter() + (float("inf") if wait is None else wait)
     while _sampling(predictor) and time.perf_counter() < deadline:
         predicted = predictor.prediction()
-        if predicted is not None and predicted.needs_confirmation:
+        if predicted is not None and predicted.lower_bound and predicted.needs_confirmation:
             break
         predictor.join(0.05)
     return predictor.prediction()

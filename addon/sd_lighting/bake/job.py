@@ -40,16 +40,23 @@ class BakeJob(Worker):
         self.error = None             # message when the bake failed
         self.finished = False
         self.seconds = 0.0
+        self._step_start = time.perf_counter()   # of the current step: the seconds in the status
+
+    def _step(self, choosing=False, refining=False):
+        self.choosing, self.refining = choosing, refining
+        self._step_start = time.perf_counter()
 
     def status_text(self):
+        """The step, the object, the progress and the step's seconds so far (which move while a
+        step's setup - a large mesh's scene - moves no fraction)."""
         if not self.tasks:
             return ""
         task = self.tasks[min(self.current, len(self.tasks) - 1)]
         doing = ("choosing the settings of" if self.choosing else
                  "refining" if self.refining else "baking")
-        return "SD Lighting: %s %s (%d/%d), %d %%  -  Esc to cancel" % (
+        return "SD Lighting: %s %s (%d/%d), %d %%, %d s  -  Esc to cancel" % (
             doing, task.object_name, min(self.current + 1, len(self.tasks)), len(self.tasks),
-            int(100 * self.fraction))
+            int(100 * self.fraction), time.perf_counter() - self._step_start)
 
     # -- work
     def run(self):
@@ -61,6 +68,7 @@ class BakeJob(Worker):
             choices = SharedChoices()
             for index, task in enumerate(self.tasks):
                 self.current = index
+                self._step()
                 if self.cancel_requested:
                     raise sd.BakeCancelled("cancelled")
 
@@ -73,15 +81,14 @@ class BakeJob(Worker):
                 # the refinement the rest of the first half, when it runs.
                 chosen = CHOICE_SHARE if task.automatic else 0.0
                 if task.automatic:
-                    self.choosing = True
+                    self._step(choosing=True)
                     choices.choose(task, lambda: self.cancel_requested,
                                    lambda fraction, progress=task_progress: progress(chosen * fraction, 1.0))
-                    self.choosing = False
                 halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else chosen
                 t0 = time.perf_counter()
-                self.refining = True
+                self._step(refining=True)
                 task.refine(sd, share(task_progress, chosen, halfway))
-                self.refining = False
+                self._step()
                 task.refine_seconds = time.perf_counter() - t0
                 self.check_memory(task)   # now of the copy to bake, with its method
                 t0 = time.perf_counter()

@@ -97,6 +97,12 @@ def test_reference_of_a_constant_sky_is_its_radiance(sd):
         sd.reference(sky, np.zeros((2, 3)), normals, np.zeros((0, 3), dtype=int), lobe="phong", exponent=8.0)
 
 
+def test_reference_of_no_vertex_is_empty(sd):
+    sky = sd.environment_from_pixels(np.tile([1.0, 2.0, 3.0], (8, 16, 1)))
+    radiance, error = sd.reference(sky, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), dtype=int))
+    assert radiance.shape == error.shape == (0, 3)
+
+
 def test_reference_refuses_a_matrix_that_is_no_rotation(sd):
     # Found by tests/fuzz/fuzz_reference: the reference took any matrix (NaN or silently wrong).
     sky = sd.environment_from_pixels(np.ones((4, 8, 3)))

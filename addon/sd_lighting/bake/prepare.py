@@ -182,8 +182,8 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         share_key = None
         if settings["method"] == analysis.AUTOMATIC:   # what the choice depends on (task.SharedChoices)
             lobe = tuple(settings[k] for k in ("lobe", "exponent", "diffuse_lobe", "lobe_weights", "diffuse_share"))
-            share_key = (geometry.source, np.round(inputs.rotation, 6).tobytes(), np.round(shape, 6).tobytes(),
-                         lobe, tuple(sorted(inputs.fixed.items())),
+            share_key = (geometry.source, geometry.backs, np.round(inputs.rotation, 6).tobytes(),
+                         np.round(shape, 6).tobytes(), lobe, tuple(sorted(inputs.fixed.items())),
                          surrounded(obj, transforms.transform_points(placement, geometry.mesh_positions)),
                          None if lobe[0] == "lambert" or inputs.eye is None else tuple(np.round(inputs.eye, 6)))
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs, share_key))

@@ -53,8 +53,12 @@ class SharedChoices:
                 self._leaders[task.share_key] = task
             return
         task.adopt(leader.settings, leader.predicted_error)
-        task.settings["automatic"] = "%s\nShared: measured on %s (the same mesh, turned alike, alike " \
-            "surrounded, under the same light)" % (leader.settings["automatic"], leader.object_name)
+        # the setting is shared; how it is evaluated follows this object's own size on screen
+        per_pixel, evaluation = automatic.evaluation(task.analysis.triangle_pixels)
+        reasons = [line for line in leader.settings["automatic"].split("\n") if not line.startswith("Evaluation:")]
+        task.settings.update(per_pixel=per_pixel, automatic="\n".join(reasons + [
+            evaluation, "Shared: measured on %s (the same mesh, turned alike, alike surrounded, under the "
+            "same light)" % leader.object_name]))
 
 
 class BakeTask:
@@ -269,15 +273,16 @@ class BakeTask:
         geometry = self.baked if known else self.geometry
         vertices = len(geometry.vertices) if known else len(self.geometry.mesh_positions)
         triangles = len(geometry.triangles) if known else len(self.geometry.mesh_triangles)
-        s = self.settings
-        if self.automatic:   # not chosen yet: a fit and texels as asked, the largest transfer it may choose
+        s = self.settings   # read once: the prediction's worker may adopt a choice meanwhile
+        unchosen = s["method"] == analysis.AUTOMATIC
+        if unchosen:   # not chosen yet: a fit and texels as asked, the largest transfer it may choose
             fitted = bool(s.get("least_squares")) and self._vertex_count <= least_squares.MAX_VERTICES
             texels = lightmap.expected_texels(int(s.get("lightmap", 0)))
         else:
             fitted, texels = self.fits_least_squares, lightmap.expected_texels(self.lightmap_size)
         points = vertices + (triangles if fitted else 0) + texels
         traced = 3 * triangles if fitted else triangles
-        if self.automatic:
+        if unchosen:
             floats = 1 + (self.analysis.max_order + 1) ** 2
         else:
             floats = cost.stored_floats(methods.get(s["method"]), int(s["light_order"]), int(s["visibility_order"]))

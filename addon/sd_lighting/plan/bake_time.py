@@ -46,6 +46,8 @@ def sample_mesh(vertices, normals, triangles, count, seed=0, run=1):
     rays took 2.8 times the bake's per vertex); a measurement of errors takes them one by one."""
     triangles = np.asarray(triangles).reshape(-1, 3)
     count = min(count, len(triangles))
+    if count == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), np.int32)
     run = max(min(run, count), 1)
     rng = np.random.default_rng(seed)
     starts = run * rng.choice(len(triangles) // run, max(count // run, 1), replace=False)

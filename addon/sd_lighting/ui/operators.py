@@ -57,7 +57,9 @@ class SD_OT_bake(bpy.types.Operator):
         for task in tasks:   # what the prediction chose is not measured again
             if task.automatic and task.object_name in chosen:
                 task.adopt(*chosen[task.object_name])
-        return BakeJob(tasks, warnings, go_ahead=self.go_ahead or self.confirmed)
+        # a confirmed memory figure lets the bake go ahead; a confirmed time alone still has the
+        # worker check the memory of the final copy
+        return BakeJob(tasks, warnings, go_ahead=self.go_ahead or bool(self.predicted_memory))
 
     def _finish(self, context, job):
         if job.cancelled:

@@ -34,7 +34,8 @@ def settings_key(context):
         return None
     names = ("method", "material_source", "phong_exponent", "automatic_orders", "target_error",
              "max_automatic_order", "light_order", "visibility_order", "rays", "environment_source",
-             "environment_path", "least_squares", "texture_space", "lightmap_size")
+             "environment_path", "least_squares", "texture_space", "lightmap_size", "refine",
+             "refine_max_vertices")
     world = scene.world.name if scene.world is not None else ""
     return tuple(getattr(settings, name) for name in names) + (world, meshes)
 

@@ -205,14 +205,15 @@ void EmbreeScene::probe_filter(const RTCFilterFunctionNArguments* args) {
 }
 
 EmbreeScene::Hit EmbreeScene::first_hit(const glm::dvec3& origin, const glm::dvec3& dir, double t_max,
-                                        int skipped_geometry, const std::vector<unsigned>& skipped) const {
+                                        int skipped_geometry, const std::vector<unsigned>& skipped,
+                                        double tolerance) const {
   ProbeContext probe;
   rtcInitIntersectContext(&probe.context);
   probe.face_normals = &face_normals_;
   probe.orientation = &orientation_;
   probe.skipped_geometry = skipped_geometry;
   probe.skipped = &skipped;
-  probe.tolerance = static_cast<float>(1e-4 * t_max);
+  probe.tolerance = static_cast<float>(tolerance >= 0.0 ? tolerance : 1e-4 * t_max);
   probe.first_t = 0.0f;
   probe.first_side = Side::kNothing;
   RTCRayHit query{};

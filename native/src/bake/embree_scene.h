@@ -83,9 +83,10 @@ class EmbreeScene {
   /// The first triangle the segment origin + t dir, t in [0, t_max], meets. Triangles met at the
   /// same t (coplanar ones: a box standing on a floor) count as kBack when any of them is met
   /// from behind, else as kSheet when any is a sheet. Triangles `skipped` of geometry
-  /// `skipped_geometry` are not seen. Thread-safe after commit().
+  /// `skipped_geometry` are not seen. tolerance: how near two hits count as one t; by default
+  /// 1e-4 t_max (a probe as long as the geometry it tests). Thread-safe after commit().
   Hit first_hit(const glm::dvec3& origin, const glm::dvec3& dir, double t_max, int skipped_geometry = -1,
-                const std::vector<unsigned>& skipped = {}) const;
+                const std::vector<unsigned>& skipped = {}, double tolerance = -1.0) const;
 
  private:
   static std::string error_name(RTCError code);

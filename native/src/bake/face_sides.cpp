@@ -183,7 +183,8 @@ std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, con
       const std::vector<unsigned> own{in_scene[t].primitive};
       for (const glm::dvec3& local : directions) {
         const glm::dvec3 d = local.x * tangent + local.y * bitangent + local.z * n;
-        if (scene.first_hit(behind, d, reach, in_scene[t].geometry, own).side != EmbreeScene::Side::kBack) {
+        // coplanar hits count as one within the face's own offset, not a fraction of the reach
+        if (scene.first_hit(behind, d, reach, in_scene[t].geometry, own, eta).side != EmbreeScene::Side::kBack) {
           ++free_rays[i];
         }
       }

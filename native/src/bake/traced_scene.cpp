@@ -72,6 +72,7 @@ struct Fans {
 void orient_surfaces(EmbreeScene& scene, const std::vector<glm::dvec3>& points, const std::vector<Triangle>& triangles,
                      const std::vector<unsigned>& traced_id, int object, const OccluderMesh& occluders, int others,
                      const ParallelOptions& parallel) {
+  if (triangles.empty() && occluders.triangles.empty()) return;  // nothing to orient (probe points alone)
   std::vector<glm::dvec3> all(points);
   all.insert(all.end(), occluders.vertices.begin(), occluders.vertices.end());
   std::vector<Triangle> faces(triangles);

@@ -45,6 +45,11 @@ def _linked_node(socket):
     return socket.links[0].from_node if socket is not None and socket.is_linked else None
 
 
+# Sky Texture types whose light on a surface in Cycles is more than their camera-ray image (README,
+# "Any other world"; test_world_render measures the others).
+SCATTERING_SKIES = {"SINGLE_SCATTERING", "MULTIPLE_SCATTERING"}
+
+
 def reason(world, output, background, texture, mapping):
     """Why the world must be rendered (a few words for the panel), or None when the add-on reads
     it directly; `output`, `background`, `texture`, `mapping`: the nodes environment.world_nodes
@@ -69,6 +74,9 @@ def reason(world, output, background, texture, mapping):
     if colour is None:
         return None
     if texture is None:
+        if getattr(colour, "sky_type", "") in SCATTERING_SKIES:
+            return ("a %s node - Blender 5's scattering skies light Cycles' shading 8-20 %% more than "
+                    "their image shows: shaded that much darker here" % colour.name)
         return "a %s node" % colour.name
     if texture.projection != 'EQUIRECTANGULAR':
         return "a %s projection" % texture.projection.lower().replace("_", " ")

@@ -1,9 +1,11 @@
 """Large and many at the panel's defaults (issue 32, item 5): the predicted bake time and memory
 against the bake's own, for one large mesh and for many identical small ones.
 
-- large: Suzanne with a Subdivision Surface modifier (--levels, 6: about 2M vertices) over a
-  ground;
-- many: --copies copies of a cube (one mesh each, equal) in a grid on a ground.
+- large: Suzanne (or --mesh, a model file, scaled to 2 units and shaded smooth) with a
+  Subdivision Surface modifier (--levels, 6: about 2M vertices for Suzanne) over a ground;
+- many: --copies copies of a cube (or of --mesh, scaled to 0.6 units) - one mesh each, equal - in
+  a grid on a ground.
+Under --hdri (one of Blender's studio lights, forest.exr by default).
 Each scene at the panel's defaults (Automatic, Refine, Least Squares): printed are how long the
 prediction took to be final and what it says (the time, and the predicted memory against the free
 memory), whether a script's bake is refused without go_ahead, then the bake with go_ahead=True:
@@ -12,7 +14,7 @@ among the objects), the ratio of the bake's time to the predicted one, and the a
 own cost estimate for the first object.
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_large.py -- --zip build/sd_lighting.zip
-         [--scene large|many] [--levels 6] [--copies 200]
+         [--scene large|many] [--levels 6] [--copies 200] [--mesh PATH] [--hdri NAME.exr]
 Not part of the test suite (minutes).
 """
 
@@ -35,37 +37,46 @@ def options():
     parser.add_argument("--scene", choices=("large", "many"), default="large")
     parser.add_argument("--levels", type=int, default=6)
     parser.add_argument("--copies", type=int, default=200)
+    parser.add_argument("--mesh", default=None)
+    parser.add_argument("--hdri", default="forest.exr")
     return parser.parse_args(argv)
 
 
-def large_scene(scene, levels):
-    bpy.ops.mesh.primitive_monkey_add(location=(0.0, 0.0, 1.0))
-    monkey = bpy.context.active_object
-    monkey.data.polygons.foreach_set("use_smooth", [True] * len(monkey.data.polygons))
-    modifier = monkey.modifiers.new("Subdivision", 'SUBSURF')
+def large_scene(scene, levels, path):
+    if path is None:
+        bpy.ops.mesh.primitive_monkey_add(location=(0.0, 0.0, 1.0))
+        obj = bpy.context.active_object
+    else:
+        obj = sdtest.sized_model(path, 2.0, (0.0, 0.0, 1.0))
+    obj.data.polygons.foreach_set("use_smooth", [True] * len(obj.data.polygons))
+    modifier = obj.modifiers.new("Subdivision", 'SUBSURF')
     modifier.levels = modifier.render_levels = levels
-    return [monkey]
+    return [obj]
 
 
-def many_scene(scene, copies):
+def many_scene(scene, copies, path):
     side = int(copies ** 0.5 + 0.999)
-    cubes = []
+    objects = []
     for k in range(copies):
-        cube = sdtest.flat_cube(scene, name="Cube %03d" % k, size=0.6,
-                                location=(1.0 * (k % side) - 0.5 * side, 1.0 * (k // side) - 0.5 * side, 0.3))
-        if cubes:
-            cube.data = cubes[0].data.copy()
-        cubes.append(cube)
-    return cubes
+        location = (1.0 * (k % side) - 0.5 * side, 1.0 * (k // side) - 0.5 * side, 0.3)
+        if path is None:
+            obj = sdtest.flat_cube(scene, name="Cube %03d" % k, size=0.6, location=location)
+        else:
+            obj = sdtest.sized_model(path, 0.6, location)
+        if objects:
+            obj.data = objects[0].data.copy()
+        objects.append(obj)
+    return objects
 
 
 def main():
     opts = options()
     package = sdtest.install_addon(opts.zip)
     scene = sdtest.empty_scene()
-    sdtest.hdri_world(scene, sdtest.hdri("forest.exr"))
+    sdtest.hdri_world(scene, sdtest.hdri(opts.hdri))
     sdtest.grid(scene, cuts=10, size=30.0 if opts.scene == "many" else 6.0)
-    objects = large_scene(scene, opts.levels) if opts.scene == "large" else many_scene(scene, opts.copies)
+    objects = (large_scene(scene, opts.levels, opts.mesh) if opts.scene == "large" else
+               many_scene(scene, opts.copies, opts.mesh))
     sdtest.camera(scene, location=(0.0, -14.0, 9.0), target=(0.0, 0.0, 0.0))
     sdtest.select_only(objects)
     depsgraph = bpy.context.evaluated_depsgraph_get()

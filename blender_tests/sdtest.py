@@ -568,3 +568,13 @@ def imported(path):
         bpy.data.objects.remove(bpy.data.objects[name])
     bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
     return obj, "%s (%d parts joined)" % (os.path.basename(path), len(meshes))
+
+
+def sized_model(path, size, location):
+    """A model file imported (imported()), scaled to `size` units across (scale applied) and placed
+    at `location`."""
+    obj, _ = imported(path)
+    obj.scale = (size / max(obj.dimensions),) * 3
+    bpy.ops.object.transform_apply(location=False, rotation=False, scale=True)
+    obj.location = location
+    return obj

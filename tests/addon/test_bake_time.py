@@ -36,9 +36,12 @@ def test_sample_mesh_keeps_its_triangles():
 
 
 def test_extrapolation_adds_the_vertices_to_the_setup():
-    # rounds (vertices, the bake's setup seconds, its seconds): the largest one's time per vertex
-    rounds = [(6, 0.5, 0.5 + 6 * 0.02), (48, 0.5, 0.5 + 48 * 0.01)]
-    assert bake_time.extrapolate(rounds, 10000) == pytest.approx(0.5 + 100.0)
+    # rounds (vertices, the bake's setup seconds, its seconds): the line through the two separates
+    # a call's fixed cost (0.1 s) from the vertices' time (0.01 s each)
+    rounds = [(6, 0.5, 0.5 + 0.1 + 6 * 0.01), (48, 0.6, 0.6 + 0.1 + 48 * 0.01)]
+    assert bake_time.extrapolate(rounds, 10000) == pytest.approx(0.6 + 0.1 + 100.0)
+    # a line that falls (noise): the largest round's time per vertex
+    assert bake_time.extrapolate([(6, 0.5, 0.9), (48, 0.5, 0.8)], 480) == pytest.approx(0.5 + 3.0)
     # a setup of seconds against a large mesh does not count as vertices' time
     assert bake_time.extrapolate([(6, 5.0, 5.06)], 2_000_000) == pytest.approx(5.0 + 0.01 * 2_000_000)
     assert bake_time.extrapolate([(10, 1.0, 0.9)], 1000) == pytest.approx(1.0)

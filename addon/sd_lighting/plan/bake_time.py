@@ -7,10 +7,11 @@ vertex, milliseconds at degree 6, tens of seconds at 18 - and on how much of the
 sees. The sample: a few triangles drawn at random (seeded) with their own vertices, baked by
 sdnative.bake_transfer with the bake's own options against the whole mesh and its occluders, so a
 sampled vertex sees what it sees in the bake and the setup is the bake's own, on as many threads.
-The bake reports its setup (`setup_seconds`); the rest of a round's time is its vertices'. A
-first small round measures both; then the largest round that the first predicts within
-SAMPLE_BUDGET measures the vertices' time (each round builds the scene again, seconds for a mesh
-of millions of triangles). A refinement before the bake (bake/refine.py) is predicted as a setup
+The bake reports its setup (`setup_seconds`); the rest of a round's time is its vertices' and a
+call's fixed cost. A first small round measures the setup; then the largest round whose vertices
+the first predicts within SAMPLE_BUDGET (each round builds the scene again, 13 s for a mesh of
+millions of triangles); the line through the two separates the vertices' time from the fixed
+cost. A refinement before the bake (bake/refine.py) is predicted as a setup
 per level and its first level's points: every vertex and an edge midpoint for each (about three
 per vertex), at its rays. Each object adds TASK_SECONDS of work around its bake.
 While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
@@ -28,12 +29,12 @@ import numpy as np
 from ..background import Worker
 
 CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
-RUN = 16                     # consecutive triangles sampled together
+RUN = 64                     # consecutive triangles sampled together
 # An object's work besides what its sampled bakes measure (its copy, the refinement's levels and
 # fit beyond their setups, storing): blender_tests/benchmark_large.py --scene many bakes 200 cubes
 # of 8 vertices at the defaults in 12.7 s, of which the rounds predicted 2 s.
 TASK_SECONDS = 0.05
-ROUNDS = (2, 16, 128)        # triangles per sample round (about 3 vertices each): the first, then one more
+ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each): the first, then one more
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
 
 
@@ -59,9 +60,18 @@ def sample_mesh(vertices, normals, triangles, count, seed=0, run=1):
 
 def extrapolate(rounds, vertex_count):
     """Seconds for `vertex_count` vertices from timed rounds [(vertices, setup seconds, seconds)]:
-    the setup of the largest round plus its time per vertex (the rest of its seconds)."""
-    n, setup, seconds = max(rounds)
-    return setup + max(seconds - setup, 0.0) * vertex_count / n
+    the setup of the largest round plus the rest of a round's seconds - its vertices' and what a
+    call costs besides (threads, results) - as the line through the two largest rounds' gives them,
+    or, from one round or a line that falls (noise), its time per vertex."""
+    rounds = sorted(rounds)
+    n2, setup, seconds2 = rounds[-1]
+    net2 = max(seconds2 - setup, 0.0)
+    if len(rounds) > 1:
+        n1, setup1, seconds1 = rounds[-2]
+        per_vertex = (net2 - max(seconds1 - setup1, 0.0)) / (n2 - n1) if n2 > n1 else -1.0
+        if per_vertex > 0.0:
+            return setup + max(net2 - per_vertex * n2, 0.0) + per_vertex * vertex_count
+    return setup + net2 * vertex_count / n2
 
 
 def lower_bound(elapsed, done, threads, vertex_count):
@@ -154,7 +164,10 @@ class BakeTimePredictor(Worker):
             estimates = list(self._estimates)
             running = self._running
         total = sum(e for e in estimates if e is not None)
-        bound = running is not None and estimates[running[0]] is None and running[2] is not None
+        # a bound only while the round's rays run (its last vertices done, it is finishing: no
+        # vertex's time is in the seconds that pass)
+        bound = (running is not None and estimates[running[0]] is None and running[2] is not None
+                 and running[3] < running[4])
         if bound:
             _, count, start, done, _ = running
             total += lower_bound(time.perf_counter() - start, done, self._threads, count)
@@ -208,7 +221,9 @@ class BakeTimePredictor(Worker):
             with self._lock:
                 self._estimates[index] = extrapolate(rounds, count)
             if len(rounds) == 1 and len(vertices) < len(mesh[0]):   # the mesh not all sampled yet
-                sizes = [size for size in ROUNDS[1:] if extrapolate(rounds, 3 * size) <= SAMPLE_BUDGET][-1:]
+                # the second round pays its setup again; its vertices' time is what the budget bounds
+                sizes = [size for size in ROUNDS[1:]
+                         if extrapolate(rounds, 3 * size) - rounds[0][1] <= SAMPLE_BUDGET][-1:]
         refinement = job.refinement() if job.refinement is not None else None
         if refinement is not None:   # (points, their cost against the bake's per point, levels)
             points, share, levels = refinement

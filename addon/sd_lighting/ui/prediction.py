@@ -139,7 +139,7 @@ def memory(context):
 
 def refusal(context):
     """Why a script's bake of the selection must be told to go ahead (None: it may run): memory
-    predicted over the free memory, or a time over a minute - predicted by sampling only where
+    predicted over the free memory, or a time over CONFIRM_SECONDS - predicted by sampling only where
     the selection is large (CHECKED_VERTICES) or the method builds designs, so that small bakes
     start at once."""
     predicted_memory = memory(context)
@@ -155,8 +155,8 @@ def refusal(context):
         return None
     predicted = for_confirmation(context, wait=None)
     if predicted is not None and predicted.needs_confirmation:
-        return ("the bake is predicted to take %s, over a minute: go_ahead=True bakes anyway"
-                % predicted.text())
+        return ("the bake is predicted to take %s, over %s: go_ahead=True bakes anyway"
+                % (predicted.text(), bake_time.format_duration(bake_time.CONFIRM_SECONDS)))
     return None
 
 

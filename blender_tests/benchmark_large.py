@@ -101,6 +101,11 @@ def main():
     print("bake with go_ahead: %s in %.1f s (%.2f x the prediction), peak memory %.1f GB; %d setting(s) %s"
           % (sorted(result), seconds, seconds / predicted.seconds,
              resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6, len(settings), sorted(settings)))
+    record = objects[0]["sd_bake"]
+    print("%s: %s -> %s vertices (%s refinement levels, %s s), %s faces doubled, %s turned; bake %.1f s"
+          % (objects[0].name, record.get("unrefined_vertices"), record["vertices"], record.get("refine_levels"),
+             record.get("refine_seconds"), record.get("faces_doubled"), record.get("faces_flipped"),
+             record["seconds"]))
     print("the automatic mode's own estimate: %s" % next(
         (line for line in objects[0]["sd_bake"].get("automatic", "").splitlines() if "bake about" in line), "none"))
     return 0

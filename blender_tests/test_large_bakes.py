@@ -10,6 +10,9 @@ ahead, leaving everything as it was.
   speed): bpy.ops.sd_lighting.bake() refuses with the predicted time and bakes nothing.
 - With the free memory made to look smaller than the bake needs: refused with both figures;
   go_ahead=True bakes anyway.
+- A refinement is predicted from a sample of the copy's triangles (plan/bake_time.py): a low-poly
+  flat-shaded ball sampled whole is predicted to the vertex the bake refines it to; a finer one,
+  sampled in part, within a factor of 2.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_large_bakes.py -- --zip Z --out DIR
 """
 
@@ -88,6 +91,32 @@ def main():
     checks.check(refused and result == {'FINISHED'} and package.store.baked.record(ball) is not None,
                  "a bake over the free memory is refused with the figures; go_ahead=True bakes it",
                  reports.strip())
+    for obj in (ball,):
+        package.store.baked.clear(obj)
+
+    # Refinement, predicted from the triangles sampled.
+    ball.hide_set(True)
+    for subdivisions in (1, 4):   # 20 and 1,280 triangles
+        low_poly = sdtest.ico_sphere(scene, name="Low %d" % subdivisions, subdivisions=subdivisions,
+                                     location=(0.0, 0.0, 1.0), smooth=False)
+        sdtest.bake_settings(scene, "prt_diffuse", 'LAMBERT', 4, rays=256, select=[low_poly], refine=True)
+        predictor = package.ui.prediction.start(bpy.context)
+        predictor.join(120)
+        task = predictor.jobs[0].task
+        estimate = task.predicted_refinement
+        predicted = -1 if estimate is None else estimate.vertex_growth * len(task.geometry.vertices)
+        result, reports = sdtest.operator_reports(bpy.ops.sd_lighting.bake, go_ahead=True)
+        record = package.store.baked.record(low_poly)
+        baked = -1 if record is None else record.vertices
+        sampled = len(task.geometry.triangles) <= package.plan.bake_time.REFINE_SAMPLE
+        checks.check(result == {'FINISHED'} and baked > len(task.geometry.vertices) and
+                     (round(predicted) == baked if sampled else 0.5 * baked <= predicted <= 2.0 * baked),
+                     "a refinement is predicted from a sample: %s" % (
+                         "all of a low-poly ball, to the vertex" if sampled else "a finer ball's, within 2x"),
+                     "%d triangles: %d -> %d vertices, predicted %.0f" % (
+                         len(task.geometry.triangles), len(task.geometry.vertices), baked, predicted))
+        package.store.baked.clear(low_poly)
+        low_poly.hide_set(True)
     return checks.summary()
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from sd_lighting.plan import bake_time
+from sd_lighting.bake.task import RefinementEstimate
 from sd_lighting.plan.bake_time import BakeTimePredictor, Prediction, SampleJob
 
 
@@ -20,6 +21,14 @@ def grid(n):
     i = i.ravel()
     triangles = np.concatenate([np.stack([i, i + 1, i + n], 1), np.stack([i + 1, i + n + 1, i + n], 1)])
     return vertices, normals, triangles.astype(np.int32)
+
+
+def test_sample_rows_are_runs_of_distinct_triangles():
+    rows = bake_time.sample_rows(1000, 128, seed=1, run=64)
+    assert len(rows) == 128 == len(np.unique(rows)) and rows.max() < 1000
+    assert np.all(np.diff(rows.reshape(2, 64), axis=1) == 1)   # two runs of consecutive triangles
+    assert np.array_equal(bake_time.sample_rows(10, 128, run=64), np.arange(10))   # all of a small mesh
+    assert len(bake_time.sample_rows(0, 16)) == 0
 
 
 def test_sample_mesh_keeps_its_triangles():
@@ -166,16 +175,17 @@ def test_what_follows_the_rays_is_added_once_from_a_sample_result():
     vertices, normals, triangles = grid(30)
     seen = []
 
-    def after_rays(sd, result):
-        seen.append(result)
-        return 100.0
+    def after_rays(sd, result, growth):
+        seen.append((result, growth))
+        return 100.0 * growth
     plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
     fitted = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {}, None, after_rays)],
                                threads=1)
     for predictor in (plain, fitted):
         predictor.start()
         assert predictor.join(30)
-    assert len(seen) == 1 and set(seen[0]) == {"setup_seconds", "seconds"}   # FakeNative's bake result
+    assert len(seen) == 1 and set(seen[0][0]) == {"setup_seconds", "seconds"}   # FakeNative's bake result
+    assert seen[0][1] == 1.0   # no refinement: the mesh's own vertices
     assert fitted.prediction().seconds == pytest.approx(plain.prediction().seconds + 100.0, rel=0.2)
 
 
@@ -191,13 +201,22 @@ def test_extra_points_are_predicted_at_the_vertices_cost():
     assert texels.prediction().seconds - setup == pytest.approx(3.0 * (plain.prediction().seconds - setup), rel=0.2)
 
 
-def test_a_refinement_adds_its_points_at_their_cost():
+def test_a_refinement_adds_its_time_and_the_points_it_makes():
+    # A refinement predicted to take 2 s and to leave 3 times the vertices and 4 times the
+    # triangles: the traced mesh grows as the triangles, the fit after the rays as the vertices.
     vertices, normals, triangles = grid(30)
+    grown = []
+
+    def after_rays(sd, result, growth):
+        grown.append(growth)
+        return 0.0
+    estimate = RefinementEstimate(2.0, 3.0, 4.0)
     plain = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {})], threads=1)
-    refined = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {},
-                                                         refinement=lambda: (400, 0.5, 3))], threads=1)
+    refined = BakeTimePredictor(FakeNative(), [SampleJob((vertices, normals, triangles), {}, None, after_rays,
+                                                         refinement=lambda sd, stop: estimate)], threads=1)
     for predictor in (plain, refined):
         predictor.start()
         assert predictor.join(30)
     added = refined.prediction().seconds - plain.prediction().seconds
-    assert added == pytest.approx(3 * FakeNative.SETUP + 0.5 * 400 * FakeNative.PER_VERTEX, rel=0.3)
+    assert added == pytest.approx(2.0 + 3 * FakeNative.PER_VERTEX * len(vertices), rel=0.3)
+    assert grown == [3.0]

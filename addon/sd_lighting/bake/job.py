@@ -84,7 +84,7 @@ class BakeJob(Worker):
                     self._step(choosing=True)
                     choices.choose(task, lambda: self.cancel_requested,
                                    lambda fraction, progress=task_progress: progress(chosen * fraction, 1.0))
-                halfway = 0.5 if task.settings.get("refine") and not task.lightmap_size else chosen
+                halfway = 0.5 if task.refines else chosen
                 t0 = time.perf_counter()
                 self._step(refining=True)
                 task.refine(sd, share(task_progress, chosen, halfway))

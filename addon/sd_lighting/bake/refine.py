@@ -66,6 +66,18 @@ class Surface:
     uvs: object = None
     sides: object = None
 
+    def subset(self, rows):
+        """The surface of the triangles `rows` alone, with their vertices (re-indexed, welds kept)."""
+        triangles = np.asarray(self.triangles)[rows]
+        used, local = np.unique(triangles, return_inverse=True)
+
+        def pick(values):
+            return None if values is None else np.asarray(values)[used]
+
+        return Surface(self.vertices[used], self.normals[used], self.positions[used], self.weld[used],
+                       local.reshape(-1, 3).astype(triangles.dtype), pick(self.slots), pick(self.uvs),
+                       pick(self.sides))
+
     def with_midpoints(self, edges, welded_edges):
         """This surface with one vertex appended at the middle of each edge [E, 2]; midpoints of
         copies of one place (welded_edges [E]: its index) share a new weld id."""

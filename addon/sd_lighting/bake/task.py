@@ -5,6 +5,7 @@ import functools
 import hashlib
 import time
 import uuid
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,6 +34,15 @@ def share(progress, start, end):
         return progress(start + (end - start) * (done / total if total else 1.0), 1.0)
     return shared
 
+
+
+@dataclass(frozen=True)
+class RefinementEstimate:
+    """A refinement predicted from a sample (BakeTask.refinement_estimate): its seconds, and how
+    many times the copy's vertices and triangles it leaves."""
+    seconds: float
+    vertex_growth: float
+    triangle_growth: float
 
 
 class SharedChoices:
@@ -75,6 +85,7 @@ class BakeTask:
         self.predicted_error = None   # of a chosen method's settings, once predicted
         self.baked = None             # the geometry baked: `geometry` or its refinement
         self.refinement = None        # refine.Refinement, when the settings ask for one
+        self.predicted_refinement = None   # RefinementEstimate, when a prediction made one
         self.refine_seconds = 0.0
         self.result = None
         self._inputs = None
@@ -235,44 +246,94 @@ class BakeTask:
                 "values": {key: spread(result[key]) for key in least_squares.FITTED if result.get(key) is not None},
                 "seconds": time.perf_counter() - start}
 
+    @property
+    def refines(self):
+        """Whether the bake refines its copy first (Refine on, without texture-space data)."""
+        return bool(self.settings.get("refine")) and not self.lightmap_size
+
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
         (refine.py, recorded in `refinement`) tested against this task's light and
         occluders with common rays. progress(done, total) as bake_transfer's, over all levels."""
-        s = self.settings
         self.baked = self.geometry
-        if not s.get("refine") or self.lightmap_size:
+        if not self.refines:
             return
+        self.refinement = self._refined(sd, self.geometry.surface(), int(self.settings["refine_max_vertices"]),
+                                        progress)
+        if self.refinement.levels:
+            self.baked = self.geometry.refined(self.refinement.surface)
+
+    def _refined(self, sd, surface, max_vertices, progress, others=(), levels=None):
+        """refine.refine of `surface` against the task's light and occluders and the parts
+        `others` [(vertices, triangles)]; `levels`: None, or a list given each level's
+        (setup seconds, seconds) of its bake."""
+        s = self.settings
         kwargs = above_horizon({"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
                                 "transfer_order": refine.CRITERION_ORDER, "common_rotation": True})
-        levels = []
+        timed = []
 
         def bake(vertices, normals, triangles, rest_vertices, rest_triangles):
-            level = len(levels)
-            levels.append(level)
+            level = len(timed)
 
             def level_progress(done, total):   # each level a share of one bar
                 return progress(level * total + done, refine.MAX_LEVELS * total)
 
-            others, other_triangles = geometry_module.join([(rest_vertices, rest_triangles)] + self.occluder_parts())
-            extra = {} if others is None else {"occluder_vertices": others, "occluder_triangles": other_triangles}
-            return sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs, **extra,
-                                    progress=level_progress)["transfer"]
+            parts = [(rest_vertices, rest_triangles)] + list(others) + self.occluder_parts()
+            others_vertices, other_triangles = geometry_module.join(parts)
+            extra = ({} if others_vertices is None else
+                     {"occluder_vertices": others_vertices, "occluder_triangles": other_triangles})
+            start = time.perf_counter()
+            result = sd.bake_transfer(vertices, normals, triangles.astype(np.int32), **kwargs, **extra,
+                                      progress=level_progress)
+            timed.append((float(result["setup_seconds"]), time.perf_counter() - start))
+            return result["transfer"]
 
         weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
-        self.refinement = refine.refine(self.geometry.surface(), bake, weights,
-                                        float(s["refine_target"]), int(s["refine_max_vertices"]))
-        if self.refinement.levels:
-            self.baked = self.geometry.refined(self.refinement.surface)
+        refinement = refine.refine(surface, bake, weights, float(s["refine_target"]), max_vertices)
+        if levels is not None:
+            levels.extend(timed)
+        return refinement
+
+    def refinement_estimate(self, sd, rows, stop):
+        """The refinement the bake will make, predicted from the refinement of the copy's
+        triangles `rows` alone, against the rest of the copy and the occluders (any thread): a
+        RefinementEstimate, or None when the bake does not refine. Its time counts each level's
+        setup once and the rest per triangle; the copy grows as the sample did, within the vertex
+        budget. stop() -> True cancels (sdnative's BakeCancelled)."""
+        if not self.refines:
+            return None
+        surface = self.geometry.surface()
+        budget = int(self.settings["refine_max_vertices"])
+        if len(surface.vertices) >= budget:   # a copy at its vertex budget already is not refined
+            return RefinementEstimate(0.0, 1.0, 1.0)
+        rows = np.asarray(rows)
+        total = len(surface.triangles)
+        unsampled = np.ones(total, dtype=bool)
+        unsampled[rows] = False
+        sample = surface.subset(rows)
+        others = [(surface.vertices, surface.triangles[unsampled])] if unsampled.any() else []
+        scale = total / max(len(rows), 1)
+        levels = []
+        refined = self._refined(sd, sample, max(int(budget / scale), len(sample.vertices) + 1),
+                                lambda done, count: not stop(), others, levels).surface
+        seconds = sum(setup + (elapsed - setup) * scale for setup, elapsed in levels)
+        vertex_growth = min(len(refined.vertices) / len(sample.vertices), budget / len(surface.vertices))
+        triangle_growth = vertex_growth * (len(refined.triangles) / len(refined.vertices)) / (
+            len(sample.triangles) / len(sample.vertices))
+        return RefinementEstimate(seconds, vertex_growth, triangle_growth)
 
     def predicted_bytes(self):
         """The peak memory of this object's bake (plan/cost.bake_bytes): of the copy to bake once it
         is known (the worker, after the choice and the refinement), else of the evaluated mesh's
-        vertices and triangles as they are (the split and the faces seen from behind add more)."""
+        vertices and triangles as they are, grown as a predicted refinement says (the split and the
+        faces seen from behind add more)."""
         known = "baked" if self.baked is not None else None
         geometry = self.baked if known else self.geometry
         vertices = len(geometry.vertices) if known else len(self.geometry.mesh_positions)
         triangles = len(geometry.triangles) if known else len(self.geometry.mesh_triangles)
+        grown = None if known else self.predicted_refinement
+        if grown is not None:
+            vertices, triangles = int(vertices * grown.vertex_growth), int(triangles * grown.triangle_growth)
         s = self.settings   # read once: the prediction's worker may adopt a choice meanwhile
         unchosen = s["method"] == analysis.AUTOMATIC
         if unchosen:   # not chosen yet: a fit and texels as asked, the largest transfer it may choose

@@ -11,9 +11,10 @@ The bake reports its setup (`setup_seconds`); the rest of a round's time is its 
 call's fixed cost. A first small round measures the setup; then the largest round whose vertices
 the first predicts within SAMPLE_BUDGET (each round builds the scene again, 13 s for a mesh of
 millions of triangles); the line through the two separates the vertices' time from the fixed
-cost. A refinement before the bake (bake/refine.py) is predicted as a setup
-per level and its first level's points: every vertex and an edge midpoint for each (about three
-per vertex), at its rays. Each object adds TASK_SECONDS of work around its bake.
+cost. A refinement before the bake (bake/refine.py) is predicted first, by refining REFINE_SAMPLE
+of the copy's triangles (all of a small one) against the rest: its time, and how many vertices the
+bake will trace (a low-poly model of 1,140 vertices is refined to 69,271, and its bake took 50
+times what its unrefined vertices predicted). Each object adds TASK_SECONDS of work around its bake.
 While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
 so within a second of them.
 
@@ -35,24 +36,33 @@ RUN = 64                     # consecutive triangles sampled together
 # of 8 vertices at the defaults in 12.7 s, of which the rounds predicted 2 s.
 TASK_SECONDS = 0.05
 ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each): the first, then one more
+REFINE_SAMPLE = 512          # triangles whose refinement predicts the copy's
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
 
 
-def sample_mesh(vertices, normals, triangles, count, seed=0, run=1):
-    """`count` triangles and their vertices, re-indexed: (vertices [n, 3], normals [n, 3],
-    triangles [count, 3] int32): runs of `run` consecutive triangles from starts drawn at random
-    without replacement (seeded). The timing rounds take runs of RUN: a mesh's neighbouring
-    triangles are mostly near in its order, and a bake's rays from neighbouring vertices find the
-    scene in the cache that isolated vertices would not (sampled one by one, a 2M-vertex mesh's
-    rays took 2.8 times the bake's per vertex); a measurement of errors takes them one by one."""
-    triangles = np.asarray(triangles).reshape(-1, 3)
-    count = min(count, len(triangles))
-    if count == 0:
-        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), np.int32)
+def sample_rows(triangle_count, count, seed=0, run=1):
+    """The indices of `count` of `triangle_count` triangles (all of them, in order, when that is
+    all): runs of `run` consecutive triangles from starts drawn at random without replacement
+    (seeded). The timing rounds take runs of RUN:
+    a mesh's neighbouring triangles are mostly near in its order, and a bake's rays from
+    neighbouring vertices find the scene in the cache that isolated vertices would not (sampled
+    one by one, a 2M-vertex mesh's rays took 2.8 times the bake's per vertex); a measurement of
+    errors takes them one by one."""
+    if count >= triangle_count:
+        return np.arange(triangle_count)
     run = max(min(run, count), 1)
     rng = np.random.default_rng(seed)
-    starts = run * rng.choice(len(triangles) // run, max(count // run, 1), replace=False)
-    chosen = triangles[(starts[:, None] + np.arange(run)[None, :]).ravel()[:count]]
+    starts = run * rng.choice(triangle_count // run, max(count // run, 1), replace=False)
+    return (starts[:, None] + np.arange(run)[None, :]).ravel()[:count]
+
+
+def sample_mesh(vertices, normals, triangles, count, seed=0, run=1):
+    """The triangles sample_rows draws and their vertices, re-indexed: (vertices [n, 3],
+    normals [n, 3], triangles [count, 3] int32)."""
+    triangles = np.asarray(triangles).reshape(-1, 3)
+    chosen = triangles[sample_rows(len(triangles), count, seed, run)]
+    if len(chosen) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), np.int32)
     used, inverse = np.unique(chosen.ravel(), return_inverse=True)
     return (np.asarray(vertices)[used], np.asarray(normals)[used],
             inverse.reshape(-1, 3).astype(np.int32))
@@ -114,12 +124,13 @@ class SampleJob:
     triangles), a dict or a function of a stop query returning one. Both functions are called in
     the worker, the keywords first (the automatic mode chooses the settings there, and they
     decide the mesh: least squares' centroid split); `task`: the caller's; `after_rays`: None, or
-    a function of (sdnative, a sample bake's result) returning the seconds the bake spends after
-    its rays (the least-squares fit), called in the worker; `extra_points`: points baked beside
-    the mesh's vertices at the same cost per point (texels), a count or a function returning one,
-    called in the worker after the keywords; `refinement`: None, or a function returning None or
-    (points, the cost of one against one of the bake's, levels) of a refinement before the bake,
-    called in the worker after the keywords."""
+    a function of (sdnative, a sample bake's result, the growth of the mesh's vertices by its
+    refinement) returning the seconds the bake spends after its rays (the least-squares fit),
+    called in the worker; `extra_points`: points baked beside the mesh's vertices at the same cost
+    per point (texels), a count or a function returning one, called in the worker after the
+    keywords; `refinement`: None, or a function of (sdnative, stop) returning None or a
+    BakeTask.refinement_estimate of a refinement before the bake, called in the worker after the
+    keywords (the traced mesh grows as its triangles do)."""
     mesh: object
     bake_arguments: object
     task: object = None
@@ -194,7 +205,10 @@ class BakeTimePredictor(Worker):
     def _sample(self, index, job):
         arguments = job.arguments(lambda: self.cancel_requested)
         mesh = job.traced_mesh()
-        count = len(mesh[0]) + job.points()
+        refinement = (job.refinement(self._sd, lambda: self.cancel_requested)
+                      if job.refinement is not None else None)
+        growth = 1.0 if refinement is None else refinement.triangle_growth
+        count = int(round(len(mesh[0]) * growth)) + job.points()
         rounds = []
         sizes = list(ROUNDS[:1])
         while sizes:
@@ -219,20 +233,15 @@ class BakeTimePredictor(Worker):
             setup = float(result["setup_seconds"]) + max(elapsed - float(result["seconds"]), 0.0)
             rounds.append((len(vertices), setup, elapsed))
             with self._lock:
-                self._estimates[index] = extrapolate(rounds, count)
+                self._estimates[index] = extrapolate(rounds, count) + (0.0 if refinement is None
+                                                                       else refinement.seconds)
             if len(rounds) == 1 and len(vertices) < len(mesh[0]):   # the mesh not all sampled yet
                 # the second round pays its setup again; its vertices' time is what the budget bounds
                 sizes = [size for size in ROUNDS[1:]
                          if extrapolate(rounds, 3 * size) - rounds[0][1] <= SAMPLE_BUDGET][-1:]
-        refinement = job.refinement() if job.refinement is not None else None
-        if refinement is not None:   # (points, their cost against the bake's per point, levels)
-            points, share, levels = refinement
-            setup = extrapolate(rounds, 0)
-            with self._lock:
-                self._estimates[index] += levels * setup + share * (extrapolate(rounds, points) - setup)
         with self._lock:
             self._estimates[index] += TASK_SECONDS
         if job.after_rays is not None:
-            after = job.after_rays(self._sd, result)
+            after = job.after_rays(self._sd, result, 1.0 if refinement is None else refinement.vertex_growth)
             with self._lock:
                 self._estimates[index] += after

@@ -10,7 +10,7 @@ import os
 import time
 
 from .. import methods, native, redraw
-from ..bake import geometry as geometry_module, job as job_module, least_squares, lightmap, prepare, refine
+from ..bake import geometry as geometry_module, job as job_module, least_squares, lightmap, prepare
 from ..bake import task as task_module
 from ..errors import BakeError
 from ..plan import analysis, bake_time, cost
@@ -65,26 +65,30 @@ def sample_jobs(tasks):
         mesh = (geometry.vertices, geometry.normals, geometry.triangles)
         return least_squares.centroid_split(*mesh) if task.fits_least_squares else mesh
 
-    def fit_seconds(task, sd, result):
+    def fit_seconds(task, sd, result, growth):
         if not task.fits_least_squares:
             return 0.0
-        return least_squares.predicted_seconds(sd, len(task.geometry.vertices), least_squares.channels(result))
+        return least_squares.predicted_seconds(sd, len(task.geometry.vertices) * growth,
+                                               least_squares.channels(result))
 
-    def refinement(task):
-        """The refinement's first level (bake/refine.py): every vertex and a midpoint of each edge
-        (about three per vertex), at its rays (at most the bake's)."""
-        settings = task.settings
-        vertices = len(task.geometry.vertices)
-        if not settings.get("refine") or task.lightmap_size or vertices >= int(settings["refine_max_vertices"]):
-            return None   # a copy at its vertex budget already is not refined
-        rays = int(settings["rays"])
-        return 4 * vertices, min(rays, refine.CRITERION_RAYS) / rays, refine.MAX_LEVELS
+    refinements = {}   # share key -> the first such task's estimate: copies refine alike
+
+    def refinement(task, index, sd, stop):
+        known = refinements.get(task.share_key) if task.share_key is not None else None
+        if known is None:
+            rows = bake_time.sample_rows(len(task.geometry.triangles), bake_time.REFINE_SAMPLE, seed=index,
+                                         run=bake_time.RUN)
+            known = task.refinement_estimate(sd, rows, stop)
+            if task.share_key is not None:
+                refinements[task.share_key] = known
+        task.predicted_refinement = known   # for its memory
+        return known
 
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
-                                lambda sd, result, task=task: fit_seconds(task, sd, result),
+                                lambda sd, result, growth, task=task: fit_seconds(task, sd, result, growth),
                                 lambda task=task: lightmap.expected_texels(task.lightmap_size),
-                                lambda task=task: refinement(task))
-            for task in tasks]
+                                lambda sd, stop, task=task, index=index: refinement(task, index, sd, stop))
+            for index, task in enumerate(tasks)]
 
 
 def start(context):

@@ -107,7 +107,7 @@ def main():
              record.get("refine_seconds"), record.get("faces_doubled"), record.get("faces_flipped"),
              record["seconds"]))
     print("the automatic mode's own estimate: %s" % next(
-        (line for line in objects[0]["sd_bake"].get("automatic", "").splitlines() if "bake about" in line), "none"))
+        (line for line in objects[0]["sd_bake"].get("automatic", "").splitlines() if line.startswith("Cost:")), "none"))
     return 0
 
 

@@ -53,6 +53,7 @@ class _Candidate:
     frame_terms: int
     floats: int
     bake_seconds: float
+    points: int                # that its bake traces
 
     def cost(self):
         return (self.frame_terms, self.floats, self.bake_seconds)
@@ -77,7 +78,7 @@ def _candidates(table, gaunt, vertices, threads, fixed, fitted_points):
                     setting = accuracy.Setting(method_id, s, sv, rays)
                     yield _Candidate(setting, table.error(setting), method.frame_terms(s, sv, gaunt),
                                      cost.stored_floats(method, s, sv),
-                                     cost.bake_seconds(method, s, sv, rays, traced, threads))
+                                     cost.bake_seconds(method, s, sv, rays, traced, threads), traced)
 
 
 def choose(table, target_error, gaunt, vertices, threads, bake_budget, fixed=None, fitted_points=None):
@@ -159,5 +160,7 @@ def _reasons(table, best, candidates, target, met, fixed):
         lines.append("Rays: %d - ray noise %.1f %% (measured %.1f %% at %d)" % (
             setting.rays, 100 * measured.noise * (measured.rays / setting.rays) ** 0.5,
             100 * measured.noise, measured.rays))
-    lines.append("Cost: %d floats per vertex, bake about %.1f s" % (best.floats, best.bake_seconds))
+    # the rays alone, of the copy as it is: the panel's predicted bake time adds the refinement
+    lines.append("Cost: %d floats per vertex; rays about %.1f s for its {:,} points before any refinement"
+                 .format(best.points) % (best.floats, best.bake_seconds))
     return lines

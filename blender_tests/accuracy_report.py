@@ -261,7 +261,7 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
         settings += [("msd_visibility", s, sv, full_rays), ("msd_lobe", s, sv, full_rays)]
 
     # CPU cost: every setting on all vertices, once per lobe kind (one HDRI: the cost does not depend on it).
-    light = sdnative.load_environment(hdris[0]).sh(s_max)
+    light = package.scene.environment.load_file(hdris[0]).sh(s_max)
     for lobe, exponent in (("lambert", 1.0), ("phong", 16.0)):
         views = data.views[0] if lobe == "phong" else None
         for method, s, sv, rays in settings:
@@ -286,7 +286,7 @@ def vertex_grid(package, sdnative, data, hdris, config, progress, rows, costs):
     lobes = config["lobes"]
     for path in hdris:
         hdri = os.path.basename(path)
-        env = sdnative.load_environment(path)
+        env = package.scene.environment.load_file(path)
         light = env.sh(s_max)
         # lobe key -> (reference [V, P, 3], standard error, {setting: B [V, P, 3]}, measured [V, P]):
         # glossy B is measured where the view sees the point's front (n.v > 0.05).
@@ -359,7 +359,7 @@ STRIP_METHODS = [("unshadowed", 4, 0), ("ambient_occlusion", 4, 0), ("prt_diffus
 def strip_vertices(package, sdnative, data, bakes, designs, hdri_path, config, strip):
     """The image strip's vertex panels: the reference at every vertex (Lambert) and each method at
     s = 4, s' = 2 with the full bake's rays, with the vertices' clip-space positions."""
-    env = sdnative.load_environment(hdri_path)
+    env = package.scene.environment.load_file(hdri_path)
     truth, se = sdnative.reference(env, bakes[config["full_rays"]]["ray_origins"], data.normals, np.zeros((0, 3), np.int32), rotation=data.g,
                                    samples=config["samples"] // 4, seed=3, occluder_vertices=data.scene_vertices,
                                    occluder_triangles=data.scene_triangles)
@@ -548,11 +548,11 @@ def predictions(package, sdnative, data, hdris, config, rows, progress):
     out = []
     for path in hdris:
         hdri = os.path.basename(path)
-        light = sdnative.load_environment(path).sh(max_order)
+        light = package.scene.environment.load_file(path).sh(max_order)
         for lobe, exponent in (("lambert", 1.0), ("phong", 16.0)):
             material = lobe_key(lobe, exponent)
             for table_rays in config["predicted_rays"]:
-                table = accuracy.ErrorTable(sdnative, sample, sdnative.load_environment(path),
+                table = accuracy.ErrorTable(sdnative, sample, package.scene.environment.load_file(path),
                                             lambda s: light[:(s + 1) ** 2], lobe, exponent, data.g,
                                             [m.id for m in package.methods.METHODS], max_order, table_rays)
                 for row in rows:

@@ -61,6 +61,7 @@ TESTS = [
     ("test_extension", BACKGROUND, 300, [], [], (4, 2, 0)),
     ("test_bake", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_default_scene", BACKGROUND, 600, [], [], (3, 4, 0)),
+    ("test_portable", BACKGROUND, 300, [], [], (4, 2, 0)),
     ("test_shader_variants", GPU, 600, [], [], (3, 4, 0)),
     ("test_gpu_matches_cpu", GPU, 600, [], [], (3, 4, 0)),
     ("test_gpu_hard_cases", GPU, 300, [], [], (3, 4, 0)),

@@ -21,12 +21,12 @@ if [[ -n "$py313" ]]; then
     cmake -S "$root" -B "$root/build/py313" -DCMAKE_BUILD_TYPE=Release \
           -DPython3_EXECUTABLE="$venv/bin/python" -Dpybind11_DIR="$("$venv/bin/python" -m pybind11 --cmakedir)" \
           -DSD_BUILD_TESTS=OFF -DSD_BUILD_BENCHMARKS=OFF > /dev/null
-    targets=(sdnative)   # and the x86-64-v3 build where native/CMakeLists.txt defines one
+    targets=(sdnative_addon)   # and the x86-64-v3 build where native/CMakeLists.txt defines one
     if cmake --build "$root/build/py313" --target help | grep sdnative_x86_64_v3 > /dev/null; then
       targets+=(sdnative_x86_64_v3)
     fi
     cmake --build "$root/build/py313" --target "${targets[@]}" -j "$(nproc)"
-    native313="$(for target in "${targets[@]}"; do ls "$root"/build/py313/native/"$target".cpython-313-*.so; done |
+    native313="$(for target in "${targets[@]}"; do ls "$root"/build/py313/native/addon/"${target%_addon}".cpython-313-*.so; done |
                  paste -sd ';')"
   else
     echo "build.sh: pybind11 for CPython 3.13 could not be installed; building for 3.11 only" >&2

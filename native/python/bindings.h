@@ -12,8 +12,11 @@ void bind_sh(pybind11::module_& m);
 /// Weighted spherical designs of lobes, tabulated zonal weights and discrete measures.
 void bind_designs(pybind11::module_& m);
 
-/// Environment maps: the class Environment (size, texels, masses, area-averaged copies), loading.
+/// Environment maps: the class Environment (size, texels, masses, area-averaged copies), from pixels.
 void bind_environment(pybind11::module_& m);
+
+/// load_environment and load_cube_environment: image files (the test module only; after bind_environment).
+void bind_image_files(pybind11::module_& m);
 
 /// Environment.sh, .band_limited, .band_energies and band_limited_texture (after bind_environment).
 void bind_sh_projection(pybind11::module_& m);

@@ -1,4 +1,6 @@
-// The Python module `sdnative`: the sdlighting library for the Blender add-on and for tests.
+// The Python module `sdnative`: the sdlighting library for the Blender add-on and for tests. Built
+// twice: for the add-on, and with SD_IMAGE_FILES (load_environment, load_cube_environment:
+// OpenImageIO) for the tests and tools.
 //
 // Every array argument is accepted as anything numpy can convert to a C-contiguous float64 array;
 // every array result is a fresh float64 (or int32 for index tables) numpy array. Shapes, finiteness
@@ -45,8 +47,8 @@ Functions:
   gaunt_coefficients(a, b, c)           real Gaunt coefficients (sparse)
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
-  load_environment(path), load_cube_environment(faces), environment_from_pixels(rgb)
-                                        -> Environment: .sh(lmax), .band_limited(...), errors, designs
+  environment_from_pixels(rgb), load_environment(path), load_cube_environment(faces)
+                                        -> Environment (the last two not in the add-on's module): .sh(lmax), .band_limited(...), errors, designs
   rotated_environment_sh(coeffs, g)     coefficients of x -> L(g x)
   bake_transfer(vertices, normals, triangles, rays, ...)   per-vertex AO, Ṽ, M, T, V designs
   bake_visibility(vertices, normals, triangles, order, rays, ...)   Ṽ only
@@ -101,6 +103,9 @@ PYBIND11_MODULE(sdnative, m) {
   sdpy::bind_sh(m);
   sdpy::bind_designs(m);
   sdpy::bind_environment(m);  // the class first: the next four add its methods
+#ifdef SD_IMAGE_FILES
+  sdpy::bind_image_files(m);
+#endif
   sdpy::bind_sh_projection(m);
   sdpy::bind_environment_error(m);
   sdpy::bind_ringing(m);

@@ -219,20 +219,39 @@ def _image_pixels(image):
     return rgb
 
 
+def _file_pixels(path):
+    """The RGB of an image file as _image_pixels gives it, read by Blender: the add-on's sdnative
+    reads no files, so that it links no image library (issue 31). Raises OSError."""
+    import bpy
+    try:
+        image = bpy.data.images.load(path, check_existing=False)
+    except RuntimeError as exc:
+        raise OSError("Blender cannot read %s: %s" % (path, exc)) from exc
+    try:
+        if 0 in tuple(image.size):   # reading the size loads the pixels
+            raise OSError("Blender cannot read %s: it finds no pixels in it" % path)
+        return _image_pixels(image)
+    finally:
+        bpy.data.images.remove(image)
+
+
 def environment(src):
     """The sdnative.Environment of a file or pixel Source (cached)."""
     env = _cache.get(src.key)
     if env is None:
         sd = native.get()
         try:
-            if src.kind == "file":
-                env = sd.load_environment(src.path)
-            else:
-                env = sd.environment_from_pixels(_image_pixels(src.image))
+            rgb = _file_pixels(src.path) if src.kind == "file" else _image_pixels(src.image)
+            env = sd.environment_from_pixels(rgb)
         except (OSError, ValueError) as exc:
             raise Unavailable("cannot read the environment (%s): %s" % (src.description, exc)) from exc
         _cache[src.key] = env
     return env
+
+
+def load_file(path):
+    """The sdnative.Environment of an image file (cached; for scripts). Raises Unavailable."""
+    return environment(Source("file", _file_key(path), path, path=path))
 
 
 BACKGROUND_MAX_WIDTH = 2048   # the world background's texture: finer maps are sampled down

@@ -1,4 +1,5 @@
-// Environment maps L (the distant light of eq. (1)): loading through OpenImageIO, the texels, their
+// Environment maps L (the distant light of eq. (1)): loading through OpenImageIO (load() and load_cube(),
+// in the library sdlighting_image_files: the add-on's module links no image library), the texels, their
 // masses and norms, area-averaged copies. What is computed from a map has a header per concern:
 // sh_projection.h (SH coefficients, band energies, band-limited textures L̃), environment_error.h
 // (the error measures that choose the order s), ringing.h (windows against ringing and the error of

@@ -67,34 +67,6 @@ Environment Environment::from_texels(EnvironmentLayout layout, int width, int he
   return env;
 }
 
-Environment Environment::load(const std::string& path) {
-  LoadedImage image = read_image_file(path);
-  return from_texels(EnvironmentLayout::Equirect, image.width, image.height, std::move(image.rgb),
-                     "environment map '" + path + "'");
-}
-
-Environment Environment::load_cube(const std::array<std::string, 6>& faces) {
-  std::vector<float> rgb;
-  int size = 0;
-  for (int f = 0; f < 6; ++f) {
-    const LoadedImage image = read_image_file(faces[f]);
-    const std::string origin = std::string("cube face ") + kFaceNames[f] + " '" + faces[f] + "'";
-    if (image.width != image.height) {
-      throw std::invalid_argument(origin + " is not square (" + std::to_string(image.width) + " x " +
-                                  std::to_string(image.height) + ")");
-    }
-    if (f == 0) {
-      size = image.width;
-      rgb.reserve(static_cast<size_t>(size) * size * 18);
-    } else if (image.width != size) {
-      throw std::invalid_argument(origin + " is " + std::to_string(image.width) + " pixels wide, face +X is " +
-                                  std::to_string(size) + ": all faces must have one size");
-    }
-    rgb.insert(rgb.end(), image.rgb.begin(), image.rgb.end());
-  }
-  return from_texels(EnvironmentLayout::Cube, size, size, std::move(rgb), "cube map '" + faces[0] + "', ...");
-}
-
 Environment Environment::from_equirect_pixels(int width, int height, std::vector<float> rgb) {
   return from_texels(EnvironmentLayout::Equirect, width, height, std::move(rgb), "equirect pixels");
 }

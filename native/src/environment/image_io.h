@@ -1,4 +1,5 @@
-// Reading environment images and checking their pixels. Private to the environment files.
+// Checking environment images' sizes and pixels, and reading image files (read_image_file: image_file.cpp,
+// the library sdlighting_image_files). Private to the environment files.
 #pragma once
 
 #include <cstdint>

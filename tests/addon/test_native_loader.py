@@ -62,8 +62,13 @@ print(json.dumps({"file": sd.__file__, "ao": out["ambient_occlusion"].tolist(),
 """
 
 
+# The add-on's builds (the zip's): the test module beside them in build/native has only the portable one.
+ADDON_BUILDS = os.environ.get("SDNATIVE_ADDON_PATH") or os.path.join(
+    os.path.dirname(__file__), "..", "..", "build", "native", "addon")
+
+
 def bake_with(build):
-    environment = dict(os.environ, SDNATIVE_BUILD=build)
+    environment = dict(os.environ, SDNATIVE_BUILD=build, SDNATIVE_PATH=os.path.abspath(ADDON_BUILDS))
     script = BAKE % os.path.dirname(os.path.dirname(native.__file__))
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=environment,
                             timeout=300)

@@ -249,17 +249,18 @@ def _draw_handler():
     if settings is None or not settings.live_shading or context.region_data is None:
         return
     try:
-        objects = baked_objects(scene, context.view_layer)
-        if not objects and not settings.world_background:
-            return
-        view = View.from_region(context.region_data)
-        gpu.state.depth_test_set('LESS_EQUAL')
-        gpu.state.depth_mask_set(True)
-        gpu.state.blend_set('NONE')
-        draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS,
-                     instances=baked_instances(scene, objects, context.view_layer))
-        if settings.world_background:
-            draw_background(scene, view, exposure_scale(scene))
+        with baked.records_once():
+            objects = baked_objects(scene, context.view_layer)
+            if not objects and not settings.world_background:
+                return
+            view = View.from_region(context.region_data)
+            gpu.state.depth_test_set('LESS_EQUAL')
+            gpu.state.depth_mask_set(True)
+            gpu.state.blend_set('NONE')
+            draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS,
+                         instances=baked_instances(scene, objects, context.view_layer))
+            if settings.world_background:
+                draw_background(scene, view, exposure_scale(scene))
         gpu.state.depth_mask_set(False)
         gpu.state.depth_test_set('NONE')
         last_error = ""

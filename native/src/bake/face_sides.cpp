@@ -92,8 +92,6 @@ struct Pieces {
   }
 };
 
-double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
-
 }  // namespace
 
 std::vector<FaceSides> classify_sides(const std::vector<glm::dvec3>& points, const std::vector<Triangle>& triangles,

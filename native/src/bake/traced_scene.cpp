@@ -42,8 +42,6 @@ std::vector<glm::dvec3> shifted(const std::vector<glm::dvec3>& points, const glm
   return out;
 }
 
-double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
-
 // The triangles around each vertex (compressed rows), degenerate ones left out: they have no side.
 struct Fans {
   std::vector<std::size_t> offsets;  // [N+1]

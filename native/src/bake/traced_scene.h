@@ -43,6 +43,8 @@
 
 #include <glm/vec3.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -52,6 +54,10 @@ namespace sd {
 constexpr double kOriginOffset = 1e-3;
 /// ... but at least kOriginFloat × the vertex's largest coordinate in the traced space.
 constexpr double kOriginFloat = 1e-5;
+/// The largest coordinate's magnitude, which kOriginFloat scales: what float rounding is relative to.
+inline double largest_coordinate(const glm::dvec3& p) {
+  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+}
 /// The faces around a vertex whose centroids a candidate origin is probed towards, largest first.
 constexpr int kProbedFaces = 16;
 /// η of a vertex without faces, relative to the object's bounding-box diagonal.

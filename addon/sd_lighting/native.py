@@ -57,6 +57,8 @@ def builds(features, override=None):
 def load_file(path):
     """Imports the module file `path`, of either build: both define PyInit_sdnative, so the
     module is "sdnative" either way."""
+    if hasattr(os, "add_dll_directory"):   # Windows (untested): the Embree it carries lies beside it
+        os.add_dll_directory(os.path.dirname(os.path.abspath(path)))
     spec = importlib.util.spec_from_file_location("sdnative", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -64,18 +66,18 @@ def load_file(path):
 
 
 def _load():
-    abi = "cpython-%d%d" % sys.version_info[:2]
+    tags = ("cpython-%d%d" % sys.version_info[:2], "cp%d%d-" % sys.version_info[:2])   # Linux and macOS, Windows
     for directory in _candidate_directories():
         if not os.path.isdir(directory):
             continue
         names = os.listdir(directory)
         for build in builds(cpu_features(), os.environ.get("SDNATIVE_BUILD")):
             for name in sorted(names):
-                if name.startswith(build + ".") and name.endswith(".so") and abi in name:
+                if name.startswith(build + ".") and name.endswith((".so", ".pyd")) and any(t in name for t in tags):
                     return load_file(os.path.join(directory, name))
     raise ImportError(
         "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
-        "$SDNATIVE_PATH or in the repository's build/native/" % abi)
+        "$SDNATIVE_PATH or in the repository's build/native/" % tags[0])
 
 
 def get():

@@ -7,14 +7,11 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 namespace sd {
@@ -29,23 +26,25 @@ bool names_linear_space(std::string name) {
 }
 
 // Refuses what is not a non-empty regular file before OpenImageIO opens it: a directory, a FIFO (opening
-// it blocks until a writer comes), a device such as /dev/zero (endless data) or a socket. stat() looks
-// without opening, so nothing here can block or read.
+// it blocks until a writer comes), a device such as /dev/zero (endless data) or a socket. The status
+// is looked up without opening the file, so nothing here can block or read.
 void check_regular_file(const std::string& path, const std::string& origin) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) {
-    throw std::runtime_error("cannot open " + origin + ": " + std::strerror(errno));
-  }
-  if (S_ISDIR(info.st_mode)) throw std::runtime_error("cannot open " + origin + ": it is a directory, not an image file");
-  if (!S_ISREG(info.st_mode)) {
-    const char* kind = S_ISFIFO(info.st_mode)                                 ? "a FIFO (named pipe)"
-                       : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode)       ? "a device file"
-                       : S_ISSOCK(info.st_mode)                               ? "a socket"
-                                                                              : "not a regular file";
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (error) throw std::runtime_error("cannot open " + origin + ": " + error.message());
+  if (fs::is_directory(status)) throw std::runtime_error("cannot open " + origin + ": it is a directory, not an image file");
+  if (!fs::is_regular_file(status)) {
+    const char* kind = fs::is_fifo(status)                                        ? "a FIFO (named pipe)"
+                       : fs::is_character_file(status) || fs::is_block_file(status) ? "a device file"
+                       : fs::is_socket(status)                                    ? "a socket"
+                                                                                  : "not a regular file";
     throw std::runtime_error("cannot open " + origin + ": it is " + kind +
                              ", not an image file (refused without reading: it could block or never end)");
   }
-  if (info.st_size == 0) throw std::runtime_error("cannot open " + origin + ": the file is empty (0 bytes)");
+  if (fs::file_size(path, error) == 0 && !error) {
+    throw std::runtime_error("cannot open " + origin + ": the file is empty (0 bytes)");
+  }
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ if [[ "$(id -u)" != 0 ]] || ! unshare -m true 2>/dev/null; then
   exit 77
 fi
 hidden="$(for f in /usr/lib/x86_64-linux-gnu/lib{embree3,tbb,tbbmalloc,OpenImageIO,OpenImageIO_Util}.so.*; do
-            [[ -e "$f" ]] && readlink -f "$f"; done | sort -u | paste -sd:)"
+            if [[ -e "$f" ]]; then readlink -f "$f"; fi; done | sort -u | paste -sd:)"
 export SD_HIDDEN_LIBRARIES="$hidden"
 exec unshare -m bash -c '
   IFS=: read -ra files <<< "$SD_HIDDEN_LIBRARIES"

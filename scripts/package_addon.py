@@ -66,6 +66,8 @@ def carried_libraries(natives):
     for native in natives:
         listing = subprocess.run(["ldd", native], capture_output=True, text=True, check=True).stdout
         for name, path in re.findall(r"^\s*(\S+) => (\S+)", listing, re.M):
+            if path == "not":   # "=> not found"
+                sys.exit("package_addon: %s needs %s, which this machine does not have" % (native, name))
             if name not in SYSTEM_LIBRARIES:
                 carried[name] = os.path.realpath(path)
     return carried

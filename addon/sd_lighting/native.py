@@ -9,9 +9,9 @@ directory in the environment variable `SDNATIVE_PATH`, or the repository's `buil
 searched instead.
 """
 
+import importlib.machinery
 import importlib.util
 import os
-import sys
 
 _module = None
 _error = None
@@ -66,18 +66,19 @@ def load_file(path):
 
 
 def _load():
-    tags = ("cpython-%d%d" % sys.version_info[:2], "cp%d%d-" % sys.version_info[:2])   # Linux and macOS, Windows
+    # the interpreter's own suffix (".cpython-311-x86_64-linux-gnu.so", ".cp311-win_amd64.pyd"): a zip
+    # may carry other versions' and platforms' builds too
+    suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
     for directory in _candidate_directories():
         if not os.path.isdir(directory):
             continue
-        names = os.listdir(directory)
+        names = set(os.listdir(directory))
         for build in builds(cpu_features(), os.environ.get("SDNATIVE_BUILD")):
-            for name in sorted(names):
-                if name.startswith(build + ".") and name.endswith((".so", ".pyd")) and any(t in name for t in tags):
-                    return load_file(os.path.join(directory, name))
+            if build + suffix in names:
+                return load_file(os.path.join(directory, build + suffix))
     raise ImportError(
         "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
-        "$SDNATIVE_PATH or in the repository's build/native/" % tags[0])
+        "$SDNATIVE_PATH or in the repository's build/native/" % suffix)
 
 
 def get():

@@ -22,7 +22,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -144,8 +143,8 @@ py::class_<sd::Environment> environment_class(py::module_& m) {
 void bind_environment(py::module_& m) {
   py::class_<sd::Environment> env(m, "Environment", R"doc(A distant environment map L (immutable).
 
-Built by load_environment, load_cube_environment, environment_from_pixels or
-environment_from_cube_pixels. Orientation is Blender's world (Cycles' equirectangular mapping):
+Built by environment_from_pixels or environment_from_cube_pixels (and, in the tests' module,
+load_environment or load_cube_environment). Orientation is Blender's world (Cycles' equirectangular mapping):
 direction d is seen at u = 0.5 - atan2(d.y, d.x) / (2 pi), v = 1 - acos(d.z) / pi with v = 0 at
 the image's bottom row, so in an image held rows top-first (as files are) the pixel in row j,
 column i has centre theta = pi (j + 0.5) / H, phi = pi - 2 pi (i + 0.5) / W: +X looks at the

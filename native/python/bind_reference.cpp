@@ -69,7 +69,7 @@ void bind_reference(py::module_& m) {
         R"doc(The reference: eq. (1) by Monte Carlo with the full-resolution environment, ray-traced V and the
 exact lobe — what every method is measured against.
 
-environment: an Environment (load_environment); vertices, normals (N, 3); triangles (T, 3) int:
+environment: an Environment (environment_from_pixels); vertices, normals (N, 3); triangles (T, 3) int:
 the object's mesh (it shadows itself); occluder_vertices/occluder_triangles: other blockers.
 views (N, 3): unit vectors to the eye (phong only); rotation g (3, 3) as in shade().
 samples: sample pairs per vertex, one from the environment (∝ luminance) and one from the lobe,

@@ -304,9 +304,9 @@ class BakeTask:
             return None
         surface = self.geometry.surface()
         budget = int(self.settings["refine_max_vertices"])
-        if len(surface.vertices) >= budget:   # a copy at its vertex budget already is not refined
-            return RefinementEstimate(0.0, 1.0, 1.0)
         rows = np.asarray(rows)
+        if len(surface.vertices) >= budget or len(rows) == 0:   # at its budget already: not refined
+            return RefinementEstimate(0.0, 1.0, 1.0)
         total = len(surface.triangles)
         unsampled = np.ones(total, dtype=bool)
         unsampled[rows] = False
@@ -314,7 +314,8 @@ class BakeTask:
         others = [(surface.vertices, surface.triangles[unsampled])] if unsampled.any() else []
         scale = total / max(len(rows), 1)
         levels = []
-        refined = self._refined(sd, sample, max(int(budget / scale), len(sample.vertices) + 1),
+        sample_budget = int(budget * len(sample.vertices) / len(surface.vertices))
+        refined = self._refined(sd, sample, max(sample_budget, len(sample.vertices) + 1),
                                 lambda done, count: not stop(), others, levels).surface
         seconds = sum(setup + (elapsed - setup) * scale for setup, elapsed in levels)
         vertex_growth = min(len(refined.vertices) / len(sample.vertices), budget / len(surface.vertices))

@@ -31,8 +31,8 @@ from ..background import Worker
 
 CONFIRM_SECONDS = 60.0       # a longer bake asks before it starts
 RUN = 64                     # consecutive triangles sampled together
-# An object's work besides what its sampled bakes measure (its copy, the refinement's levels and
-# fit beyond their setups, storing): blender_tests/benchmark_large.py --scene many bakes 200 cubes
+# An object's work besides what its sampled bakes measure (its copy, the refinement's and the
+# fit's work beyond their bakes, storing): blender_tests/benchmark_large.py --scene many bakes 200 cubes
 # of 8 vertices at the defaults in 12.7 s, of which the rounds predicted 2 s.
 TASK_SECONDS = 0.05
 ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each): the first, then one more

@@ -24,6 +24,7 @@ bake's lobe and order, chosen once per (source, lobe, exponent, order, setting) 
 """
 
 import os
+import threading
 
 import numpy as np
 
@@ -221,8 +222,11 @@ def _image_pixels(image):
 
 def _file_pixels(path):
     """The RGB of an image file as _image_pixels gives it, read by Blender: the add-on's sdnative
-    reads no files, so that it links no image library (issue 31). Raises OSError."""
+    reads no files, so that it links no image library (issue 31). Raises OSError, also off the
+    main thread (a worker finding the cache emptied by a file load): bpy is the main thread's."""
     import bpy
+    if threading.current_thread() is not threading.main_thread():
+        raise OSError("%s is read on Blender's main thread only: bake again" % path)
     try:
         image = bpy.data.images.load(path, check_existing=False)
     except RuntimeError as exc:

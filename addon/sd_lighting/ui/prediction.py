@@ -66,8 +66,8 @@ def sample_jobs(tasks):
         return least_squares.centroid_split(*mesh) if task.fits_least_squares else mesh
 
     def fit_seconds(task, sd, result, growth):
-        if not task.fits_least_squares:
-            return 0.0
+        if not task.fits_least_squares or len(task.geometry.vertices) * growth > least_squares.MAX_VERTICES:
+            return 0.0   # the bake skips the fit over its limit
         return least_squares.predicted_seconds(sd, len(task.geometry.vertices) * growth,
                                                least_squares.channels(result))
 
@@ -131,8 +131,8 @@ def for_confirmation(context, wait=3.0):
 
 def memory(context):
     """(the object of the selection whose bake needs the most memory, its predicted peak bytes,
-    the free bytes), or None when unknown (plan/cost.bake_bytes; before the choice and the
-    refinement, of the meshes as they are)."""
+    the free bytes), or None when unknown (plan/cost.bake_bytes: before the choice, of the meshes
+    as they are, grown as the refinement is predicted to grow them once it is)."""
     predictor = start(context)
     free = cost.available_bytes()
     if predictor is None or free is None or not predictor.jobs:
@@ -158,6 +158,9 @@ def refusal(context):
     if vertices <= CHECKED_VERTICES and not designs:
         return None
     predicted = for_confirmation(context, wait=None)
+    predicted_memory = memory(context)   # now with the refinement's predicted growth
+    if predicted_memory is not None and predicted_memory[1] > predicted_memory[2]:
+        return job_module.memory_refusal(*predicted_memory)
     if predicted is not None and predicted.needs_confirmation:
         return ("the bake is predicted to take %s, over %s: go_ahead=True bakes anyway"
                 % (predicted.text(), bake_time.format_duration(bake_time.CONFIRM_SECONDS)))

@@ -6,7 +6,8 @@ Variants: every method x lobes (Lambert, Phong, Lambert + Phong; PRT (2) Lambert
 vertex-target, the texture-space variants of the methods whose data texels hold (drawn, per
 pixel), and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each
 drawn variant with material albedos (slots and an image texture; Lambert + Phong with the slots'
-Principled weights, and Phong alone with them as a metal has): N_VARIANTS programs, each built by
+Principled weights, and Phong alone with them as a metal has; each of those also with the
+prefiltered glossy light): N_VARIANTS programs, each built by
 gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
@@ -49,7 +50,7 @@ import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 418        # the programs variants() enumerates
+N_VARIANTS = 454        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
@@ -63,6 +64,7 @@ def variants(package):
     """Every variant the live shading can build at ORDERS."""
     shader_variant = _module(package, "live.shader_variant")
     sd = package.native.get()
+    prefiltered_atlas = (sd.PREFILTER_WIDTH, sd.PREFILTER_LEVELS)
     for method in _module(package, "methods").METHODS:
         for glossy, both in (((False, False),) if method.lambert_only else
                              ((False, False), (True, False), (True, True))):
@@ -89,24 +91,28 @@ def variants(package):
                     yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
                                                  lightmap=LIGHTMAP, **lobes)
                     if (s, sv) == ALBEDO_ORDERS:
-                        yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
-                                                     material_count=3, material_slots=True,
-                                                     albedo_texture=True, lightmap=LIGHTMAP, **lobes)
+                        for prefiltered in ((), prefiltered_atlas) if both else ((),):
+                            yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
+                                                         material_count=3, material_slots=True,
+                                                         albedo_texture=True, lightmap=LIGHTMAP,
+                                                         prefiltered=prefiltered, **lobes)
                 for per_pixel in (False, True):
                     for vertex_target in (False, True):
                         for texture in textures:
                             yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt,
                                                          per_pixel, vertex_target, texture, **lobes)
                             if (s, sv) == ALBEDO_ORDERS and not vertex_target:
-                                yield shader_variant.Variant(
-                                    method, glossy, s, sv, stride, design, gaunt, per_pixel,
-                                    vertex_target, texture, material_count=3, material_slots=True,
-                                    albedo_texture=True, **lobes)
-                                if glossy and not both:   # Principled metals: weights, one lobe
+                                for prefiltered in ((), prefiltered_atlas) if both else ((),):
                                     yield shader_variant.Variant(
                                         method, glossy, s, sv, stride, design, gaunt, per_pixel,
                                         vertex_target, texture, material_count=3, material_slots=True,
-                                        albedo_texture=True, lobe_weights=True)
+                                        albedo_texture=True, prefiltered=prefiltered, **lobes)
+                                if glossy and not both:   # Principled metals: weights, one lobe
+                                    for prefiltered in ((), prefiltered_atlas):
+                                        yield shader_variant.Variant(
+                                            method, glossy, s, sv, stride, design, gaunt, per_pixel,
+                                            vertex_target, texture, material_count=3, material_slots=True,
+                                            albedo_texture=True, lobe_weights=True, prefiltered=prefiltered)
 
 
 def one_per_define(package, all_variants):

@@ -36,7 +36,8 @@ vec2 sd_environment_brdf(float n_dot_v, float roughness)
 }
 #endif
 
-/* The surface's radiance from lobe 0's B and (SD_DIFFUSE_LOBE) the Lambert lobe's: with
+/* The surface's radiance from lobe 0's B (SD_PREFILTERED: its prefiltered light) and
+ * (SD_DIFFUSE_LOBE) the Lambert lobe's: with
  * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): Phong times the specular layer's
  * albedo mix(F0, albedo, metallic) A + B, Lambert times (1 - metallic) albedo, less the dielectric
  * layer's F0 A + B where the layer lies over the diffuse (layer 1; 2: added to it; 0: no layer);
@@ -68,6 +69,15 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
   return lobe0 * albedo;
 #endif
 }
+
+#ifdef SD_PREFILTERED
+/* Lobe 0's light at the pixel (times 2^exposure): the environment prefiltered by the slot's GGX
+ * lobe around the mirrored view, times the share `visibility` of it the bake lets through. */
+vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
+{
+  return (sd.params.x * visibility) * sd_prefiltered_light(sd_lobe_axis(normal, view), sd_lobe_weights.z);
+}
+#endif
 
 #ifdef SD_PER_PIXEL
 /* Adds the B of data entry `entry` (a triangle corner's vertex, or a lightmap texel) with its
@@ -127,15 +137,26 @@ void main()
   sd_add_entry(sd_bary.y, int(sd_corners.y + 0.5), normal, view, rgb, diffuse);
   sd_add_entry(sd_bary.z, int(sd_corners.z + 0.5), normal, view, rgb, diffuse);
 #  endif
-  fragColor = vec4(sd_surface(sd.params.x * rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
+#  ifdef SD_PREFILTERED
+  rgb = sd_glossy_light(sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal), normal, view);
+#  else
+  rgb *= sd.params.x;
+#  endif
+  fragColor = vec4(sd_surface(rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
 #else
 #  ifdef SD_DIFFUSE_LOBE
   diffuse = sd_diffuse_color;
 #  endif
+#  ifdef SD_PREFILTERED
+  vec3 normal = normalize(sd_normal);
+  vec3 view = sd_view_direction(sd_origin_offset);
+  fragColor = vec4(sd_surface(sd_glossy_light(sd_visibility, normal, view), diffuse, dot(normal, view)), 1.0);
+#  else
   float n_dot_v = 1.0;
-#  ifdef SD_LOBE_WEIGHTS
+#    ifdef SD_LOBE_WEIGHTS
   n_dot_v = sd_n_dot_v;
-#  endif
+#    endif
   fragColor = vec4(sd_surface(sd_color, diffuse, n_dot_v), 1.0);
+#  endif
 #endif
 }

@@ -40,6 +40,14 @@
  *                        map sd_lightmap_index, -1 where none is stored), read at the pixel's
  *                        lightmap UV (bake/lightmap.py) instead of at its triangle's vertices
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
+ *   SD_PREFILTERED       (with SD_LOBE_WEIGHTS) lobe 0's light is the environment prefiltered by
+ *                        the slot's GGX lobe (native glossy_prefilter.h: the split sum), looked up
+ *                        per pixel at g R r in the atlas sd_prefiltered (SD_PREFILTERED_MAP names
+ *                        it; SD_PREFILTERED_WIDTH, SD_PREFILTERED_LEVELS its layout), times the
+ *                        share of lobe 0's low-order light the baked visibility lets through
+ *                        (sd_visibility_ratio; SD_OPEN_ORDER: the order the method's B reaches
+ *                        where V = 1; SD_HORIZON_LOBE: the block's row of horizon factors,
+ *                        SD_HORIZON_ORDER their order)
  *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
  *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it
  *                        for sd_equirect.glsl) at g R x (sd.local_to_environment) instead of
@@ -66,28 +74,37 @@
  * The constants come as defines (comma-separated, the float64 values of
  * sdnative.sh_recurrence_constants); the a/b tables are indexed l (l + 1) / 2 + m.
  * ------------------------------------------------------------------------------------------- */
+/* Funk-Hecke factor w_l of lobe 0 (the only one, or Phong) or 1 (Lambert; w_0 = 1), from the
+ * frame block. */
+float sd_lobe_factor(int lobe, int l)
+{
+  return sd.lobe[lobe * SD_LOBE_VEC4S + l / 4][l % 4];
+}
+
 #ifdef SD_BASIS_ORDER
 const float sd_sh_diagonal[SD_BASIS_ORDER + 1] = float[SD_BASIS_ORDER + 1](SD_SH_DIAGONAL);
 const float sd_sh_a[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_A);
 const float sd_sh_b[SD_SH_TABLE_SIZE] = float[SD_SH_TABLE_SIZE](SD_SH_B);
 
-/* SD_SH_SUM (MSD 13 with the SH path, whose only use of the basis is L~ at a direction): the
- * recurrences below compute L~(d) = sum_i L_i y_i(d) (order SD_BASIS_ORDER = s), summed while the
- * basis is generated, without a basis array (faster where arrays spill). Otherwise they fill the
- * basis y_i(d). */
+/* SD_SH_SUM (MSD 13 with the SH path, whose only use of the basis is sums of L at a direction): the
+ * recurrences below compute sum_{l <= order} f_l sum_m L_lm y_lm(d), f_l = 1 (lobe < 0) or lobe's
+ * factor w_l, summed while the basis is generated, without a basis array (faster where arrays
+ * spill). Otherwise they fill the basis y_i(d) up to SD_BASIS_ORDER. */
 #  if defined(SD_METHOD_MSD_VISIBILITY) && !defined(SD_BAND_LIMITED_TEXTURE)
 #    define SD_SH_SUM
-vec3 sd_light_at(vec3 d)
+vec3 sd_banded_light(vec3 d, int lobe, int order)
 #  else
 void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
 #  endif
 {
 #  ifdef SD_SH_SUM
   vec3 sum = vec3(0.0);
+#  else
+  int order = SD_BASIS_ORDER;
 #  endif
   float re = 1.0;
   float im = 0.0;
-  for (int m = 0; m <= SD_BASIS_ORDER; m++) {
+  for (int m = 0; m <= order; m++) {
     if (m > 0) {
       float r = re * d.x - im * d.y;
       im = re * d.y + im * d.x;
@@ -96,7 +113,7 @@ void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
     float q_prev2 = 0.0;
     float q_prev = 0.0;
     float q = sd_sh_diagonal[m];
-    for (int l = m; l <= SD_BASIS_ORDER; l++) {
+    for (int l = m; l <= order; l++) {
       if (l > m) {
         int k = (l * (l + 1)) / 2 + m;
         q = sd_sh_a[k] * d.z * q_prev - sd_sh_b[k] * q_prev2;
@@ -105,9 +122,10 @@ void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
       q_prev = q;
       int center = l * l + l;
 #  ifdef SD_SH_SUM
-      sum += sd.light[center + m].rgb * (q * re);
+      float f = (lobe < 0) ? 1.0 : sd_lobe_factor(lobe, l);
+      sum += sd.light[center + m].rgb * (f * q * re);
       if (m > 0) {
-        sum += sd.light[center - m].rgb * (q * im);
+        sum += sd.light[center - m].rgb * (f * q * im);
       }
 #  else
       y[center + m] = q * re;
@@ -121,6 +139,14 @@ void sd_sh_basis(vec3 d, out float y[SD_BASIS_COUNT])
   return sum;
 #  endif
 }
+
+#  ifdef SD_SH_SUM
+/* L~(d) = sum_i L_i y_i(d) for the rotated environment. */
+vec3 sd_light_at(vec3 d)
+{
+  return sd_banded_light(d, -1, SD_BASIS_ORDER);
+}
+#  endif
 #endif
 
 #ifdef SD_BAND_LIMITED_TEXTURE
@@ -132,13 +158,6 @@ vec3 sd_light_at(vec3 d)
 }
 
 #endif
-
-/* Funk-Hecke factor w_l of lobe 0 (the only one, or Phong) or 1 (Lambert; w_0 = 1), from the
- * frame block. */
-float sd_lobe_factor(int lobe, int l)
-{
-  return sd.lobe[lobe * SD_LOBE_VEC4S + l / 4][l % 4];
-}
 
 #if defined(SD_BASIS_ORDER) && defined(SD_LIGHT_COUNT) && !defined(SD_BAND_LIMITED_TEXTURE)
 /* L~(x) = sum_i L_i y_i(x) for the rotated environment, given the basis at x. */
@@ -206,17 +225,18 @@ void sd_orthonormal_basis(vec3 a, out vec3 t1, out vec3 t2)
 }
 #endif
 
-#ifdef SD_METHOD_MSD_VISIBILITY
-/* The lobe truncated at order s': w~(t) = sum_{l<=s'} (2l+1) w_l P_l(t). */
-float sd_truncated_lobe(float t, int lobe)
+#if defined(SD_METHOD_MSD_VISIBILITY) || defined(SD_PREFILTERED)
+/* sum_{l <= order} (2l+1) f_l P_l(t) for the factors f_l of block row `lobe`: a lobe's w_l give
+ * the lobe truncated at that order (eq. 13's w~), SD_HORIZON_LOBE's the horizon factor. */
+float sd_legendre_sum(float t, int lobe, int order)
 {
   float p_prev = 1.0;
   float p = t;
   float sum = sd_lobe_factor(lobe, 0);
-  if (SD_VIS_ORDER >= 1) {
+  if (order >= 1) {
     sum += 3.0 * sd_lobe_factor(lobe, 1) * t;
   }
-  for (int l = 2; l <= SD_VIS_ORDER; l++) {
+  for (int l = 2; l <= order; l++) {
     float fl = float(l);
     float next = ((2.0 * fl - 1.0) * t * p - (fl - 1.0) * p_prev) / fl;
     p_prev = p;
@@ -234,14 +254,18 @@ float sd_truncated_lobe(float t, int lobe)
 #  define SD_LOBE1(code)
 #endif
 
-#if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
-/* Funk-Hecke: sum_l w_l sum_m L_lm y_lm(a). */
-vec3 sd_unshadowed(vec3 a, int lobe)
+#if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION) || defined(SD_PREFILTERED)
+/* Funk-Hecke up to `order` (<= SD_BASIS_ORDER): the lobe's unshadowed light
+ * sum_{l <= order} w_l sum_m L_lm y_lm(a). */
+vec3 sd_open_light(vec3 a, int lobe, int order)
 {
+#  ifdef SD_SH_SUM
+  return sd_banded_light(a, lobe, order);
+#  else
   vec3 rgb = vec3(0.0);
   float y[SD_BASIS_COUNT];
   sd_sh_basis(a, y);
-  for (int l = 0; l <= SD_BASIS_ORDER; l++) {
+  for (int l = 0; l <= order; l++) {
     vec3 band = vec3(0.0);
     for (int i = l * l; i < (l + 1) * (l + 1); i++) {
       band += sd.light[i].rgb * y[i];
@@ -249,6 +273,47 @@ vec3 sd_unshadowed(vec3 a, int lobe)
     rgb += sd_lobe_factor(lobe, l) * band;
   }
   return rgb;
+#  endif
+}
+#endif
+
+#ifdef SD_PREFILTERED
+/* The share of lobe 0's light (axis a0) that the baked visibility lets through at a surface of
+ * normal n (msd-notes, "Glossy light"): the method's low-order B (b0) over what the same formula
+ * gives where nothing but the surface's own tangent plane occludes - the lobe's Funk-Hecke sum to
+ * SD_OPEN_ORDER times the horizon factor, the share of the truncated lobe above the plane in a
+ * uniform world -, in luminance, within [0, 1]. The horizon itself is the split sum's (its
+ * directional albedo); the ratio keeps what other geometry hides. Both are offset by a tenth of
+ * the environment's mean radiance (L_00): where the truncated sums come near zero (a lobe facing
+ * a dark ground) their ratio would swing between 0 and 1 with the ringing, not the shadow. */
+float sd_visibility_ratio(vec3 b0, vec3 a0, vec3 n)
+{
+  const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
+  float offset = max(0.1 * dot(sd.light[0].rgb, luminance), 1e-8);
+  float horizon = min(sd_legendre_sum(dot(a0, normalize(n)), SD_HORIZON_LOBE, SD_HORIZON_ORDER), 1.0);
+  float open = max(horizon * dot(sd_open_light(a0, 0, SD_OPEN_ORDER), luminance), 0.0);
+  float shadowed = max(dot(b0, luminance), 0.0);
+  return clamp((shadowed + offset) / (open + offset), 0.0, 1.0);
+}
+
+/* Level k of the prefiltered atlas (glossy_prefilter.h's PrefilterLayout) at the environment
+ * direction e. */
+vec3 sd_prefiltered_level(vec3 e, int k)
+{
+  int w0 = SD_PREFILTERED_WIDTH;
+  ivec2 origin = (k == 0) ? ivec2(0) : ivec2(w0 - (w0 >> (k - 1)), w0 / 2);
+  return sd_equirect_block(1, origin, ivec2(w0 >> k, w0 >> (k + 1)), e);
+}
+
+/* The environment prefiltered by the GGX lobe of perceptual roughness r around the local direction
+ * d (looked up at g R d): linear between the two levels around r (level k holds r = k / (levels -
+ * 1)). */
+vec3 sd_prefiltered_light(vec3 d, float roughness)
+{
+  vec3 e = normalize(mat3(sd.local_to_environment) * d);
+  float level = clamp(roughness, 0.0, 1.0) * float(SD_PREFILTERED_LEVELS - 1);
+  int k = min(int(level), SD_PREFILTERED_LEVELS - 2);
+  return mix(sd_prefiltered_level(e, k), sd_prefiltered_level(e, k + 1), level - float(k));
 }
 #endif
 
@@ -295,8 +360,8 @@ void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
   b1 = vec3(0.0);
 
 #if defined(SD_METHOD_UNSHADOWED) || defined(SD_METHOD_AMBIENT_OCCLUSION)
-  b0 = sd_unshadowed(a0, 0);
-  SD_LOBE1(b1 = sd_unshadowed(a1, 1);)
+  b0 = sd_open_light(a0, 0, SD_BASIS_ORDER);
+  SD_LOBE1(b1 = sd_open_light(a1, 1, SD_BASIS_ORDER);)
 #  ifdef SD_METHOD_AMBIENT_OCCLUSION
   float ao = sd_vertex_texel(p, 0).x;
   b0 *= ao;
@@ -366,8 +431,8 @@ void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
       break;
     }
     vec3 light = node.w * sd_light_at(node.xyz);
-    b0 += sd_truncated_lobe(dot(node.xyz, a0), 0) * light;
-    SD_LOBE1(b1 += sd_truncated_lobe(dot(node.xyz, a1), 1) * light;)
+    b0 += sd_legendre_sum(dot(node.xyz, a0), 0, SD_VIS_ORDER) * light;
+    SD_LOBE1(b1 += sd_legendre_sum(dot(node.xyz, a1), 1, SD_VIS_ORDER) * light;)
   }
 #endif
 }

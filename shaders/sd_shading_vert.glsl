@@ -12,7 +12,8 @@
  * SD_ALBEDO: the vertex's material slot picks its albedo from sd.albedo (SD_MATERIAL_SLOTS: the
  * attribute material_slot, else slot 0), passed on with the UV of the albedo texture, and with
  * SD_LOBE_WEIGHTS the slot's lobe weights and n.v. SD_DIFFUSE_LOBE: the Lambert lobe's B goes in
- * sd_diffuse_color.
+ * sd_diffuse_color. SD_PREFILTERED (per vertex): instead of lobe 0's B and n.v, its visibility
+ * ratio, and the position and normal with which the fragment looks the glossy light up.
  */
 void main()
 {
@@ -60,11 +61,18 @@ void main()
   vec3 view = sd_view_direction(mat3(sd.model) * pos);
   vec3 b0, b1;
   sd_shade_lobes(gl_VertexID, normal, view, b0, b1);
+#  ifdef SD_PREFILTERED
+  /* lobe 0's light is looked up per pixel; the vertex gives the share its visibility lets through */
+  sd_visibility = sd_visibility_ratio(b0, sd_lobe_axis(normal, view), normal);
+  sd_origin_offset = mat3(sd.model) * pos;
+  sd_normal = nrm;
+#  else
   sd_color = sd.params.x * b0;
+#  endif
 #  ifdef SD_DIFFUSE_LOBE
   sd_diffuse_color = sd.params.x * b1;
 #  endif
-#  ifdef SD_LOBE_WEIGHTS
+#  if defined(SD_LOBE_WEIGHTS) && !defined(SD_PREFILTERED)
   sd_n_dot_v = dot(normal, view);
 #  endif
 #endif

@@ -33,6 +33,9 @@ class Method:
     gaunt_table: bool = False  # reads the real Gaunt coefficients (eq. 10)
     equal_to: Optional[str] = None   # the method whose result it equals for the same bake (its
                                      # error is measured once, as that method's)
+    open_order: Callable = lambda s, sv: s   # (s, s') -> the order of the lobe's Funk-Hecke sum
+                                     # its B is where V = 1 (the prefiltered glossy light's
+                                     # visibility ratio divides by that)
 
     def bake_arguments(self, light_order, visibility_order):
         """sdnative.bake_transfer's keywords for what this method reads (the ambient occlusion
@@ -70,7 +73,8 @@ METHODS = (
            lobe_order=lambda s, sv: sv,
            # each node: L~ there and the lobe truncated at s'
            frame_terms=lambda s, sv, gaunt: design_nodes(s + sv) * ((s + 1) ** 2 + sv + 1),
-           uses_visibility_order=True, band_limited_texture=True, equal_to="prt_matrix"),
+           uses_visibility_order=True, band_limited_texture=True, equal_to="prt_matrix",
+           open_order=lambda s, sv: min(s, sv)),
     Method("msd_lobe", "MSD Theorem 2.1 (12)", "MSD (12)",
            "Method of spherical designs with a design of the BRDF lobe turned onto the lobe axis: "
            "eq. (12). Equal to PRT (10)", VISIBILITY,
@@ -93,7 +97,7 @@ METHODS = (
            lobe_order=lambda s, sv: sv,
            # M^T L, then against the lobe of order s'
            frame_terms=lambda s, sv, gaunt: (s + 1) ** 2 * (sv + 1) ** 2 + (sv + 1) ** 2,
-           uses_visibility_order=True),
+           uses_visibility_order=True, open_order=lambda s, sv: min(s, sv)),
     Method("prt_diffuse", "PRT (2), diffuse", "PRT (2)",
            "Precomputed radiance transfer for Lambert materials: one dot product, eq. (2)",
            TRANSFER,

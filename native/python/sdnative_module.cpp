@@ -8,6 +8,7 @@
 // the library's own std::invalid_argument also surfaces as ValueError and its std::runtime_error
 // ("no certified design") as RuntimeError. Long computations release the GIL.
 #include "bindings.h"
+#include "sdlighting/glossy_prefilter.h"
 #include "sdlighting/limits.h"
 
 #include <string>
@@ -47,6 +48,8 @@ Functions:
   gaunt_coefficients(a, b, c)           real Gaunt coefficients (sparse)
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
+  Environment.prefiltered_ggx(...)     the map prefiltered by the GGX lobe per roughness (split sum)
+  environment_brdf(n_dot_v, roughness)  the GGX lobe's directional albedo (A, B)
   environment_from_pixels(rgb), load_environment(path), load_cube_environment(faces)
                                         -> Environment (the last two not in the add-on's module): .sh(lmax), .band_limited(...), errors, designs
   rotated_environment_sh(coeffs, g)     coefficients of x -> L(g x)
@@ -100,6 +103,8 @@ PYBIND11_MODULE(sdnative, m) {
   m.attr("MAX_RAYS_PER_VERTEX") = sd::kMaxRaysPerVertex;
   m.attr("MAX_SHADING_ORDER") = sd::kMaxShadingOrder;
   m.attr("MAX_CALL_BYTES") = sd::kMaxCallBytes;
+  m.attr("PREFILTER_WIDTH") = sd::PrefilterLayout().width0;
+  m.attr("PREFILTER_LEVELS") = sd::PrefilterLayout().levels;
   sdpy::bind_sh(m);
   sdpy::bind_designs(m);
   sdpy::bind_environment(m);  // the class first: the next four add its methods
@@ -110,6 +115,7 @@ PYBIND11_MODULE(sdnative, m) {
   sdpy::bind_environment_error(m);
   sdpy::bind_ringing(m);
   sdpy::bind_channel_design(m);
+  sdpy::bind_glossy_prefilter(m);
   sdpy::bind_environment_sampler(m);
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);

@@ -74,3 +74,34 @@ def test_a_bake_record_names_its_lobes():
     assert both == lobes.Lobes("phong", 8.0, True, True)
     assert both.shaded() == [("phong", 8.0), ("lambert", 1.0)]
     assert lobes.Lobes("phong", 8.0).shaded() == [("phong", 8.0)]
+
+
+def test_horizon_factors_are_the_half_space_step():
+    # h_l = 1/2 integral_0^1 P_l, by the trapezoid rule on the Legendre polynomials
+    import numpy as np
+    from numpy.polynomial import legendre
+    t = np.linspace(0.0, 1.0, 20001)
+    for l, h in enumerate(lobes.horizon_factors(9)):
+        values = legendre.legval(t, np.eye(10)[l])
+        assert h == pytest.approx(0.5 * np.sum((values[1:] + values[:-1]) / 2) * (t[1] - t[0]), abs=1e-8)
+
+
+@pytest.mark.parametrize("exponent, angle", [(8.0, 0.0), (8.0, 1.2), (30.0, 1.45), (1.0, 0.7)])
+def test_horizon_share_of_a_lobe_by_funk_hecke(sdnative, exponent, angle):
+    """sum_l (2l+1) h_l w_l P_l(a.n) is the share of a Phong lobe around a above the plane of n:
+    against a quadrature of the lobe over the sphere."""
+    import numpy as np
+    from numpy.polynomial import legendre
+    order = 40
+    w = np.asarray(sdnative.zonal_coefficients("phong", exponent, order))
+    series = legendre.legval(np.cos(angle), (2 * np.arange(order + 1) + 1) * lobes.horizon_factors(order) * w)
+    # the lobe (2 sigma + 2) max(0, a.x)^sigma over dmu = dx / 4 pi, a tilted by `angle` from n = z
+    theta = (np.arange(800) + 0.5) * np.pi / 800
+    phi = (np.arange(1600) + 0.5) * 2 * np.pi / 1600
+    st, ph = np.meshgrid(theta, phi, indexing="ij")
+    x = np.stack([np.sin(st) * np.cos(ph), np.sin(st) * np.sin(ph), np.cos(st)], axis=-1)
+    a = np.array([np.sin(angle), 0.0, np.cos(angle)])
+    lobe = (2 * exponent + 2) * np.maximum(x @ a, 0.0) ** exponent
+    weights = np.sin(st) * (np.pi / 800) * (2 * np.pi / 1600) / (4 * np.pi)
+    share = np.sum(lobe * weights * (x[..., 2] > 0.0)) / np.sum(lobe * weights)
+    assert series == pytest.approx(share, abs=5e-3)

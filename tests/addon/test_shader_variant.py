@@ -23,16 +23,19 @@ def all_variants():
             both = lobes == "both"
             if lobes != "lambert" and method.lambert_only:
                 continue
-            for texels in ((False, True) if per_pixel and lightmap.applies(method) else (False,)):
+            weights = lobes in ("metal", "both")
+            for texels, prefiltered in itertools.product(
+                    (False, True) if per_pixel and lightmap.applies(method) else (False,),
+                    (False, True) if weights else (False,)):
                 yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
                               shader_variant.band_limited_texture_size(4) if texture else (),
                               material_count=2 if albedo else 0, material_slots=albedo,
-                              albedo_texture=albedo, lobe_weights=lobes in ("metal", "both"),
+                              albedo_texture=albedo, lobe_weights=weights,
                               diffuse_lobe=both,
                               diffuse_design_size=12 if both and method.lobe_design else 0,
-                              lightmap=(64, 32) if texels else ())
+                              lightmap=(64, 32) if texels else (), prefiltered=(1024, 7) if prefiltered else ())
 
 
 def test_defines_of_a_known_variant(sdnative):
@@ -80,7 +83,7 @@ def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source,
     for variant in all_variants():
         defines = variant.defines(sdnative.sh_recurrence_constants)
         produced |= set(defines)
-        equirect_maps.add(defines.get("SD_EQUIRECT_MAP"))
+        equirect_maps |= {defines.get("SD_EQUIRECT_MAP"), defines.get("SD_PREFILTERED_MAP")}
         fields |= {f.name for f in variant.frame_fields()}
         samplers |= {name for _, name in variant.samplers()}
     defined_in_glsl = set(re.findall(r"#\s*define\s+(SD_[A-Z0-9_]+)", source))
@@ -88,7 +91,8 @@ def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source,
     assert used == produced
     assert set(re.findall(r"\bsd\.([a-z_]+)", source)) == fields
     glsl_samplers = set(re.findall(r"(?:texelFetch|texture)\((sd_[a-z_]+)", source))
-    assert "texelFetch(SD_EQUIRECT_MAP" in source   # sd_equirect.glsl reads the one it names
+    # sd_equirect.glsl reads the maps they name
+    assert "texelFetch(SD_EQUIRECT_MAP" in source and "texelFetch(SD_PREFILTERED_MAP" in source
     assert glsl_samplers | (equirect_maps - {None}) == samplers
 
 

@@ -29,6 +29,7 @@ from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
 from . import gpu_shading, staleness
+from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER
 
 log = logging.getLogger(__name__)
 
@@ -47,18 +48,18 @@ def clear_cache():
     _instances = (None, [])
 
 
-def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False):
+def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False, prefiltered=False):
     """The GPU data of the object's bake (cached until the bake or the mode changes), or None."""
     mesh = baked.baked_mesh(obj)
     if mesh is None:
         return None
-    key = (mesh.name, baked.mesh_record(mesh).bake_id, per_pixel, vertex_target, band_limited_texture)
+    key = (mesh.name, baked.mesh_record(mesh).bake_id, per_pixel, vertex_target, band_limited_texture, prefiltered)
     cache_key = (obj.name, vertex_target)
     cached = _objects.get(cache_key)
     if cached is not None and cached[0] == key:
         return cached[1]
     data = gpu_shading.ObjectData(mesh, per_pixel=per_pixel, vertex_target=vertex_target,
-                                  band_limited_texture=band_limited_texture)
+                                  band_limited_texture=band_limited_texture, prefiltered=prefiltered)
     _objects[cache_key] = (key, data)
     return data
 
@@ -170,22 +171,30 @@ def use_band_limited_texture(scene):
     return bool(settings is not None and settings.band_limited_texture)
 
 
+def use_prefiltered_glossy(scene):
+    """The scene's option: glossy Principled lobes are lit by the prefiltered environment."""
+    settings = getattr(scene, "sd_lighting", None)
+    return bool(settings is None or settings.prefiltered_glossy)
+
+
 def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, **kwargs):
-    """(uniform block, band-limited texture or None) of one draw of the object's data with `matrix`
-    (default: its world matrix; an instance's). wait: as shading_light; without waiting, what is
-    still pending is watched (_watch_background)."""
+    """(uniform block, {sampler: texture} of the environment textures it reads) of one draw of the
+    object's data with `matrix` (default: its world matrix; an instance's). wait: as
+    shading_light; without waiting, what is still pending is watched (_watch_background)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
     block = data.frame_block(matrix, view.view_projection, view.camera,
                              light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
-    texture = None
+    source = source or environment.source(scene)
+    textures = {}
     if data.uses_band_limited_texture:
-        source = source or environment.source(scene)
-        texture = gpu_shading.band_limited_texture(
+        textures[BAND_LIMITED_TEXTURE_SAMPLER[1]] = gpu_shading.band_limited_texture(
             source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
+    if data.variant.prefiltered_lookup:
+        textures[PREFILTERED_SAMPLER[1]] = gpu_shading.prefiltered_texture(source)
     if not wait:
         _watch_background()
-    return block, texture
+    return block, textures
 
 
 def exposure_scale(scene):
@@ -200,14 +209,15 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, w
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
+    prefiltered = use_prefiltered_glossy(scene)
     for obj, matrix in [(obj, None) for obj in objects] + list(instances):
         record = baked.record(obj)
         data = object_data(obj, per_pixel=per_pixel or bool(record and record.per_pixel),
-                           band_limited_texture=band_limited_texture)
+                           band_limited_texture=band_limited_texture, prefiltered=prefiltered)
         if data is None:
             continue
-        block, texture = _frame(scene, obj, data, view, scale, wait, source, g, matrix, depth_bias=depth_bias)
-        data.draw(block, texture)
+        block, textures = _frame(scene, obj, data, view, scale, wait, source, g, matrix, depth_bias=depth_bias)
+        data.draw(block, textures)
 
 
 def draw_background(scene, view, scale):
@@ -315,10 +325,10 @@ def gpu_vertex_values(scene, obj, view, per_pixel=False, wait=True):
     n = data.vertex_count
     width = min(n, 1024)
     height = (n + width - 1) // width
-    block, texture = _frame(scene, obj, data, view, 1.0, wait, target=(width, height))
+    block, textures = _frame(scene, obj, data, view, 1.0, wait, target=(width, height))
     offscreen = gpu.types.GPUOffScreen(width, height, format='RGBA32F')
     try:
-        values = draw_offscreen(offscreen, lambda: data.draw(block, texture), depth_test=False)
+        values = draw_offscreen(offscreen, lambda: data.draw(block, textures), depth_test=False)
     finally:
         offscreen.free()
     return values.reshape(-1, 4)[:n, :3]

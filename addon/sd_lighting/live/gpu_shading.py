@@ -39,8 +39,8 @@ from ..scene import environment, lobes, materials, transforms
 from ..store import attributes, baked
 from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
 from . import lobe_designs as lobe_design_cache
-from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BAND_LIMITED_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER,
-                             LIGHTMAP_INDEX_SAMPLER, Variant, band_limited_texture_size)
+from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER, LIGHTMAP_INDEX_SAMPLER, Variant,
+                             band_limited_texture_size)
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
@@ -53,6 +53,7 @@ _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
+_prefiltered_textures = {}    # source key -> GPUTexture
 _background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
 
 
@@ -85,6 +86,7 @@ def clear_cache():
         _lobe_designs.close()
         _lobe_designs = None
     _band_limited_textures.clear()
+    _prefiltered_textures.clear()
     _background.clear()
 
 
@@ -182,6 +184,25 @@ def band_limited_texture(source, light):
     return texture
 
 
+def prefiltered_layout():
+    """(width0, levels) of the prefiltered atlas (sdnative's PREFILTER_WIDTH, PREFILTER_LEVELS)."""
+    return native.get().PREFILTER_WIDTH, native.get().PREFILTER_LEVELS
+
+
+def prefiltered_texture(source):
+    """The environment of `source` prefiltered by the GGX lobe per roughness level, strength
+    applied (scene/environment.prefiltered_atlas), as the RGBA32F atlas texture the shader's
+    sd_prefiltered_light reads (cached per source)."""
+    texture = _prefiltered_textures.get(source.key)
+    if texture is None:
+        atlas = environment.prefiltered_atlas(source, *prefiltered_layout())
+        height, width, _ = atlas.shape
+        texels = np.ones((height, width, 4), dtype=np.float32)
+        texels[..., :3] = atlas
+        texture = _prefiltered_textures[source.key] = _texture(width, height, texels)
+    return texture
+
+
 def _background_shader():
     """(GPUShader, batch of its screen-covering triangle) of the world background (compiled once)."""
     compiled = _background.get("shader")
@@ -271,7 +292,7 @@ def lobe_design_status():
 class ObjectData:
     """GPU data of one baked mesh: batches, per-vertex texture, shader variant, lobe constants."""
 
-    def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False):
+    def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False, prefiltered=False):
         record = baked.mesh_record(mesh)
         self.method = methods.get(record.method)
         self.lobes = record.lobes
@@ -305,13 +326,10 @@ class ObjectData:
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
                                lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
-                               diffuse_design_size=design_sizes[1], lightmap=self.lightmap)
+                               diffuse_design_size=design_sizes[1], lightmap=self.lightmap,
+                               prefiltered=prefiltered_layout() if prefiltered and self.lobes.weighted else ())
         self.shader = shader_program(self.variant)
-        per_lobe = 4 * self.variant.lobe_vec4s
-        self.lobe_factors = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
-        for k, (lobe, exponent) in enumerate(self.lobes.shaded()):
-            factors = native.get().zonal_coefficients(lobe, exponent, self.variant.lobe_order)
-            self.lobe_factors[k * per_lobe:k * per_lobe + len(factors)] = factors
+        self._lobe_factors = (None, None)   # (lobe_vec4s, lobe_order, lobe_count), lobe_factors()
 
         positions = attributes.read_positions(mesh)
         normals = attributes.read_normals(mesh)
@@ -365,6 +383,25 @@ class ObjectData:
         degree = self.light_order + self.visibility_order
         return [lobe_design(lobe, exponent, degree) for lobe, exponent in self.lobes.shaded()]
 
+    def lobe_factors(self):
+        """The block's rows of factors: the variant's lobes' Funk-Hecke factors to its lobe order,
+        and with the prefiltered lookup (once weights are drawn) the horizon factors h_l w_l of
+        lobe 0 (scene/lobes.horizon_factors), or 1 for a method that sees no horizon."""
+        key = (self.variant.lobe_vec4s, self.variant.lobe_order, self.variant.lobe_count)
+        if self._lobe_factors[0] != key:
+            per_lobe = 4 * self.variant.lobe_vec4s
+            out = np.zeros(per_lobe * self.variant.lobe_count, dtype=np.float32)
+            rows = [native.get().zonal_coefficients(lobe, exponent, self.variant.lobe_order)
+                    for lobe, exponent in self.lobes.shaded()]
+            if self.variant.prefiltered_lookup:
+                order = self.variant.horizon_order
+                rows.append(lobes.horizon_factors(order) * rows[0][:order + 1]
+                            if self.method.uses_visibility_order else np.ones(1))
+            for k, factors in enumerate(rows):
+                out[k * per_lobe:k * per_lobe + len(factors)] = factors
+            self._lobe_factors = (key, out)
+        return self._lobe_factors[1]
+
     def _use_albedos(self, albedos):
         """The block's albedo and lobe weight rows for the materials' current albedos
         (materials.object_albedos), switching to the variant they need: none for a lobe without
@@ -414,15 +451,17 @@ class ObjectData:
         values = {"model": model, "view_projection": view_projection,
                   "world_to_local": transforms.rotation_part(model).T, "camera": camera,
                   "params": (exposure_scale, target[0], target[1], depth_bias),
-                  "light": light, "lobe": self.lobe_factors}
-        if self.variant.band_limited_texture:
+                  "light": light, "lobe": self.lobe_factors()}
+        if self.variant.band_limited_texture or self.variant.prefiltered_lookup:
             values["local_to_environment"] = local_to_environment
         if self.designs:
             values["design"] = np.concatenate([d.texels() for d in self.designs])
         values.update(surface_rows)
         return self.variant.frame_block(values)
 
-    def draw(self, block, band_limited_texture=None):
+    def draw(self, block, environment_textures=None):
+        """Draws with the block (frame_block) and the environment textures the variant reads
+        ({sampler name: GPUTexture}: the band-limited texture, the prefiltered atlas)."""
         import gpu
         buffer = gpu.types.Buffer('FLOAT', block.size, block)
         if self.ubo is None:
@@ -431,9 +470,9 @@ class ObjectData:
             self.ubo.update(buffer)
         bind(self.shader)
         self.shader.uniform_block("sd", self.ubo)
-        textures = {DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
-                    BAND_LIMITED_TEXTURE_SAMPLER[1]: band_limited_texture,
-                    LIGHTMAP_INDEX_SAMPLER[1]: self.lightmap_index}
+        textures = dict(environment_textures or {})
+        textures.update({DATA_SAMPLER[1]: self.data_texture, GAUNT_SAMPLER[1]: self.gaunt_texture,
+                         LIGHTMAP_INDEX_SAMPLER[1]: self.lightmap_index})
         if self.variant.albedo_texture:
             textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
         for _, name in self.variant.samplers():

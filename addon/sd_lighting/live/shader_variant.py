@@ -21,6 +21,7 @@ GAUNT_SAMPLER = (1, "sd_gaunt")                             # (a, b, c, G) of eq
 BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equirect image
 ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
 LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texel's data row, or -1
+PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment prefiltered per roughness
 
 
 def band_limited_texture_size(order):
@@ -95,10 +96,14 @@ class Variant:
     diffuse_lobe: bool = False    # a Lambert lobe 1 besides it (lobe_weights)
     diffuse_design_size: int = 0  # nodes of lobe 1's design (methods with lobe_design)
     lightmap: tuple = ()          # (width, height) of texture-space data (per pixel), or ()
+    prefiltered: tuple = ()       # (width0, levels) of the prefiltered atlas lobe 0's light is
+                                  # looked up in (drawn with weights), or () for its SH result
 
     def __post_init__(self):
         if (self.lobe_weights and not self.glossy) or (self.diffuse_lobe and not self.lobe_weights):
             raise ValueError("lobe weights go with a Phong lobe 0, a Lambert lobe 1 with weights")
+        if self.prefiltered and not self.lobe_weights:
+            raise ValueError("the prefiltered glossy light needs the slots' lobe weights (roughness)")
         if self.lightmap and not self.per_pixel:
             raise ValueError("texture-space data are read per pixel")
 
@@ -108,18 +113,43 @@ class Variant:
         return self.lobe_weights and self.material_count > 0
 
     @property
-    def lobe_count(self):
+    def prefiltered_lookup(self):
+        """Whether lobe 0's light is looked up in the prefiltered atlas (where weights are drawn)."""
+        return bool(self.prefiltered) and self.weighted
+
+    @property
+    def open_order(self):
+        """The order of lobe 0's unshadowed sum its visibility ratio divides by (prefiltered_lookup)."""
+        return self.method.open_order(self.light_order, self.visibility_order)
+
+    @property
+    def horizon_order(self):
+        """The order of the horizon factor of the visibility ratio: what the method's B has of
+        the surface's own hemisphere (methods with V~, M or a design of V: min(s', open order); the
+        others see no horizon: order 0, factor 1)."""
+        return min(self.visibility_order, self.open_order) if self.method.uses_visibility_order else 0
+
+    @property
+    def shaded_lobes(self):
+        """Lobes whose B the shader evaluates: lobe 0 and the Lambert lobe 1."""
         return 2 if self.diffuse_lobe else 1
 
     @property
+    def lobe_count(self):
+        """Rows of factors in the block: the shaded lobes', and the horizon factors with the
+        prefiltered lookup (row shaded_lobes)."""
+        return self.shaded_lobes + (1 if self.prefiltered_lookup else 0)
+
+    @property
     def basis_order(self):
-        return self.method.basis_order(self.light_order, self.visibility_order,
-                                       bool(self.band_limited_texture))
+        order = self.method.basis_order(self.light_order, self.visibility_order, bool(self.band_limited_texture))
+        return max(order, self.open_order) if self.prefiltered_lookup else order
 
     @property
     def lobe_order(self):
         """Highest l whose Funk-Hecke factor the shader reads."""
-        return self.method.lobe_order(self.light_order, self.visibility_order)
+        order = self.method.lobe_order(self.light_order, self.visibility_order)
+        return max(order, self.open_order) if self.prefiltered_lookup else order
 
     @property
     def lobe_vec4s(self):
@@ -173,6 +203,14 @@ class Variant:
                 d["SD_ALBEDO_TEXTURE"] = "1"
             if self.weighted:
                 d["SD_LOBE_WEIGHTS"] = "1"
+        if self.prefiltered_lookup:
+            d["SD_PREFILTERED"] = "1"
+            d["SD_PREFILTERED_MAP"] = PREFILTERED_SAMPLER[1]
+            d["SD_PREFILTERED_WIDTH"] = str(self.prefiltered[0])
+            d["SD_PREFILTERED_LEVELS"] = str(self.prefiltered[1])
+            d["SD_OPEN_ORDER"] = str(self.open_order)
+            d["SD_HORIZON_LOBE"] = str(self.shaded_lobes)
+            d["SD_HORIZON_ORDER"] = str(self.horizon_order)
         return d
 
     def vertex_inputs(self):
@@ -196,6 +234,11 @@ class Variant:
         elif self.per_pixel:
             out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
                    ("smooth", "vec3", "sd_bary"), ("flat", "vec3", "sd_corners")]
+        elif self.prefiltered_lookup:
+            out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
+                   ("smooth", "float", "sd_visibility")]
+            if self.diffuse_lobe:
+                out.append(("smooth", "vec3", "sd_diffuse_color"))
         else:
             out = [("smooth", "vec3", "sd_color")]
             if self.diffuse_lobe:
@@ -224,6 +267,8 @@ class Variant:
             out.append(ALBEDO_TEXTURE_SAMPLER)
         if self.lightmap:
             out.append(LIGHTMAP_INDEX_SAMPLER)
+        if self.prefiltered_lookup:
+            out.append(PREFILTERED_SAMPLER)
         return out
 
     def frame_fields(self):
@@ -234,10 +279,10 @@ class Variant:
                   BlockField("camera", "vec4"),            # eye - object origin (w = 1), or direction to it (w = 0)
                   BlockField("params", "vec4"),            # 2^exposure, target width, height, depth bias
                   BlockField("light", "vec4", (self.light_order + 1) ** 2),  # L(g R x), rgb
-                  # Funk-Hecke factors, lobe 0's then lobe 1's
+                  # Funk-Hecke factors, lobe 0's then lobe 1's, then the horizon factors
                   BlockField("lobe", "vec4", self.lobe_vec4s * self.lobe_count)]
-        if self.band_limited_texture:
-            fields.append(BlockField("local_to_environment", "mat4"))  # g R: the texture is unrotated
+        if self.band_limited_texture or self.prefiltered_lookup:
+            fields.append(BlockField("local_to_environment", "mat4"))  # g R: the textures are unrotated
         if self.method.lobe_design:
             # x, y, z, lambda; lobe 0's nodes, then lobe 1's
             fields.append(BlockField("design", "vec4", self.lobe_design_size + self.diffuse_design_size))

@@ -275,6 +275,17 @@ def background_texels(src):
     return (radiance * src.strength).reshape(width // 2, width, 3)
 
 
+def prefiltered_atlas(src, width0, levels):
+    """The environment prefiltered by the GGX lobe per roughness level, strength applied, in the
+    atlas layout of sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour
+    is that colour at every roughness. float32 [3 width0 / 4, width0, 3]."""
+    if src.kind == "uniform":
+        colour = np.asarray(src.colour, dtype=np.float32) * src.strength
+        return np.broadcast_to(colour, (3 * width0 // 4, width0, 3)).copy()
+    atlas, _ = environment(src).prefiltered_ggx(width0, levels)
+    return (atlas * src.strength).astype(np.float32)
+
+
 def light_coefficients(src, order):
     """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied."""
     if src.kind == "uniform":

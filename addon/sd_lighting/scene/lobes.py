@@ -25,6 +25,8 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
 
 from dataclasses import dataclass
 
+import numpy as np
+
 LUMINANCE = (0.2126, 0.7152, 0.0722)   # of linear Rec. 709 RGB (Blender's default scene-linear)
 MIN_EXPONENT = 1.0
 MAX_EXPONENT = 1000.0
@@ -111,6 +113,21 @@ def lobes_from_principled(roughness, metallic, f0):
     both = metal < 1.0
     return Lobes("phong", sigma, both, True), "%sroughness %.2f -> %sPhong sigma %.1f" % (
         "metallic %.2f, " % metal if metal > 0.0 else "", roughness, "Lambert + " if both else "", sigma)
+
+
+def horizon_factors(order):
+    """h_0 .. h_order: the Legendre coefficients of the half-space step H(t) = [t > 0] for the
+    normalised measure, h_l = 1/2 integral_0^1 P_l(t) dt (h_0 = 1/2, h_1 = 1/4, h_l = 0 for even
+    l > 0). By Funk-Hecke, a zonal lobe of factors w_l truncated at `order` has the share
+    sum_l (2l+1) h_l w_l P_l(a.n) of itself above the plane of normal n (a: its axis), in a uniform
+    world: the horizon factor of the prefiltered glossy light's visibility ratio
+    (shaders/sd_shading_lib.glsl, sd_visibility_ratio)."""
+    from numpy.polynomial import legendre
+    factors = []
+    for l in range(order + 1):
+        integral = legendre.legint(np.eye(order + 1)[l], lbnd=0.0)
+        factors.append(0.5 * legendre.legval(1.0, integral))
+    return np.array(factors)
 
 
 def label(lobe, exponent):

@@ -185,6 +185,12 @@ class SceneSettings(bpy.types.PropertyGroup):
         description=", ".join(m.label for m in methods.METHODS if m.band_limited_texture) +
         ": look the environment L~ up in a band-limited equirect float texture (bilinear, about "
         "5e-4 relative) instead of summing its (s+1)^2 SH terms at every node (exact)")
+    prefiltered_glossy: BoolProperty(
+        name="Prefiltered Glossy", default=True, update=_redraw,
+        description="Light glossy Principled materials with the environment prefiltered by their "
+                    "GGX lobe (the split sum: sharp at any roughness, looked up per pixel), times "
+                    "the share of the lobe's light the bake's visibility lets through; off: the "
+                    "seed's Phong lobe truncated at order s")
     ringing_window: EnumProperty(
         name="Ringing Window",
         items=[(name.upper(), ringing.LABELS[name], description) for name, description in (

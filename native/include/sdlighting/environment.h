@@ -4,7 +4,8 @@
 // sh_projection.h (SH coefficients, band energies, band-limited textures L̃), environment_error.h
 // (the error measures that choose the order s), ringing.h (windows against ringing and the error of
 // the displayed radiance that chooses them), channel_design.h (weighted designs of a channel).
-// Rotation: rotated_sh (sh_rotation.h); importance sampling: environment_sampler.h.
+// Rotation: rotated_sh (sh_rotation.h); importance sampling: environment_sampler.h; the map
+// prefiltered by the GGX lobe for glossy light: glossy_prefilter.h.
 //
 // Orientation (Blender/Cycles world, blender-notes "Cycles as a reference"): a direction d is
 // seen in an equirectangular image at

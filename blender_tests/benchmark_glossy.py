@@ -1,0 +1,86 @@
+"""Glossy Principled materials against Cycles (issue 28): the prefiltered GGX light (the split sum
+with the bake's visibility ratio, the default) beside the seed's Phong lobe truncated at order s.
+
+Scenes: a smooth sphere in gold (metallic 1) at roughness 0.05, 0.15, 0.3 and 0.5 and in red
+plastic at 0.2; a subdivided Suzanne in gold (roughness 0.3) on a red plastic floor (0.2), where
+the shadows and the floor's reflection of the head need the baked visibility. Each is baked from
+its materials with MSD (13) at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex;
+Cycles renders it with direct light, pixel filter off, from two seeds (its noise printed).
+
+Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered.
+
+Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
+         [--hdri NAME.exr]
+(Debian's Blender needs `xvfb-run -a` in front for its GPU.) Not part of the test suite (about 3
+minutes).
+"""
+
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sdtest  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+GOLD = (1.0, 0.7, 0.3, 1.0)
+RED = (0.8, 0.1, 0.05, 1.0)
+SPHERES = [("gold, roughness 0.05", GOLD, 0.05, 1.0), ("gold, roughness 0.15", GOLD, 0.15, 1.0),
+           ("gold, roughness 0.3", GOLD, 0.3, 1.0), ("gold, roughness 0.5", GOLD, 0.5, 1.0),
+           ("red plastic, roughness 0.2", RED, 0.2, 0.0)]
+
+
+def compare(name, scene, objects, out, size, block):
+    """Bakes `objects`, previews them with and without the prefiltered light, prints the line."""
+    stem = os.path.join(out, name.replace(" ", "_").replace(",", ""))
+    cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
+    sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)
+    assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}, name
+    cells = []
+    for prefiltered in (False, True):
+        scene.sd_lighting.prefiltered_glossy = prefiltered
+        ours = sdtest.preview(stem + ("_prefiltered" if prefiltered else "_truncated") + ".exr",
+                              width=size, height=size)
+        mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+        a, b = (sdtest.block_averages(image, mask, block) for image in (ours, cycles))
+        error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
+        bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+        cells.append("%5.1f %% (bias %s %%)" % (100 * error, np.round(100 * bias, 1)))
+    print("%-44s truncated %s | prefiltered %s | Cycles' noise %.2f %%" % (name, cells[0], cells[1], 100 * noise),
+          flush=True)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--zip", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--hdri", default="forest.exr")
+    args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+    os.makedirs(args.out, exist_ok=True)
+    sdtest.install_addon(args.zip)
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri(args.hdri))
+    print("glossy against Cycles under %s (MSD (13), s = 8, s' = 4)" % args.hdri)
+
+    sdtest.camera(scene, location=(0.0, -4.2, 0.6), target=(0.0, 0.0, 0.0), lens=55.0)
+    ball = sdtest.ico_sphere(scene, "Glossy", subdivisions=5, location=(0.0, 0.0, 0.0))
+    for name, colour, roughness, metallic in SPHERES:
+        ball.data.materials.clear()
+        ball.data.materials.append(sdtest.principled_material(name, colour, roughness, metallic))
+        compare("sphere, " + name, scene, [ball], args.out, 120, 6)
+    bpy.data.objects.remove(ball)
+
+    sdtest.camera(scene, location=(0.0, -5.0, 2.5), target=(0.0, 0.0, 0.5), lens=45.0)
+    bpy.ops.mesh.primitive_monkey_add(size=1.6, location=(0.0, 0.0, 0.9))
+    monkey = bpy.context.active_object
+    monkey.modifiers.new("Subdivision", 'SUBSURF').levels = 2
+    monkey.data.polygons.foreach_set("use_smooth", [True] * len(monkey.data.polygons))
+    monkey.data.materials.append(sdtest.principled_material("gold", GOLD, 0.3, 1.0))
+    ground = sdtest.grid(scene, cuts=30, size=4.0)
+    ground.data.materials.append(sdtest.principled_material("red plastic", RED, 0.2, 0.0))
+    compare("gold Suzanne (0.3) on a red plastic floor (0.2)", scene, [monkey, ground], args.out, 160, 4)
+
+
+main()

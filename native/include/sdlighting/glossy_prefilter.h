@@ -1,0 +1,65 @@
+// Glossy light without SH truncation (issue 28): the split sum of Karis ("Real Shading in Unreal
+// Engine 4", SIGGRAPH 2013 course notes). The light a GGX lobe reflects towards v is approximated by
+//     ∫ L(l) f(l, v) (n·l) dl  ≈  [∫ L(l) D(h) (n·l) dl / ∫ D(h) (n·l) dl] · ∫ f(l, v) (n·l) dl,
+// the first factor a map of the environment prefiltered by the lobe with n = v = r (looked up in
+// the mirrored view r, per roughness: prefilter_ggx), the second the lobe's directional albedo
+// F0·A + B over n·v and roughness (environment_brdf). Baked visibility is applied to the first
+// factor separately (the shader's visibility ratio, msd-notes "Glossy light").
+//
+// GGX (Trowbridge–Reitz) with Blender's parameterisation: α = r², r the Principled BSDF's
+// roughness; D(h) = α² / (π ((α² − 1) (n·h)² + 1)²); Smith's height-correlated masking-shadowing
+// (Heitz 2014), as Cycles' microfacet BSDF.
+#pragma once
+
+#include "sdlighting/environment.h"
+
+#include <array>
+#include <vector>
+
+namespace sd {
+
+/// Where the roughness levels of a prefiltered environment lie in one RGB atlas (rows bottom-first,
+/// as GPU textures hold them; the shader's sd_prefiltered_light reads the same layout). Level k of
+/// `levels` holds perceptual roughness r_k = k / (levels − 1) as an equirect image of Blender's
+/// orientation (environment.h), width0 >> k wide and width0 >> (k + 1) high, rows bottom-first
+/// (row 0 at the south pole): level 0 (r = 0, the map itself) fills rows [0, width0 / 2); level
+/// k >= 1 lies in the rows above it, [width0 / 2, width0 / 2 + width0 / 4), from column
+/// width0 − (width0 >> (k − 1)). The atlas is width0 × 3 width0 / 4.
+struct PrefilterLayout {
+  int width0 = 1024;  ///< width of level 0, a power of two
+  int levels = 7;     ///< roughness levels, >= 2, with width0 >> (levels − 1) >= 4
+
+  int level_width(int k) const { return width0 >> k; }
+  int level_height(int k) const { return width0 >> (k + 1); }
+  /// Column and row of level k's first texel in the atlas.
+  std::array<int, 2> level_origin(int k) const {
+    return k == 0 ? std::array<int, 2>{0, 0} : std::array<int, 2>{width0 - (width0 >> (k - 1)), width0 / 2};
+  }
+  int atlas_width() const { return width0; }
+  int atlas_height() const { return width0 / 2 + width0 / 4; }
+  /// Perceptual roughness r of level k.
+  double roughness(int k) const { return static_cast<double>(k) / (levels - 1); }
+  /// Throws std::invalid_argument naming the field for a layout outside the limits above.
+  void check() const;
+};
+
+/// The environment prefiltered by the GGX lobe per roughness level, in the atlas `layout`
+/// describes: level k at direction r holds ∫ L(l) D(h) (r·l)⁺ dl / ∫ D(h) (r·l)⁺ dl with
+/// n = v = r and α = r_k² (level 0: the map itself at the level's size). Levels of roughness
+/// below 0.5 by GGX-distributed directions (Hammersley), `samples` per texel on level 1 and four
+/// times as many on each level after it (up to 4096), each read from the map averaged over about
+/// the sample's solid angle (filtered importance sampling: Křivánek and Colbert 2008: no visible
+/// noise); rougher levels by the exact sum over the texels of the map averaged to 64 texels wide.
+/// Both cores. float RGB, atlas_width ×
+/// atlas_height × 3, zero outside the levels. Throws std::invalid_argument for a bad layout or
+/// samples outside [1, 4096].
+std::vector<float> prefilter_ggx(const Environment& environment, const PrefilterLayout& layout, int samples = 128);
+
+/// The lobe's directional albedo E(n·v, r) = F0·A + B of the split sum for Schlick's Fresnel
+/// F = F0 + (1 − F0)(1 − v·h)⁵: A = ∫ (1 − (1 − v·h)⁵) f₁ (n·l) dl, B = ∫ (1 − v·h)⁵ f₁ (n·l) dl with
+/// f₁ the GGX BRDF of F = 1 (single scattering, Smith height-correlated), by `samples` GGX-
+/// distributed half vectors (Hammersley). n_dot_v in (0, 1], roughness in [0, 1] (clamped to
+/// α >= 1e-4). Returns {A, B}. Throws std::invalid_argument outside those ranges.
+std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples = 1024);
+
+}  // namespace sd

@@ -1,0 +1,55 @@
+// Bindings of the split sum (sdlighting/glossy_prefilter.h): Environment.prefiltered_ggx and
+// environment_brdf.
+//
+// Errors: a bad layout, sample count, n·v or roughness raises ValueError. The prefilter runs
+// without the GIL.
+#include "bindings.h"
+#include "environment_class.h"
+#include "sdlighting/glossy_prefilter.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace sdpy {
+
+void bind_glossy_prefilter(py::module_& m) {
+  py::class_<sd::Environment> env = environment_class(m);
+  env.def(
+      "prefiltered_ggx",
+      [](const sd::Environment& e, int width0, int levels, int samples) {
+        const sd::PrefilterLayout layout{width0, levels};
+        layout.check();
+        std::vector<float> atlas;
+        {
+          py::gil_scoped_release release;
+          atlas = sd::prefilter_ggx(e, layout, samples);
+        }
+        py::array_t<double> out({layout.atlas_height(), layout.atlas_width(), 3});
+        std::copy(atlas.begin(), atlas.end(), out.mutable_data());
+        return py::make_tuple(out, layout.width0);
+      },
+      py::arg("width0") = sd::PrefilterLayout().width0, py::arg("levels") = sd::PrefilterLayout().levels, py::arg("samples") = 128,
+      R"doc(The map prefiltered by the GGX lobe per roughness level (the split sum's first factor):
+(atlas, width0), atlas float64 [3 width0 / 4, width0, 3] with rows bottom-first as GPU textures hold
+them. Level k of `levels` holds perceptual roughness k / (levels - 1) as an equirect image
+width0 >> k wide (Blender's orientation); level 0 fills the bottom width0 / 2 rows, level k >= 1
+lies in the rows above it from column width0 - (width0 >> (k - 1)). The defaults are
+PREFILTER_WIDTH and PREFILTER_LEVELS. `samples` GGX directions per texel (filtered importance
+sampling). ValueError for a width0 that is not a power of two >= 4, levels with
+width0 >> (levels - 1) < 4, samples outside [1, 4096].)doc");
+  m.def(
+      "environment_brdf",
+      [](double n_dot_v, double roughness, int samples) {
+        const auto ab = sd::environment_brdf(n_dot_v, roughness, samples);
+        return py::make_tuple(ab[0], ab[1]);
+      },
+      py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024,
+      R"doc((A, B): the GGX lobe's directional albedo F0 A + B for Schlick's Fresnel at n.v in (0, 1] and
+Principled roughness in [0, 1] (single scattering, Smith height-correlated), by `samples` GGX half
+vectors. ValueError outside those ranges.)doc");
+}
+
+}  // namespace sdpy

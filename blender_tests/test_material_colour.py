@@ -16,8 +16,9 @@ Principled BSDFs (GLOSSY): a red plastic (roughness 0.3), gold (metallic 1, roug
 half-metallic blue (roughness 0.3) on a smooth icosphere, baked from the material (Lambert +
 Phong, or Phong alone for the metal, weighted per pixel by scene/lobes.py) and previewed with the
 unshadowed formula at s = 12 and the prefiltered glossy light (the default), against Cycles from
-two seeds: relative RMS of block averages and bias per channel within GLOSSY's limits; the gold
-shown with the seed's truncated Phong lobe instead is further off, and the plastic shown as one
+two seeds: relative RMS of block averages and bias per channel within GLOSSY's limits, the gold
+also with the world turned and tilted; the gold shown with the seed's truncated Phong lobe instead
+is further off, and the plastic shown as one
 Phong lobe of its colour (the add-on before the split) far off.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR
 """
@@ -212,6 +213,19 @@ def glossy(checks, package, scene, preview, out):
             checks.check(error < 0.75 * truncated_error,
                          "the prefiltered glossy light is closer to Cycles than the truncated lobe",
                          "relative RMS %.1f %% against %.1f %%" % (100 * error, 100 * truncated_error))
+            # the world turned and tilted: the prefiltered lookup turns with it, as Cycles' does
+            mapping = scene.world.node_tree.nodes["Mapping"]
+            mapping.inputs["Rotation"].default_value = (0.4, 0.0, 1.9)
+            turned_cycles, _ = sdtest.cycles_pair(scene, stem + "_turned", SIZE, 512, BLOCK)
+            turned = sdtest.block_averages(preview(name + "_turned_world.exr"), mask, BLOCK)
+            mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
+            expected = sdtest.block_averages(turned_cycles, mask, BLOCK)
+            turned_error = np.sqrt(np.mean((turned - expected) ** 2) / np.mean(expected ** 2))
+            unturned_error = np.sqrt(np.mean((a - expected) ** 2) / np.mean(expected ** 2))
+            checks.check(turned_error <= limit and unturned_error > 2 * turned_error,
+                         "%s with the world turned and tilted = Cycles" % name,
+                         "relative RMS %.1f %% (limit %.0f %%; the unturned preview: %.1f %%)"
+                         % (100 * turned_error, 100 * limit, 100 * unturned_error))
         if metallic == 1.0:   # one glossy lobe with weights; the material turned diffuse since
             ball.data.materials[0] = sdtest.diffuse_material("Turned diffuse", colour)
             turned = sdtest.block_averages(preview(name + "_turned_diffuse.exr"), mask, BLOCK)

@@ -26,7 +26,7 @@ namespace sd {
 /// k >= 1 lies in the rows above it, [width0 / 2, width0 / 2 + width0 / 4), from column
 /// width0 − (width0 >> (k − 1)). The atlas is width0 × 3 width0 / 4.
 struct PrefilterLayout {
-  int width0 = 1024;  ///< width of level 0, a power of two
+  int width0 = 1024;  ///< width of level 0, a power of two <= kMaxTextureSide (limits.h)
   int levels = 7;     ///< roughness levels, >= 2, with width0 >> (levels − 1) >= 4
 
   int level_width(int k) const { return width0 >> k; }

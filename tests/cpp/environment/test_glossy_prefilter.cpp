@@ -127,6 +127,7 @@ TEST(GlossyPrefilter, MatchesTheConvolutionOfTheMapsTexels) {
 TEST(GlossyPrefilter, RefusesBadLayoutsAndSampleCounts) {
   const Environment env = Environment::from_equirect_pixels(8, 4, std::vector<float>(96, 1.0f));
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{100, 3}, 16), std::invalid_argument);
+  EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{1 << 30, 20}, 16), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 6}, 16), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 1}, 16), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 3}, 0), std::invalid_argument);

@@ -17,7 +17,8 @@ half-metallic blue (roughness 0.3) on a smooth icosphere, baked from the materia
 Phong, or Phong alone for the metal, weighted per pixel by scene/lobes.py) and previewed with the
 unshadowed formula at s = 12 and the prefiltered glossy light (the default), against Cycles from
 two seeds: relative RMS of block averages and bias per channel within GLOSSY's limits, the gold
-also with the world turned and tilted; the gold shown with the seed's truncated Phong lobe instead
+also with the world turned and tilted (the prefilter, run in a worker thread, keeps the first
+interactive draw waiting for nothing: the truncated lobe is drawn meanwhile); the gold shown with the seed's truncated Phong lobe instead
 is further off, and the plastic shown as one
 Phong lobe of its colour (the add-on before the split) far off.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR
@@ -25,6 +26,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/te
 
 import os
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
@@ -213,6 +215,29 @@ def glossy(checks, package, scene, preview, out):
             checks.check(error < 0.75 * truncated_error,
                          "the prefiltered glossy light is closer to Cycles than the truncated lobe",
                          "relative RMS %.1f %% against %.1f %%" % (100 * error, 100 * truncated_error))
+            # the prefilter runs in a worker thread: the interactive draw does not wait for it
+            env, shading = package.scene.environment, package.live.gpu_shading
+            env.clear_cache()
+            shading.clear_cache()
+            start = time.perf_counter()
+            first = shading.prefiltered_texture(env.source(scene), False)
+            seconds = time.perf_counter() - start
+            checks.check(first is None and len(env.prefiltered_atlases().pending()) == 1
+                         and len(env.prefilter_status()) == 1,
+                         "the interactive draw does not wait for the prefiltered environment",
+                         "%.2f s; %s" % (seconds, env.prefilter_status()))
+            view = package.scene.view.View.from_camera(scene.camera, bpy.context.evaluated_depsgraph_get(), SIZE, SIZE)
+            drawing = package.live.drawing
+            data = drawing.object_data(ball, prefiltered=True)
+            _, textures = drawing._frame(scene, ball, data, view, 1.0, False)
+            checks.check(not data.variant.prefiltered_lookup and not textures,
+                         "meanwhile the object is drawn with the truncated lobe")
+            checks.check(env.prefiltered_atlases().wait(120) and not env.prefilter_status()
+                         and shading.prefiltered_texture(env.source(scene), False) is not None,
+                         "the prefiltered environment is drawn once it is there")
+            _, textures = drawing._frame(scene, ball, data, view, 1.0, False)
+            checks.check(data.variant.prefiltered_lookup and len(textures) == 1,
+                         "then the object is drawn with it")
             # the world turned and tilted: the prefiltered lookup turns with it, as Cycles' does
             mapping = scene.world.node_tree.nodes["Mapping"]
             mapping.inputs["Rotation"].default_value = (0.4, 0.0, 1.9)

@@ -182,16 +182,17 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     object's data with `matrix` (default: its world matrix; an instance's). wait: as
     shading_light; without waiting, what is still pending is watched (_watch_background)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
-    light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
-    block = data.frame_block(matrix, view.view_projection, view.camera,
-                             light, gr, scale, albedos=materials.object_albedos(obj), **kwargs)
     source = source or environment.source(scene)
+    light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
+    prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
+    block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
+                             albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None, **kwargs)
     textures = {}
     if data.uses_band_limited_texture:
         textures[BAND_LIMITED_TEXTURE_SAMPLER[1]] = gpu_shading.band_limited_texture(
             source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
     if data.variant.prefiltered_lookup:
-        textures[PREFILTERED_SAMPLER[1]] = gpu_shading.prefiltered_texture(source)
+        textures[PREFILTERED_SAMPLER[1]] = prefiltered
     if not wait:
         _watch_background()
     return block, textures
@@ -227,8 +228,9 @@ def draw_background(scene, view, scale):
 
 
 def _background_work():
-    """What the draw asks worker threads for: the lobe designs and the ringing window choices."""
-    return (gpu_shading.lobe_designs(), environment.window_choices())
+    """What the draw asks worker threads for: the lobe designs, the ringing window choices and
+    the prefiltered environments."""
+    return (gpu_shading.lobe_designs(), environment.window_choices(), environment.prefiltered_atlases())
 
 
 def _poll_background():

@@ -189,13 +189,15 @@ def prefiltered_layout():
     return native.get().PREFILTER_WIDTH, native.get().PREFILTER_LEVELS
 
 
-def prefiltered_texture(source):
+def prefiltered_texture(source, wait):
     """The environment of `source` prefiltered by the GGX lobe per roughness level, strength
     applied (scene/environment.prefiltered_atlas), as the RGBA32F atlas texture the shader's
-    sd_prefiltered_light reads (cached per source)."""
+    sd_prefiltered_light reads (cached per source); wait=False: None while it is computed."""
     texture = _prefiltered_textures.get(source.key)
     if texture is None:
-        atlas = environment.prefiltered_atlas(source, *prefiltered_layout())
+        atlas = environment.prefiltered_atlas(source, *prefiltered_layout(), wait)
+        if atlas is None:
+            return None
         height, width, _ = atlas.shape
         texels = np.ones((height, width, 4), dtype=np.float32)
         texels[..., :3] = atlas
@@ -321,13 +323,15 @@ class ObjectData:
             self.gaunt_texture, gaunt_count = gaunt_texture(s, sv)
         self.designs = self._designs()
         self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
+        # the atlas's layout where glossy weights are lit by the prefiltered environment, else ()
+        self.prefiltered = prefiltered_layout() if prefiltered and self.lobes.weighted else ()
         design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
                                lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
                                diffuse_design_size=design_sizes[1], lightmap=self.lightmap,
-                               prefiltered=prefiltered_layout() if prefiltered and self.lobes.weighted else ())
+                               prefiltered=self.prefiltered)
         self.shader = shader_program(self.variant)
         self._lobe_factors = (None, None)   # (lobe_vec4s, lobe_order, lobe_count), lobe_factors()
 
@@ -402,7 +406,7 @@ class ObjectData:
             self._lobe_factors = (key, out)
         return self._lobe_factors[1]
 
-    def _use_albedos(self, albedos):
+    def _use_albedos(self, albedos, prefiltered):
         """The block's albedo and lobe weight rows for the materials' current albedos
         (materials.object_albedos), switching to the variant they need: none for a lobe without
         weights whose albedos are all white. Returns {field: rows}."""
@@ -421,7 +425,8 @@ class ObjectData:
         white = not self.lobes.weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
-                                      albedo_texture=image is not None)
+                                      albedo_texture=image is not None,
+                                      prefiltered=self.prefiltered if prefiltered else ())
         if variant != self.variant:
             self.variant = variant
             self.shader = shader_program(variant)
@@ -432,18 +437,20 @@ class ObjectData:
         return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.weighted else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
-                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=()):
+                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
         for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
-        the object's materials.object_albedos (a slot without one: the 0.8 default surface). The
+        the object's materials.object_albedos (a slot without one: the 0.8 default surface);
+        prefiltered: whether the prefiltered atlas is there to draw with (the truncated lobe
+        meanwhile), for data made with the prefiltered lookup. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
-        surface_rows = self._use_albedos(list(albedos))
+        surface_rows = self._use_albedos(list(albedos), prefiltered)
         self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:

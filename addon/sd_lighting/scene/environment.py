@@ -34,16 +34,18 @@ from . import ringing, transforms, world_render
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
 _window_choices = None   # background.Background of ringing window choices, made on first use
+_prefiltered = None      # background.Background of prefiltered atlases, made on first use
 
 
 def clear_cache():
-    global _window_choices
+    global _window_choices, _prefiltered
     _cache.clear()
     _sh_cache.clear()
     world_render.clear()
-    if _window_choices is not None:
-        _window_choices.close()
-        _window_choices = None
+    for work in (_window_choices, _prefiltered):
+        if work is not None:
+            work.close()
+    _window_choices = _prefiltered = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -275,15 +277,40 @@ def background_texels(src):
     return (radiance * src.strength).reshape(width // 2, width, 3)
 
 
-def prefiltered_atlas(src, width0, levels):
+def prefiltered_atlases():
+    """The session's prefiltered atlases (prefiltered_atlas: made in a worker thread)."""
+    global _prefiltered
+    if _prefiltered is None:
+        _prefiltered = background.Background("sd_lighting prefiltered environments")
+    return _prefiltered
+
+
+def prefilter_status():
+    """Lines for the panel: the environments being prefiltered or whose prefilter failed."""
+    if _prefiltered is None:
+        return []
+    return (["Prefiltering the environment for glossy light (the truncated lobe meanwhile)"] * bool(_prefiltered.pending())
+            + ["Prefiltering the environment failed: %s" % why for why in _prefiltered.failures().values()])
+
+
+def prefiltered_atlas(src, width0, levels, wait):
     """The environment prefiltered by the GGX lobe per roughness level, strength applied, in the
     atlas layout of sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour
-    is that colour at every roughness. float32 [3 width0 / 4, width0, 3]."""
+    is that colour at every roughness. float32 [3 width0 / 4, width0, 3]. Computed in a worker
+    thread (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives
+    None until it is there or when it failed; wait=True waits (raises background.Failed)."""
     if src.kind == "uniform":
         colour = np.asarray(src.colour, dtype=np.float32) * src.strength
         return np.broadcast_to(colour, (3 * width0 // 4, width0, 3)).copy()
-    atlas, _ = environment(src).prefiltered_ggx(width0, levels)
-    return (atlas * src.strength).astype(np.float32)
+    env, strength = environment(src), src.strength   # read here: the pixels come from bpy
+
+    def compute():
+        atlas, _ = env.prefiltered_ggx(width0, levels)
+        return (atlas * strength).astype(np.float32)
+
+    key = (src.key, width0, levels)
+    work = prefiltered_atlases()
+    return work.result(key, compute) if wait else work.get(key, compute)
 
 
 def light_coefficients(src, order):

@@ -339,7 +339,7 @@ class SD_PT_lighting_live(_SubPanel, bpy.types.Panel):
         col.row(heading="World").prop(settings, "world_background", text="Background")
         col.row(heading="Texture").prop(settings, "band_limited_texture", text="Band-Limited")
         col.row(heading="Glossy").prop(settings, "prefiltered_glossy", text="Prefiltered")
-        for line in gpu_shading.lobe_design_status() + environment.ringing_window_status():
+        for line in gpu_shading.lobe_design_status() + environment.ringing_window_status() + environment.prefilter_status():
             _text(layout, context, line, icon='TIME')
         layout.operator("sd_lighting.render_preview", icon='IMAGE_DATA')
 

@@ -7,12 +7,15 @@ the shadows and the floor's reflection of the head need the baked visibility. Ea
 its materials with MSD (13) at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex;
 Cycles renders it with direct light, pixel filter off, from two seeds (its noise printed).
 
-Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered.
+Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
+and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
+the world's light and its probes as EEVEE makes them).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
          [--hdri NAME.exr]
-(Debian's Blender needs `xvfb-run -a` in front for its GPU.) Not part of the test suite (about 3
-minutes).
+(Debian's Blender needs `xvfb-run -a` in front for its GPU; a `bpy` module of 4.2+ runs it with
+its venv's python: `~/.cache/sd-lighting/venv/bpy-4.5.15/bin/python blender_tests/benchmark_glossy.py
+-- ...`.) Not part of the test suite (about 3 minutes; with EEVEE on llvmpipe about 6).
 """
 
 import argparse
@@ -38,18 +41,35 @@ def compare(name, scene, objects, out, size, block):
     cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
     sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)
     assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}, name
-    cells = []
+    images = {}
     for prefiltered in (False, True):
         scene.sd_lighting.prefiltered_glossy = prefiltered
-        ours = sdtest.preview(stem + ("_prefiltered" if prefiltered else "_truncated") + ".exr",
-                              width=size, height=size)
+        label = "prefiltered" if prefiltered else "truncated"
+        images[label] = sdtest.preview(stem + "_" + label + ".exr", width=size, height=size)
+    if bpy.app.version >= (4, 2, 0):
+        images["EEVEE"] = eevee_render(scene, stem + "_eevee.exr", size)
+    cells = []
+    for label, ours in images.items():
         mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
         a, b = (sdtest.block_averages(image, mask, block) for image in (ours, cycles))
         error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
         bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
-        cells.append("%5.1f %% (bias %s %%)" % (100 * error, np.round(100 * bias, 1)))
-    print("%-44s truncated %s | prefiltered %s | Cycles' noise %.2f %%" % (name, cells[0], cells[1], 100 * noise),
-          flush=True)
+        cells.append("%s %5.1f %% (bias %s %%)" % (label, 100 * error, np.round(100 * bias, 1)))
+    print("%-44s %s | Cycles' noise %.2f %%" % (name, " | ".join(cells), 100 * noise), flush=True)
+
+
+def eevee_render(scene, path, size):
+    """EEVEE at its defaults (4.2+: EEVEE Next), transparent film, as cycles_render frames it."""
+    render = scene.render
+    render.engine = 'BLENDER_EEVEE_NEXT' if bpy.app.version < (5, 0, 0) else 'BLENDER_EEVEE'
+    render.film_transparent = True
+    render.resolution_x = render.resolution_y = size
+    render.resolution_percentage = 100
+    render.image_settings.file_format = 'OPEN_EXR'
+    render.image_settings.color_depth = '32'
+    render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    return sdtest.load_exr(path)
 
 
 def main():

@@ -23,24 +23,40 @@ vec3 sd_surface_albedo()
 }
 
 #ifdef SD_LOBE_WEIGHTS
-/* (A, B) of a GGX lobe with Schlick's Fresnel: its directional albedo is F0 A + B at n.v and the
- * roughness (Karis' analytic fit of the split-sum table, "Physically Based Shading on Mobile",
- * 2014), scaled to A + B = 1: what a rough lobe loses to single scattering, Cycles' multiple-
- * scattering GGX keeps (a lobe with F0 = 1 reflects all the light). */
+/* (A, B) of the GGX lobe with Schlick's Fresnel at n.v and the roughness: its single-scattering
+ * directional albedo is F0 A + B (the split sum's second factor), integrated natively
+ * (sdnative.environment_brdf_table: SD_BRDF_TABLE_SIZE square, n.v = (i + 0.5) / size across,
+ * roughness j / (size - 1) up), bilinear between the table's entries, clamped at its edges. */
 vec2 sd_environment_brdf(float n_dot_v, float roughness)
 {
-  vec4 r = roughness * vec4(-1.0, -0.0275, -0.572, 0.022) + vec4(1.0, 0.0425, 1.04, -0.04);
-  float a004 = min(r.x * r.x, exp2(-9.28 * max(n_dot_v, 0.0))) * r.x + r.y;
-  vec2 ab = vec2(-1.04, 1.04) * a004 + r.zw;
-  return ab / (ab.x + ab.y);
+  float last = float(SD_BRDF_TABLE_SIZE - 1);
+  vec2 xy = vec2(clamp(n_dot_v * float(SD_BRDF_TABLE_SIZE) - 0.5, 0.0, last), clamp(roughness, 0.0, 1.0) * last);
+  ivec2 i0 = ivec2(floor(xy));
+  ivec2 i1 = min(i0 + ivec2(1), ivec2(SD_BRDF_TABLE_SIZE - 1));
+  vec2 f = xy - vec2(i0);
+  vec2 bottom = mix(texelFetch(sd_environment_brdf_table, i0, 0).xy,
+                    texelFetch(sd_environment_brdf_table, ivec2(i1.x, i0.y), 0).xy, f.x);
+  vec2 top = mix(texelFetch(sd_environment_brdf_table, ivec2(i0.x, i1.y), 0).xy,
+                 texelFetch(sd_environment_brdf_table, i1, 0).xy, f.x);
+  return mix(bottom, top, f.y);
+}
+
+/* The specular layer's directional albedo for F0 (per channel) and the lobe's (A, B): single
+ * scattering F0 A + B scaled by 1 / (A + B), so that a lobe with F0 = 1 reflects all the light, as
+ * Cycles' multiple-scattering GGX does (closer to Cycles than Turquin et al.'s 1 + F0 (1 / (A + B)
+ * - 1): msd-notes, "Glossy light"). */
+vec3 sd_specular_albedo(vec3 f0, vec2 ab)
+{
+  return (f0 * ab.x + vec3(ab.y)) / max(ab.x + ab.y, 1e-4);
 }
 #endif
 
 /* The surface's radiance from lobe 0's B (SD_PREFILTERED: its prefiltered light) and
  * (SD_DIFFUSE_LOBE) the Lambert lobe's: with
- * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): Phong times the specular layer's
- * albedo mix(F0, albedo, metallic) A + B, Lambert times (1 - metallic) albedo, less the dielectric
- * layer's F0 A + B where the layer lies over the diffuse (layer 1; 2: added to it; 0: no layer);
+ * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): lobe 0 times the specular layer's
+ * albedo for F0' = mix(F0, albedo, metallic) (sd_specular_albedo), Lambert times (1 - metallic)
+ * albedo, less the dielectric layer's albedo for F0 where the layer lies over the diffuse (layer
+ * 1; 2: added to it; 0: no layer);
  * otherwise the albedo times the one lobe's B, or on the vertex target (no albedos) the two
  * lobes' sum. */
 vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
@@ -54,9 +70,9 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
   float layer = step(0.5, sd_lobe_weights.w);
   float over = layer * (1.0 - step(1.5, sd_lobe_weights.w));
   vec2 ab = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
-  vec3 rgb = lobe0 * (layer * (mix(vec3(f0), albedo, metal) * ab.x + vec3(ab.y)));
+  vec3 rgb = lobe0 * (layer * sd_specular_albedo(mix(vec3(f0), albedo, metal), ab));
 #  ifdef SD_DIFFUSE_LOBE
-  rgb += diffuse * ((1.0 - metal) * (1.0 - over * (f0 * ab.x + ab.y))) * albedo;
+  rgb += diffuse * ((1.0 - metal) * (1.0 - over * sd_specular_albedo(vec3(f0), ab).x)) * albedo;
 #  else
   /* A slot without a specular layer under the one glossy lobe (its material changed since the
    * bake): that lobe times the albedo, as without weights. */

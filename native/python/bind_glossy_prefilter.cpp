@@ -1,5 +1,5 @@
 // Bindings of the split sum (sdlighting/glossy_prefilter.h): Environment.prefiltered_ggx and
-// environment_brdf.
+// environment_brdf, environment_brdf_table.
 //
 // Errors: a bad layout, sample count, n·v or roughness raises ValueError. The prefilter runs
 // without the GIL.
@@ -50,6 +50,22 @@ width0 >> (levels - 1) < 4, samples outside [1, 4096].)doc");
       R"doc((A, B): the GGX lobe's directional albedo F0 A + B for Schlick's Fresnel at n.v in (0, 1] and
 Principled roughness in [0, 1] (single scattering, Smith height-correlated), by `samples` GGX half
 vectors. ValueError outside those ranges.)doc");
+  m.def(
+      "environment_brdf_table",
+      [](int size, int samples) {
+        std::vector<float> table;
+        {
+          py::gil_scoped_release release;
+          table = sd::environment_brdf_table(size, samples);
+        }
+        py::array_t<double> out({size, size, 2});
+        std::copy(table.begin(), table.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("size") = 32, py::arg("samples") = 1024,
+      R"doc(environment_brdf tabulated: float64 [size, size, 2], (A, B) at n.v = (i + 0.5) / size (column
+i) and roughness j / (size - 1) (row j). ValueError for size outside [2, 256] or samples outside
+[1, 2^20].)doc");
 }
 
 }  // namespace sdpy

@@ -49,7 +49,7 @@ Functions:
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
   Environment.prefiltered_ggx(...)     the map prefiltered by the GGX lobe per roughness (split sum)
-  environment_brdf(n_dot_v, roughness)  the GGX lobe's directional albedo (A, B)
+  environment_brdf(n_dot_v, roughness)  the GGX lobe's directional albedo (A, B); environment_brdf_table
   environment_from_pixels(rgb), load_environment(path), load_cube_environment(faces)
                                         -> Environment (the last two not in the add-on's module): .sh(lmax), .band_limited(...), errors, designs
   rotated_environment_sh(coeffs, g)     coefficients of x -> L(g x)

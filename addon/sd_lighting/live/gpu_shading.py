@@ -39,8 +39,8 @@ from ..scene import environment, lobes, materials, transforms
 from ..store import attributes, baked
 from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
 from . import lobe_designs as lobe_design_cache
-from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, DATA_SAMPLER, GAUNT_SAMPLER, LIGHTMAP_INDEX_SAMPLER, Variant,
-                             band_limited_texture_size)
+from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BRDF_TABLE_SAMPLER, BRDF_TABLE_SIZE, DATA_SAMPLER, GAUNT_SAMPLER,
+                             LIGHTMAP_INDEX_SAMPLER, Variant, band_limited_texture_size)
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
@@ -54,6 +54,7 @@ _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
 _prefiltered_textures = {}    # source key -> GPUTexture
+_brdf_table = []              # the GPUTexture of environment_brdf_table, once made
 _background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
 
 
@@ -87,6 +88,7 @@ def clear_cache():
         _lobe_designs = None
     _band_limited_textures.clear()
     _prefiltered_textures.clear()
+    _brdf_table.clear()
     _background.clear()
 
 
@@ -203,6 +205,17 @@ def prefiltered_texture(source, wait):
         texels[..., :3] = atlas
         texture = _prefiltered_textures[source.key] = _texture(width, height, texels)
     return texture
+
+
+def brdf_table_texture():
+    """The GGX lobe's (A, B) over n.v and roughness (sdnative.environment_brdf_table) as the
+    RGBA32F texture the shader's sd_environment_brdf reads (made once)."""
+    if not _brdf_table:
+        table = np.asarray(native.get().environment_brdf_table(BRDF_TABLE_SIZE), dtype=np.float32)
+        texels = np.zeros((BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, 4), dtype=np.float32)
+        texels[..., :2] = table
+        _brdf_table.append(_texture(BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, texels))
+    return _brdf_table[0]
 
 
 def _background_shader():
@@ -482,6 +495,8 @@ class ObjectData:
                          LIGHTMAP_INDEX_SAMPLER[1]: self.lightmap_index})
         if self.variant.albedo_texture:
             textures[ALBEDO_TEXTURE_SAMPLER[1]] = gpu.texture.from_image(self.albedo_image)
+        if self.variant.weighted:
+            textures[BRDF_TABLE_SAMPLER[1]] = brdf_table_texture()
         for _, name in self.variant.samplers():
             self.shader.uniform_sampler(name, textures[name])
         gpu.state.front_facing_set(self.mirrored)   # the local winding is the world's turned

@@ -22,6 +22,8 @@ BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equire
 ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
 LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texel's data row, or -1
 PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment prefiltered per roughness
+BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's (A, B) over n.v, roughness
+BRDF_TABLE_SIZE = 32   # its side (sdnative.environment_brdf_table)
 
 
 def band_limited_texture_size(order):
@@ -203,6 +205,7 @@ class Variant:
                 d["SD_ALBEDO_TEXTURE"] = "1"
             if self.weighted:
                 d["SD_LOBE_WEIGHTS"] = "1"
+                d["SD_BRDF_TABLE_SIZE"] = str(BRDF_TABLE_SIZE)
         if self.prefiltered_lookup:
             d["SD_PREFILTERED"] = "1"
             d["SD_PREFILTERED_MAP"] = PREFILTERED_SAMPLER[1]
@@ -267,6 +270,8 @@ class Variant:
             out.append(ALBEDO_TEXTURE_SAMPLER)
         if self.lightmap:
             out.append(LIGHTMAP_INDEX_SAMPLER)
+        if self.weighted:
+            out.append(BRDF_TABLE_SAMPLER)
         if self.prefiltered_lookup:
             out.append(PREFILTERED_SAMPLER)
         return out

@@ -3,7 +3,8 @@
 //     ∫ L(l) f(l, v) (n·l) dl  ≈  [∫ L(l) D(h) (n·l) dl / ∫ D(h) (n·l) dl] · ∫ f(l, v) (n·l) dl,
 // the first factor a map of the environment prefiltered by the lobe with n = v = r (looked up in
 // the mirrored view r, per roughness: prefilter_ggx), the second the lobe's directional albedo
-// F0·A + B over n·v and roughness (environment_brdf). Baked visibility is applied to the first
+// F0·A + B over n·v and roughness (environment_brdf, tabulated for the shader by
+// environment_brdf_table). Baked visibility is applied to the first
 // factor separately (the shader's visibility ratio, msd-notes "Glossy light").
 //
 // GGX (Trowbridge–Reitz) with Blender's parameterisation: α = r², r the Principled BSDF's
@@ -61,5 +62,10 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
 /// distributed half vectors (Hammersley). n_dot_v in (0, 1], roughness in [0, 1] (clamped to
 /// α >= 1e-4). Returns {A, B}. Throws std::invalid_argument outside those ranges.
 std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples = 1024);
+
+/// environment_brdf tabulated for the shader: (A, B) at n·v = (i + ½) / size (column i) and
+/// roughness j / (size − 1) (row j), `samples` half vectors each; float, row-major, size × size × 2.
+/// Both cores. Throws std::invalid_argument for size outside [2, 256] or samples outside [1, 2^20].
+std::vector<float> environment_brdf_table(int size = 32, int samples = 1024);
 
 }  // namespace sd

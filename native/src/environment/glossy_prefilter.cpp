@@ -261,4 +261,21 @@ std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int sam
   return {a / samples, b / samples};
 }
 
+std::vector<float> environment_brdf_table(int size, int samples) {
+  if (size < 2 || size > 256)
+    throw std::invalid_argument("environment_brdf_table: size must be in [2, 256], got " + std::to_string(size));
+  if (samples < 1 || samples > 1 << 20)
+    throw std::invalid_argument("environment_brdf_table: samples must be in [1, 2^20], got " + std::to_string(samples));
+  std::vector<float> table(static_cast<size_t>(size) * size * 2);
+  parallel_for(static_cast<size_t>(size), 1, [&](size_t begin, size_t end) {
+    for (size_t j = begin; j < end; ++j)
+      for (int i = 0; i < size; ++i) {
+        const auto ab = environment_brdf((i + 0.5) / size, static_cast<double>(j) / (size - 1), samples);
+        table[2 * (j * size + i)] = static_cast<float>(ab[0]);
+        table[2 * (j * size + i) + 1] = static_cast<float>(ab[1]);
+      }
+  });
+  return table;
+}
+
 }  // namespace sd

@@ -163,5 +163,18 @@ TEST(EnvironmentBrdf, StaysWithinEnergyAndRefusesBadInput) {
   EXPECT_THROW(environment_brdf(0.5, 0.5, 0), std::invalid_argument);
 }
 
+TEST(EnvironmentBrdf, TableHoldsTheIntegralAtItsEntries) {
+  const int size = 8;
+  const std::vector<float> table = environment_brdf_table(size, 256);
+  for (int j : {0, 3, 7})
+    for (int i : {0, 4, 7}) {
+      const auto ab = environment_brdf((i + 0.5) / size, j / 7.0, 256);
+      EXPECT_FLOAT_EQ(table[2 * (j * size + i)], static_cast<float>(ab[0]));
+      EXPECT_FLOAT_EQ(table[2 * (j * size + i) + 1], static_cast<float>(ab[1]));
+    }
+  EXPECT_THROW(environment_brdf_table(1), std::invalid_argument);
+  EXPECT_THROW(environment_brdf_table(300), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace sd::test

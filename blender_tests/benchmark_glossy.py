@@ -7,12 +7,16 @@ the shadows and the floor's reflection of the head need the baked visibility. Ea
 its materials with MSD (13) at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex;
 Cycles renders it with direct light, pixel filter off, from two seeds (its noise printed).
 
+--models: also Debian's assimp test models (MODELS: a smooth and a faceted Wuson, the low-poly
+spider) in gold, red plastic and polished steel under three HDRIs, baked at the panel's defaults
+(the automatic mode) and 192 pixels wide.
+
 Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
 and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
 the world's light and its probes as EEVEE makes them).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
-         [--hdri NAME.exr]
+         [--hdri NAME.exr] [--models]
 (Debian's Blender needs `xvfb-run -a` in front for its GPU; a `bpy` module of 4.2+ runs it with
 its venv's python: `~/.cache/sd-lighting/venv/bpy-4.5.15/bin/python blender_tests/benchmark_glossy.py
 -- ...`.) Not part of the test suite (about 3 minutes; with EEVEE on llvmpipe about 6).
@@ -35,11 +39,22 @@ SPHERES = [("gold, roughness 0.05", GOLD, 0.05, 1.0), ("gold, roughness 0.15", G
            ("red plastic, roughness 0.2", RED, 0.2, 0.0)]
 
 
-def compare(name, scene, objects, out, size, block):
-    """Bakes `objects`, previews them with and without the prefiltered light, prints the line."""
-    stem = os.path.join(out, name.replace(" ", "_").replace(",", ""))
+MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness, metallic, HDRI
+    ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.3, 1.0, "forest.exr"),
+    ("PLY/Wuson.ply", "red plastic", RED, 0.2, 0.0, "courtyard.exr"),
+    ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "studio.exr")]
+ASSIMP = "/usr/share/assimp/models/"
+
+
+def compare(name, scene, objects, out, size, block, defaults=False):
+    """Bakes `objects` (MSD (13), s = 8, s' = 4; defaults: at the panel's defaults), previews them
+    with and without the prefiltered light, prints the line."""
+    stem = os.path.join(out, name.replace(" ", "_").replace(",", "").replace("(", "").replace(")", ""))
     cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
-    sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)
+    if defaults:
+        sdtest.select_only(objects)
+    else:
+        sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)
     assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}, name
     images = {}
     for prefiltered in (False, True):
@@ -77,6 +92,7 @@ def main():
     parser.add_argument("--zip", required=True)
     parser.add_argument("--out", required=True)
     parser.add_argument("--hdri", default="forest.exr")
+    parser.add_argument("--models", action="store_true")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     os.makedirs(args.out, exist_ok=True)
     sdtest.install_addon(args.zip)
@@ -101,6 +117,16 @@ def main():
     ground = sdtest.grid(scene, cuts=30, size=4.0)
     ground.data.materials.append(sdtest.principled_material("red plastic", RED, 0.2, 0.0))
     compare("gold Suzanne (0.3) on a red plastic floor (0.2)", scene, [monkey, ground], args.out, 160, 4)
+    if args.models:
+        for path, material, colour, roughness, metallic, hdri in MODELS:
+            scene = sdtest.empty_scene()
+            sdtest.hdri_world(scene, sdtest.hdri(hdri))
+            model = sdtest.sized_model(ASSIMP + path, 2.0, (0.0, 0.0, 1.0))
+            model.data.materials.clear()
+            model.data.materials.append(sdtest.principled_material(material, colour, roughness, metallic))
+            sdtest.camera(scene, location=(0.0, -5.0, 2.0), target=(0.0, 0.0, 1.0), lens=110.0)
+            compare("%s, %s (%.2f), %s, defaults" % (os.path.basename(path), material, roughness, hdri),
+                    scene, [model], args.out, 192, 4, defaults=True)
 
 
 main()

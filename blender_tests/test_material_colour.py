@@ -244,6 +244,14 @@ def glossy(checks, package, scene, preview, out):
             turned_cycles, _ = sdtest.cycles_pair(scene, stem + "_turned", SIZE, 512, BLOCK)
             turned = sdtest.block_averages(preview(name + "_turned_world.exr"), mask, BLOCK)
             mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
+            # the world's strength: applied in the shader, the atlas made once without it
+            strength = scene.world.node_tree.nodes["Background"].inputs["Strength"]
+            strength.default_value = 2.0
+            brighter = sdtest.block_averages(preview(name + "_strength_2.exr"), mask, BLOCK)
+            strength.default_value = 1.0
+            checks.check(abs(brighter.mean() / a.mean() - 2.0) < 0.01,
+                         "twice the world's strength shows the metal twice as bright",
+                         "%.4f x" % (brighter.mean() / a.mean()))
             expected = sdtest.block_averages(turned_cycles, mask, BLOCK)
             turned_error = np.sqrt(np.mean((turned - expected) ** 2) / np.mean(expected ** 2))
             unturned_error = np.sqrt(np.mean((a - expected) ** 2) / np.mean(expected ** 2))

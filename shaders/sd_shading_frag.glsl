@@ -88,10 +88,12 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 
 #ifdef SD_PREFILTERED
 /* Lobe 0's light at the pixel (times 2^exposure): the environment prefiltered by the slot's GGX
- * lobe around the mirrored view, times the share `visibility` of it the bake lets through. */
+ * lobe around the mirrored view, times its strength (the atlas is without it) and the share
+ * `visibility` of it the bake lets through. */
 vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
 {
-  return (sd.params.x * visibility) * sd_prefiltered_light(sd_lobe_axis(normal, view), sd_lobe_weights.z);
+  return (sd.params.x * sd.prefiltered_scale.x * visibility) *
+         sd_prefiltered_light(sd_lobe_axis(normal, view), sd_lobe_weights.z);
 }
 #endif
 
@@ -154,7 +156,11 @@ void main()
   sd_add_entry(sd_bary.z, int(sd_corners.z + 0.5), normal, view, rgb, diffuse);
 #  endif
 #  ifdef SD_PREFILTERED
-  rgb = sd_glossy_light(sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal), normal, view);
+  float visibility = sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal);
+#    ifdef SD_LIGHTMAP
+  visibility = (total > 0.0) ? visibility : 0.0;   /* no texel stored here: nothing, as before */
+#    endif
+  rgb = sd_glossy_light(visibility, normal, view);
 #  else
   rgb *= sd.params.x;
 #  endif

@@ -29,16 +29,15 @@ void bind_glossy_prefilter(py::module_& m) {
         }
         py::array_t<double> out({layout.atlas_height(), layout.atlas_width(), 3});
         std::copy(atlas.begin(), atlas.end(), out.mutable_data());
-        return py::make_tuple(out, layout.width0);
+        return out;
       },
       py::arg("width0") = sd::PrefilterLayout().width0, py::arg("levels") = sd::PrefilterLayout().levels, py::arg("samples") = 128,
       R"doc(The map prefiltered by the GGX lobe per roughness level (the split sum's first factor):
-(atlas, width0), atlas float64 [3 width0 / 4, width0, 3] with rows bottom-first as GPU textures hold
-them. Level k of `levels` holds perceptual roughness k / (levels - 1) as an equirect image
+the atlas, float64 [3 width0 / 4, width0, 3] with rows bottom-first as GPU textures hold them. Level k of `levels` holds perceptual roughness k / (levels - 1) as an equirect image
 width0 >> k wide (Blender's orientation); level 0 fills the bottom width0 / 2 rows, level k >= 1
 lies in the rows above it from column width0 - (width0 >> (k - 1)). The defaults are
 PREFILTER_WIDTH and PREFILTER_LEVELS. `samples` GGX directions per texel (filtered importance
-sampling). ValueError for a width0 that is not a power of two >= 4, levels with
+sampling). ValueError for a width0 that is not a power of two in [4, MAX_TEXTURE_SIDE], levels with
 width0 >> (levels - 1) < 4, samples outside [1, 4096].)doc");
   m.def(
       "environment_brdf",

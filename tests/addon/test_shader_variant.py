@@ -219,3 +219,19 @@ def test_frame_block_wants_exactly_the_fields():
     del values["lobe"]
     with pytest.raises(ValueError):
         variant.frame_block(values)
+
+
+def test_prefiltered_lookup_reads_the_horizon_factors_to_s_prime(sdnative):
+    """The visibility ratio's horizon factor has the order of V (s'), whatever s is: a uniform
+    world (s = 0) under V = [n.x > 0] gives the lobe truncated at s' over the hemisphere."""
+    variant = Variant(methods.get("msd_visibility"), True, 0, 3, data_stride=8, material_count=1,
+                      lobe_weights=True, prefiltered=(1024, 7))
+    assert variant.prefiltered_lookup and variant.open_order == 0 and variant.horizon_order == 3
+    assert variant.lobe_order >= 3 and variant.lobe_count == 2
+    defines = variant.defines(sdnative.sh_recurrence_constants)
+    assert defines["SD_HORIZON_ORDER"] == "3" and defines["SD_HORIZON_LOBE"] == "1"
+    assert "prefiltered_scale" in [f.name for f in variant.frame_fields()]
+    unshadowed = Variant(methods.get("unshadowed"), True, 4, 0, material_count=1, lobe_weights=True,
+                         prefiltered=(1024, 7))
+    assert unshadowed.horizon_order == 0
+    assert not dataclasses.replace(variant, material_count=0).prefiltered_lookup   # the vertex target

@@ -192,9 +192,10 @@ def prefiltered_layout():
 
 
 def prefiltered_texture(source, wait):
-    """The environment of `source` prefiltered by the GGX lobe per roughness level, strength
-    applied (scene/environment.prefiltered_atlas), as the RGBA32F atlas texture the shader's
-    sd_prefiltered_light reads (cached per source); wait=False: None while it is computed."""
+    """The environment of `source` prefiltered by the GGX lobe per roughness level, without its
+    strength (scene/environment.prefiltered_atlas; the block's `prefiltered_scale` applies it), as
+    the RGBA32F atlas texture the shader's sd_prefiltered_light reads (cached per source); wait=False:
+    None while it is computed."""
     texture = _prefiltered_textures.get(source.key)
     if texture is None:
         atlas = environment.prefiltered_atlas(source, *prefiltered_layout(), wait)
@@ -450,16 +451,18 @@ class ObjectData:
         return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.weighted else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
-                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True):
+                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
         w = 1 for an eye position, w = 0 for a direction towards an orthographic viewer; light:
         [(s+1)^2, 3] coefficients of x -> L(g R x) (already rotated); local_to_environment: g R,
-        for the band-limited texture (it holds the unrotated L~, looked up at g R x); albedos:
+        for the band-limited texture and the prefiltered atlas (they hold the unrotated
+        environment, looked up at g R x); albedos:
         the object's materials.object_albedos (a slot without one: the 0.8 default surface);
         prefiltered: whether the prefiltered atlas is there to draw with (the truncated lobe
-        meanwhile), for data made with the prefiltered lookup. The
+        meanwhile), for data made with the prefiltered lookup; strength: the environment's, which
+        the atlas is without. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
@@ -474,6 +477,8 @@ class ObjectData:
                   "light": light, "lobe": self.lobe_factors()}
         if self.variant.band_limited_texture or self.variant.prefiltered_lookup:
             values["local_to_environment"] = local_to_environment
+        if self.variant.prefiltered_lookup:
+            values["prefiltered_scale"] = (strength,)
         if self.designs:
             values["design"] = np.concatenate([d.texels() for d in self.designs])
         values.update(surface_rows)

@@ -127,9 +127,10 @@ class Variant:
     @property
     def horizon_order(self):
         """The order of the horizon factor of the visibility ratio: what the method's B has of
-        the surface's own hemisphere (methods with V~, M or a design of V: min(s', open order); the
-        others see no horizon: order 0, factor 1)."""
-        return min(self.visibility_order, self.open_order) if self.method.uses_visibility_order else 0
+        the surface's own hemisphere (methods with V~, M or a design of V: s', whatever s is - in a
+        uniform world their B under V = [n.x > 0] is the lobe truncated at s' over the hemisphere;
+        the others see no horizon: order 0, factor 1)."""
+        return self.visibility_order if self.method.uses_visibility_order else 0
 
     @property
     def shaded_lobes(self):
@@ -151,7 +152,7 @@ class Variant:
     def lobe_order(self):
         """Highest l whose Funk-Hecke factor the shader reads."""
         order = self.method.lobe_order(self.light_order, self.visibility_order)
-        return max(order, self.open_order) if self.prefiltered_lookup else order
+        return max(order, self.open_order, self.horizon_order) if self.prefiltered_lookup else order
 
     @property
     def lobe_vec4s(self):
@@ -288,6 +289,8 @@ class Variant:
                   BlockField("lobe", "vec4", self.lobe_vec4s * self.lobe_count)]
         if self.band_limited_texture or self.prefiltered_lookup:
             fields.append(BlockField("local_to_environment", "mat4"))  # g R: the textures are unrotated
+        if self.prefiltered_lookup:
+            fields.append(BlockField("prefiltered_scale", "vec4"))     # the environment's strength
         if self.method.lobe_design:
             # x, y, z, lambda; lobe 0's nodes, then lobe 1's
             fields.append(BlockField("design", "vec4", self.lobe_design_size + self.diffuse_design_size))

@@ -294,19 +294,18 @@ def prefilter_status():
 
 
 def prefiltered_atlas(src, width0, levels, wait):
-    """The environment prefiltered by the GGX lobe per roughness level, strength applied, in the
-    atlas layout of sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour
-    is that colour at every roughness. float32 [3 width0 / 4, width0, 3]. Computed in a worker
-    thread (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives
-    None until it is there or when it failed; wait=True waits (raises background.Failed)."""
+    """The environment prefiltered by the GGX lobe per roughness level, without the strength (the
+    shader applies it: a changed strength needs no new prefilter), in the atlas layout of
+    sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour is that colour at
+    every roughness. float32 [3 width0 / 4, width0, 3]. Computed in a worker thread (about 1.5 s
+    for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None until it is
+    there or when it failed; wait=True waits (raises background.Failed)."""
     if src.kind == "uniform":
-        colour = np.asarray(src.colour, dtype=np.float32) * src.strength
-        return np.broadcast_to(colour, (3 * width0 // 4, width0, 3)).copy()
-    env, strength = environment(src), src.strength   # read here: the pixels come from bpy
+        return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (3 * width0 // 4, width0, 3)).copy()
+    env = environment(src)   # read here: the pixels come from bpy
 
     def compute():
-        atlas, _ = env.prefiltered_ggx(width0, levels)
-        return (atlas * strength).astype(np.float32)
+        return np.asarray(env.prefiltered_ggx(width0, levels), dtype=np.float32)
 
     key = (src.key, width0, levels)
     work = prefiltered_atlases()

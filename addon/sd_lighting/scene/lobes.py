@@ -10,8 +10,8 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
   specular layer's directional albedo E = F0' A + B, with F0' = mix(F0, base colour, metallic) and
   (A, B) the split-sum scale and bias of a GGX lobe with Schlick's Fresnel at the view's n.v and
   the roughness (sdnative.environment_brdf_table, integrated natively), scaled to
-  A + B = 1 as multiple scattering makes it (measured against Cycles: gold's bias -22 % without
-  the scaling, within 4 % with it); Lambert times
+  A + B = 1 as multiple scattering makes it (measured against Cycles with Karis' analytic fit
+  before the table: gold's bias -22 % without the scaling, within 4 % with it); Lambert times
   (1 - metallic) x base colour, less the dielectric layer's E where the layer lies over the
   diffuse and takes its energy from it (the Principled BSDF of Blender 4.0 and later; before 4.0
   the layer adds to the diffuse) (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is

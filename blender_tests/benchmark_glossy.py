@@ -75,16 +75,8 @@ def compare(name, scene, objects, out, size, block, defaults=False):
 
 def eevee_render(scene, path, size):
     """EEVEE at its defaults (4.2+: EEVEE Next), transparent film, as cycles_render frames it."""
-    render = scene.render
-    render.engine = 'BLENDER_EEVEE_NEXT' if bpy.app.version < (5, 0, 0) else 'BLENDER_EEVEE'
-    render.film_transparent = True
-    render.resolution_x = render.resolution_y = size
-    render.resolution_percentage = 100
-    render.image_settings.file_format = 'OPEN_EXR'
-    render.image_settings.color_depth = '32'
-    render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    return sdtest.load_exr(path)
+    scene.render.engine = 'BLENDER_EEVEE_NEXT' if bpy.app.version < (5, 0, 0) else 'BLENDER_EEVEE'
+    return sdtest.render_still(scene, path, size)
 
 
 def main():

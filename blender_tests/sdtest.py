@@ -501,6 +501,13 @@ def cycles_render(scene, path, size, samples=512, seed=1, transparent=True):
     scene.cycles.seed = seed
     scene.cycles.filter_width = 0.01
     scene.cycles.max_bounces = 0
+    return render_still(scene, path, size, transparent)
+
+
+def render_still(scene, path, size, transparent=True):
+    """Renders the scene with its render engine at size x size (film transparent unless asked
+    for the world behind) into a 32-bit EXR; returns load_exr's image."""
+    render = scene.render
     render.film_transparent = transparent
     render.resolution_x = render.resolution_y = size
     render.resolution_percentage = 100

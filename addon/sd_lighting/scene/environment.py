@@ -33,19 +33,25 @@ from . import ringing, transforms, world_render
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
-_window_choices = None   # background.Background of ringing window choices, made on first use
-_prefiltered = None      # background.Background of prefiltered atlases, made on first use
+_workers = {}        # name -> the session's background.Background of that work, made on first use
+RINGING_WINDOWS = "sd_lighting ringing windows"
+PREFILTERED_ATLASES = "sd_lighting prefiltered environments"
 
 
 def clear_cache():
-    global _window_choices, _prefiltered
     _cache.clear()
     _sh_cache.clear()
     world_render.clear()
-    for work in (_window_choices, _prefiltered):
-        if work is not None:
-            work.close()
-    _window_choices = _prefiltered = None
+    for work in _workers.values():
+        work.close()
+    _workers.clear()
+
+
+def _worker(name):
+    """The session's Background of the work `name` (made on first use)."""
+    if name not in _workers:
+        _workers[name] = background.Background(name)
+    return _workers[name]
 
 
 # --------------------------------------------------------------------------------------------
@@ -279,18 +285,16 @@ def background_texels(src):
 
 def prefiltered_atlases():
     """The session's prefiltered atlases (prefiltered_atlas: made in a worker thread)."""
-    global _prefiltered
-    if _prefiltered is None:
-        _prefiltered = background.Background("sd_lighting prefiltered environments")
-    return _prefiltered
+    return _worker(PREFILTERED_ATLASES)
 
 
 def prefilter_status():
     """Lines for the panel: the environments being prefiltered or whose prefilter failed."""
-    if _prefiltered is None:
+    work = _workers.get(PREFILTERED_ATLASES)
+    if work is None:
         return []
-    return (["Prefiltering the environment for glossy light (the truncated lobe meanwhile)"] * bool(_prefiltered.pending())
-            + ["Prefiltering the environment failed: %s" % why for why in _prefiltered.failures().values()])
+    return (["Prefiltering the environment for glossy light (the truncated lobe meanwhile)"] * bool(work.pending())
+            + ["Prefiltering the environment failed: %s" % why for why in work.failures().values()])
 
 
 def prefiltered_atlas(src, width0, levels, wait):
@@ -337,15 +341,12 @@ def smallest_order(src, lobe, exponent, target_error, max_order):
 
 def window_choices():
     """The session's ringing window choices (scene/ringing.choice: made in a worker thread)."""
-    global _window_choices
-    if _window_choices is None:
-        _window_choices = background.Background("sd_lighting ringing windows")
-    return _window_choices
+    return _worker(RINGING_WINDOWS)
 
 
 def ringing_window_status():
     """Lines for the panel: the ringing windows being chosen or whose choice failed."""
-    return ringing.status(_window_choices) if _window_choices is not None else []
+    return ringing.status(_workers[RINGING_WINDOWS]) if RINGING_WINDOWS in _workers else []
 
 
 def ringing_window(src, lobe, exponent, order, setting, wait):

@@ -1,14 +1,15 @@
 """Glossy Principled materials against Cycles (issue 28): the prefiltered GGX light (the split sum
 with the bake's visibility ratio, the default) beside the seed's Phong lobe truncated at order s.
 
-Scenes: a smooth sphere in gold (metallic 1) at roughness 0.05, 0.15, 0.3 and 0.5 and in red
-plastic at 0.2; a subdivided Suzanne in gold (roughness 0.3) on a red plastic floor (0.2), where
+Scenes: a smooth sphere in gold (metallic 1) at roughness 0.05, 0.15, 0.3 and 0.5, in red
+plastic at 0.2, in Blender's default material (grey, roughness 0.5) and in red clay at 0.8; a subdivided Suzanne in gold (roughness 0.3) on a red plastic floor (0.2), where
 the shadows and the floor's reflection of the head need the baked visibility. Each is baked from
 its materials with MSD (13) at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex;
 Cycles renders it with direct light, pixel filter off, from two seeds (its noise printed).
 
 --models: also Debian's assimp test models (MODELS: a smooth and a faceted Wuson, the low-poly
-spider) in gold, red plastic and polished steel under three HDRIs, baked at the panel's defaults
+spider) in gold, red plastic and polished steel under three HDRIs, and the smooth Wuson in
+Blender's default material under two, baked at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
 Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
@@ -36,20 +37,24 @@ GOLD = (1.0, 0.7, 0.3, 1.0)
 RED = (0.8, 0.1, 0.05, 1.0)
 SPHERES = [("gold, roughness 0.05", GOLD, 0.05, 1.0), ("gold, roughness 0.15", GOLD, 0.15, 1.0),
            ("gold, roughness 0.3", GOLD, 0.3, 1.0), ("gold, roughness 0.5", GOLD, 0.5, 1.0),
-           ("red plastic, roughness 0.2", RED, 0.2, 0.0)]
+           ("red plastic, roughness 0.2", RED, 0.2, 0.0),
+           ("grey, roughness 0.5 (Blender's default material)", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0),
+           ("red clay, roughness 0.8", RED, 0.8, 0.0)]
 
 
 MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness, metallic, HDRI
     ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.3, 1.0, "forest.exr"),
     ("PLY/Wuson.ply", "red plastic", RED, 0.2, 0.0, "courtyard.exr"),
-    ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "studio.exr")]
+    ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "studio.exr"),
+    ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "studio.exr"),
+    ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "courtyard.exr")]
 ASSIMP = "/usr/share/assimp/models/"
 
 
 def compare(name, scene, objects, out, size, block, defaults=False):
     """Bakes `objects` (MSD (13), s = 8, s' = 4; defaults: at the panel's defaults), previews them
     with and without the prefiltered light, prints the line."""
-    stem = os.path.join(out, name.replace(" ", "_").replace(",", "").replace("(", "").replace(")", ""))
+    stem = os.path.join(out, "".join(c for c in name.replace(" ", "_") if c.isalnum() or c in "_."))
     cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
     if defaults:
         sdtest.select_only(objects)

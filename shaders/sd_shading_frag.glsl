@@ -23,40 +23,48 @@ vec3 sd_surface_albedo()
 }
 
 #ifdef SD_LOBE_WEIGHTS
-/* (A, B) of the GGX lobe with Schlick's Fresnel at n.v and the roughness: its single-scattering
- * directional albedo is F0 A + B (the split sum's second factor), integrated natively
+/* The GGX lobe's split-sum terms at n.v and the roughness, integrated natively
  * (sdnative.environment_brdf_table: SD_BRDF_TABLE_SIZE square, n.v = (i + 0.5) / size across,
- * roughness j / (size - 1) up), bilinear between the table's entries, clamped at its edges. */
-vec2 sd_environment_brdf(float n_dot_v, float roughness)
+ * roughness j / (size - 1) up), bilinear between the table's entries, clamped at its edges:
+ * (A, B) of Schlick's Fresnel (single-scattering albedo F0 A + B), E_avg the cosine-weighted mean
+ * of A + B over n.v (scene/lobes.average_albedo), and B of the dielectric Fresnel of IOR 1.5
+ * remapped to F0..1 (A + B is the same for both shapes). */
+vec4 sd_environment_brdf(float n_dot_v, float roughness)
 {
   float last = float(SD_BRDF_TABLE_SIZE - 1);
   vec2 xy = vec2(clamp(n_dot_v * float(SD_BRDF_TABLE_SIZE) - 0.5, 0.0, last), clamp(roughness, 0.0, 1.0) * last);
   ivec2 i0 = ivec2(floor(xy));
   ivec2 i1 = min(i0 + ivec2(1), ivec2(SD_BRDF_TABLE_SIZE - 1));
   vec2 f = xy - vec2(i0);
-  vec2 bottom = mix(texelFetch(sd_environment_brdf_table, i0, 0).xy,
-                    texelFetch(sd_environment_brdf_table, ivec2(i1.x, i0.y), 0).xy, f.x);
-  vec2 top = mix(texelFetch(sd_environment_brdf_table, ivec2(i0.x, i1.y), 0).xy,
-                 texelFetch(sd_environment_brdf_table, i1, 0).xy, f.x);
+  vec4 bottom = mix(texelFetch(sd_environment_brdf_table, i0, 0),
+                    texelFetch(sd_environment_brdf_table, ivec2(i1.x, i0.y), 0), f.x);
+  vec4 top = mix(texelFetch(sd_environment_brdf_table, ivec2(i0.x, i1.y), 0),
+                 texelFetch(sd_environment_brdf_table, i1, 0), f.x);
   return mix(bottom, top, f.y);
 }
 
-/* The specular layer's directional albedo for F0 (per channel) and the lobe's (A, B): single
- * scattering F0 A + B scaled by 1 / (A + B), so that a lobe with F0 = 1 reflects all the light, as
- * Cycles' multiple-scattering GGX does (closer to Cycles than Turquin et al.'s 1 + F0 (1 / (A + B)
- * - 1): msd-notes, "Glossy light"). */
-vec3 sd_specular_albedo(vec3 f0, vec2 ab)
+/* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg),
+ * with multiple scattering as Cycles' GGX keeps it (Kulla and Conty 2017, "Revisiting physically
+ * based shading at Imageworks", its appendix's Fresnel of many bounces): the single-scattering
+ * F0 A + B times 1 + F_ms (1 - E) / E, with E = A + B, F_ms = F_avg E_avg / (1 - F_avg (1 - E_avg))
+ * and F_avg = F0 + (1 - F0) / 21, Schlick's cosine-weighted mean (the dielectric shape's own, 0.054
+ * at IOR 1.5, moves a plastic's layer by under 0.5 %). F0 = 1 reflects all the light; a plastic's
+ * layer gains hardly anything. */
+vec3 sd_specular_albedo(vec3 f0, vec3 abe)
 {
-  return (f0 * ab.x + vec3(ab.y)) / max(ab.x + ab.y, 1e-4);
+  float e = max(abe.x + abe.y, 1e-4);
+  vec3 f_avg = f0 + (vec3(1.0) - f0) / 21.0;
+  vec3 f_ms = f_avg * abe.z / (vec3(1.0) - f_avg * (1.0 - abe.z));
+  return (f0 * abe.x + vec3(abe.y)) * (vec3(1.0) + f_ms * ((1.0 - e) / e));
 }
 #endif
 
 /* The surface's radiance from lobe 0's B (SD_PREFILTERED: its prefiltered light) and
  * (SD_DIFFUSE_LOBE) the Lambert lobe's: with
  * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): lobe 0 times the specular layer's
- * albedo for F0' = mix(F0, albedo, metallic) (sd_specular_albedo), Lambert times (1 - metallic)
- * albedo, less the dielectric layer's albedo for F0 where the layer lies over the diffuse (layer
- * 1; 2: added to it; 0: no layer);
+ * albedo (sd_specular_albedo; below), Lambert times (1 - metallic) albedo, less the dielectric
+ * layer's albedo for F0 where the layer lies over the diffuse (layer 1; 2: added to it; 0: no
+ * layer);
  * otherwise the albedo times the one lobe's B, or on the vertex target (no albedos) the two
  * lobes' sum. */
 vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
@@ -69,10 +77,16 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
   float f0 = sd_lobe_weights.y;
   float layer = step(0.5, sd_lobe_weights.w);
   float over = layer * (1.0 - step(1.5, sd_lobe_weights.w));
-  vec2 ab = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
-  vec3 rgb = lobe0 * (layer * sd_specular_albedo(mix(vec3(f0), albedo, metal), ab));
+  vec4 brdf = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
+  vec3 dielectric_shape = vec3(brdf.x + brdf.y - brdf.w, brdf.w, brdf.z);
+  vec3 dielectric = sd_specular_albedo(vec3(f0), dielectric_shape);
+  /* 4.0+: a dielectric and a metal closure (Schlick's Fresnel of the base colour) mixed by
+   * metallic; before 4.0 one lobe of the mixed F0 with the dielectric's shape. */
+  vec3 specular = mix(sd_specular_albedo(mix(vec3(f0), albedo, metal), dielectric_shape),
+                      mix(dielectric, sd_specular_albedo(albedo, brdf.xyz), metal), over);
+  vec3 rgb = lobe0 * (layer * specular);
 #  ifdef SD_DIFFUSE_LOBE
-  rgb += diffuse * ((1.0 - metal) * (1.0 - over * sd_specular_albedo(vec3(f0), ab).x)) * albedo;
+  rgb += diffuse * ((1.0 - metal) * (1.0 - over * dielectric.x)) * albedo;
 #  else
   /* A slot without a specular layer under the one glossy lobe (its material changed since the
    * bake): that lobe times the albedo, as without weights. */

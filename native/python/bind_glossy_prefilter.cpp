@@ -41,30 +41,31 @@ sampling). ValueError for a width0 that is not a power of two in [4, MAX_TEXTURE
 width0 >> (levels - 1) < 4, samples outside [1, 4096].)doc");
   m.def(
       "environment_brdf",
-      [](double n_dot_v, double roughness, int samples) {
-        const auto ab = sd::environment_brdf(n_dot_v, roughness, samples);
+      [](double n_dot_v, double roughness, int samples, double ior) {
+        const auto ab = sd::environment_brdf(n_dot_v, roughness, samples, ior);
         return py::make_tuple(ab[0], ab[1]);
       },
-      py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024,
-      R"doc((A, B): the GGX lobe's directional albedo F0 A + B for Schlick's Fresnel at n.v in (0, 1] and
-Principled roughness in [0, 1] (single scattering, Smith height-correlated), by `samples` GGX half
-vectors. ValueError outside those ranges.)doc");
+      py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024, py::arg("ior") = 0.0,
+      R"doc((A, B): the GGX lobe's directional albedo F0 A + B at n.v in (0, 1] and Principled
+roughness in [0, 1] (single scattering, Smith height-correlated), by `samples` GGX half vectors, for
+Schlick's Fresnel (ior 0) or the dielectric Fresnel of `ior` > 1 remapped to F0..1 (Cycles'
+dielectric layer). ValueError outside those ranges.)doc");
   m.def(
       "environment_brdf_table",
-      [](int size, int samples) {
+      [](int size, int samples, double ior) {
         std::vector<float> table;
         {
           py::gil_scoped_release release;
-          table = sd::environment_brdf_table(size, samples);
+          table = sd::environment_brdf_table(size, samples, ior);
         }
         py::array_t<double> out({size, size, 2});
         std::copy(table.begin(), table.end(), out.mutable_data());
         return out;
       },
-      py::arg("size") = 32, py::arg("samples") = 1024,
+      py::arg("size") = 32, py::arg("samples") = 1024, py::arg("ior") = 0.0,
       R"doc(environment_brdf tabulated: float64 [size, size, 2], (A, B) at n.v = (i + 0.5) / size (column
-i) and roughness j / (size - 1) (row j). ValueError for size outside [2, 256] or samples outside
-[1, 2^20].)doc");
+i) and roughness j / (size - 1) (row j), for `ior` as environment_brdf. ValueError for size outside
+[2, 256], samples outside [1, 2^20] or a bad ior.)doc");
 }
 
 }  // namespace sdpy

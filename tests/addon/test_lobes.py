@@ -1,6 +1,7 @@
 """Roughness -> Phong sigma, and how a Principled BSDF splits between the Lambert and Phong
 lobes (the shader's colours from the weights: test_material_colour against Cycles)."""
 
+import numpy as np
 import pytest
 
 from sd_lighting.scene import lobes
@@ -25,9 +26,9 @@ def test_dielectric_reflectance(kwargs, f0):
     assert lobes.dielectric_reflectance(**kwargs) == pytest.approx(f0, rel=1e-3)
 
 
-def test_rough_dielectrics_are_lambert_alone():
-    assert lobes.lobes_from_principled(0.5, 0.0, F0)[0] == lobes.Lobes()
-    assert lobes.principled_weights(0.9, 0.0, F0) == lobes.DIFFUSE_ONLY
+def test_dielectrics_without_a_specular_layer_are_lambert_alone():
+    assert lobes.lobes_from_principled(0.5, 0.0, 0.0) == (lobes.Lobes(), "no specular layer (F0 = 0) -> Lambert")
+    assert lobes.principled_weights(0.9, 0.0, 0.0) == lobes.DIFFUSE_ONLY
 
 
 def test_metals_are_phong_alone():
@@ -62,10 +63,13 @@ def test_reflected_light_per_lobe():
     assert lobes.reflected((1.0, 0.0, 0.0), lobes.DIFFUSE_ONLY)[1] == pytest.approx(0.2126)
 
 
-def test_the_roughness_threshold_is_half():
-    assert lobes.lobes_from_principled(0.49, 0.0, F0)[0].lobe == "phong"
-    assert lobes.lobes_from_principled(0.5, 0.0, F0)[0].lobe == "lambert"
-    assert lobes.lobes_from_principled(0.5, 0.01, F0)[0].lobe == "phong"
+def test_rough_dielectrics_keep_their_specular_layer():
+    # Blender's default material: roughness 0.5, F0 0.04; the roughest lobe is clamped to sigma 1
+    found, why = lobes.lobes_from_principled(0.5, 0.0, F0)
+    assert found == lobes.Lobes("phong", 7.5, True, True)
+    assert why == "roughness 0.50 -> Lambert + Phong sigma 7.5"
+    assert lobes.principled_weights(1.0, 0.0, F0) == (0.0, F0, 1.0, lobes.LAYER_OVER)
+    assert lobes.lobes_from_principled(1.0, 0.0, F0)[0].exponent == lobes.MIN_EXPONENT
 
 
 def test_a_bake_record_names_its_lobes():
@@ -105,3 +109,13 @@ def test_horizon_share_of_a_lobe_by_funk_hecke(sdnative, exponent, angle):
     weights = np.sin(st) * (np.pi / 800) * (2 * np.pi / 1600) / (4 * np.pi)
     share = np.sum(lobe * weights * (x[..., 2] > 0.0)) / np.sum(lobe * weights)
     assert series == pytest.approx(share, abs=5e-3)
+
+
+def test_average_albedo_is_the_cosine_weighted_mean_over_n_dot_v():
+    size = 32
+    mu = (np.arange(size) + 0.5) / size
+    table = np.zeros((3, size, 2))
+    table[0] = 0.5                                # A + B = 1: all the light at every angle
+    table[1, :, 0] = mu                           # A + B = mu: 2 int mu^2 = 2/3
+    table[2, :, 1] = 0.25                         # B alone counts as A does: a constant 0.25
+    assert lobes.average_albedo(table) == pytest.approx([1.0, 2.0 / 3.0, 0.25], abs=2e-4)

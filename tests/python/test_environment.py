@@ -362,3 +362,17 @@ def test_sampler(sd, rng):
     assert abs(x.mean() - env.mass[0]) < 5 * x.std() / math.sqrt(len(x))
     with pytest.raises(ValueError, match="shape"):
         sampler.sample(np.zeros((4, 3)))
+
+
+def test_environment_brdf_and_its_table():
+    a, b = sdnative.environment_brdf(0.5, 0.4, 512)
+    table = sdnative.environment_brdf_table(8, 512)
+    dielectric = sdnative.environment_brdf_table(8, 512, ior=1.5)
+    assert table.shape == dielectric.shape == (8, 8, 2) and table.dtype == np.float64
+    assert 0.0 < b < a and a + b <= 1.0
+    # The Fresnel shape moves light between A and B, never the lobe's albedo A + B.
+    np.testing.assert_allclose(table.sum(axis=2), dielectric.sum(axis=2), atol=1e-6)
+    # IOR 1.5's Fresnel rises earlier than Schlick's (from n.v 0.3 up; nearer grazing it is lower).
+    assert (dielectric[:, 2:, 1] > table[:, 2:, 1]).all() and dielectric[0, 0, 1] < table[0, 0, 1]
+    with pytest.raises(ValueError, match="ior must be 0"):
+        sdnative.environment_brdf(0.5, 0.4, 512, ior=0.9)

@@ -209,12 +209,17 @@ def prefiltered_texture(source, wait):
 
 
 def brdf_table_texture():
-    """The GGX lobe's (A, B) over n.v and roughness (sdnative.environment_brdf_table) as the
-    RGBA32F texture the shader's sd_environment_brdf reads (made once)."""
+    """The GGX lobe's split-sum terms over n.v and roughness as the RGBA32F texture the shader's
+    sd_environment_brdf reads (made once): (A, B) of Schlick's Fresnel
+    (sdnative.environment_brdf_table), each roughness row's E_avg (lobes.average_albedo), and B of
+    the dielectric Fresnel of lobes.DIELECTRIC_SHAPE_IOR."""
     if not _brdf_table:
-        table = np.asarray(native.get().environment_brdf_table(BRDF_TABLE_SIZE), dtype=np.float32)
+        sd = native.get()
+        table = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE))
         texels = np.zeros((BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, 4), dtype=np.float32)
         texels[..., :2] = table
+        texels[..., 2] = lobes.average_albedo(table)[:, None]
+        texels[..., 3] = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE, ior=lobes.DIELECTRIC_SHAPE_IOR))[..., 1]
         _brdf_table.append(_texture(BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, texels))
     return _brdf_table[0]
 

@@ -1,22 +1,26 @@
 """The BRDF lobes of a material: Lambert, Phong with exponent sigma, or both (msd-notes, "The
 problem"), and the weights that give each lobe its colour for a Principled BSDF.
 
-- A rough dielectric (roughness >= 0.5, metallic 0) is Lambert alone, with its base colour: the
-  Principled BSDF's broad specular layer adds a few percent of the light in nearly the diffuse
-  lobe's shape, so the diffuse alone stands for both.
-- A metal (metallic 1) is Phong alone; anything else - a smooth dielectric, a partly metallic
-  surface - is Lambert and Phong, both read from the same per-vertex data.
+- A metal (metallic 1) is Phong alone; a dielectric whose specular layer reflects nothing (F0 = 0,
+  metallic 0) is Lambert alone; anything else - a dielectric at any roughness, a partly metallic
+  surface - is Lambert and Phong, both read from the same per-vertex data. Blender's default
+  material (roughness 0.5, F0 = 0.04) is one of these: its specular layer, a few percent of the
+  light at normal incidence, brightens every rim (msd-notes, "Glossy light", measures what folding
+  it into Lambert cost).
 - The lobes' colours, per pixel, as the Principled BSDF splits its energy: Phong times the
-  specular layer's directional albedo E = F0' A + B, with F0' = mix(F0, base colour, metallic) and
-  (A, B) the split-sum scale and bias of a GGX lobe with Schlick's Fresnel at the view's n.v and
-  the roughness (sdnative.environment_brdf_table, integrated natively), scaled to
-  A + B = 1 as multiple scattering makes it (measured against Cycles with Karis' analytic fit
-  before the table: gold's bias -22 % without the scaling, within 4 % with it); Lambert times
-  (1 - metallic) x base colour, less the dielectric layer's E where the layer lies over the
+  specular layer's directional albedo E = F0 A + B, with (A, B) the split-sum scale and bias of a
+  GGX lobe at the view's n.v and the roughness (sdnative.environment_brdf_table, integrated
+  natively), times the light that multiple scattering adds as Cycles computes it (Kulla and
+  Conty's F_ms with E_avg from `average_albedo`: a metal keeps its energy, a rough plastic's layer
+  gains hardly any). As in Cycles, the dielectric layer's Fresnel is the real one (of IOR
+  DIELECTRIC_SHAPE_IOR; the slot's F0) remapped to F0..1, which rises earlier than Schlick's;
+  from 4.0 the metal is Schlick's of the base colour, mixed with the dielectric by metallic,
+  before 4.0 one lobe of F0' = mix(F0, base colour, metallic) with the dielectric's shape.
+  Lambert times (1 - metallic) x base colour, less the dielectric layer's E where the layer lies over the
   diffuse and takes its energy from it (the Principled BSDF of Blender 4.0 and later; before 4.0
   the layer adds to the diffuse) (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is
   `principled_weights`: (metallic, F0, roughness, layer), layer 0 for a slot without a specular
-  layer (Diffuse BSDF, rough dielectric), LAYER_OVER or LAYER_ADDED.
+  layer (Diffuse BSDF, F0 = 0), LAYER_OVER or LAYER_ADDED.
 - The Phong exponent is sigma = 1 / (2 alpha^2) - 1/2, alpha = roughness^2 (Blender's GGX alpha):
   the Beckmann-equivalent Blinn-Phong exponent 2/alpha^2 - 2 divided by 4, the usual factor
   between a half-vector lobe and a lobe around the mirrored view; clamped to [1, 1000]
@@ -30,7 +34,7 @@ import numpy as np
 LUMINANCE = (0.2126, 0.7152, 0.0722)   # of linear Rec. 709 RGB (Blender's default scene-linear)
 MIN_EXPONENT = 1.0
 MAX_EXPONENT = 1000.0
-LAMBERT_MIN_ROUGHNESS = 0.5
+DIELECTRIC_SHAPE_IOR = 1.5   # the dielectric layer's Fresnel shape (its F0 is the slot's own)
 LAYER_OVER = 1.0     # the specular layer takes its energy from the diffuse under it (4.0+)
 LAYER_ADDED = 2.0    # the specular layer adds to the diffuse (before 4.0)
 DIFFUSE_ONLY = (0.0, 0.0, 1.0, 0.0)   # principled_weights of a slot without a specular layer
@@ -88,7 +92,7 @@ def principled_weights(roughness, metallic, f0, layer_over=True):
     (Blender 4.0 and later)."""
     metallic = min(max(float(metallic), 0.0), 1.0)
     roughness = min(max(float(roughness), 0.0), 1.0)
-    if roughness >= LAMBERT_MIN_ROUGHNESS and metallic == 0.0:
+    if metallic == 0.0 and float(f0) <= 0.0:
         return DIFFUSE_ONLY
     return (metallic, float(f0), roughness, LAYER_OVER if layer_over else LAYER_ADDED)
 
@@ -108,11 +112,22 @@ def lobes_from_principled(roughness, metallic, f0):
     """The Lobes of a Principled BSDF's inputs, and why (a line for the panel)."""
     metal, _, _, layer = principled_weights(roughness, metallic, f0)
     if layer == 0.0:
-        return Lobes(), "rough dielectric -> Lambert"
+        return Lobes(), "no specular layer (F0 = 0) -> Lambert"
     sigma = exponent_from_roughness(roughness)
     both = metal < 1.0
     return Lobes("phong", sigma, both, True), "%sroughness %.2f -> %sPhong sigma %.1f" % (
         "metallic %.2f, " % metal if metal > 0.0 else "", roughness, "Lambert + " if both else "", sigma)
+
+
+def average_albedo(table):
+    """E_avg per roughness row of sdnative.environment_brdf_table's (A, B) (rows: roughness, columns:
+    n.v = (i + 1/2) / size): the cosine-weighted mean 2 integral_0^1 (A + B) mu dmu of the lobe's
+    albedo with F0 = 1, by the midpoint rule over the columns. Cycles' multiple scattering scales
+    the specular layer with it (shaders/sd_shading_frag.glsl, sd_specular_albedo)."""
+    table = np.asarray(table, dtype=float)
+    size = table.shape[1]
+    mu = (np.arange(size) + 0.5) / size
+    return 2.0 * (table[..., 0] + table[..., 1]) @ mu / size
 
 
 def horizon_factors(order):

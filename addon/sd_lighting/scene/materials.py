@@ -7,7 +7,7 @@ or an Image Texture plugged straight into it (read through the UV map the node's
 names, or the mesh's active render UV map). A Principled BSDF's metallic, roughness and specular
 inputs split it between a Lambert and a Phong lobe (scene/lobes.py); an object's Phong exponent is
 that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the specular
-layer of a rough dielectric, GGX's shape, colour computed by other nodes, a second image texture
+GGX's shape, colour computed by other nodes, a second image texture
 on one object, another slot's roughness) is approximated, and `Albedo.note` says how; so do the
 layers it leaves out (transmission, coat, sheen, subsurface, emission, alpha). A material
 without such a BSDF uses its viewport colour; a face without a material has Blender's default
@@ -118,9 +118,7 @@ def _principled(node):
     weights = lobes.principled_weights(roughness, metallic, f0, compat.principled_layered(node))
     found, why = lobes.lobes_from_principled(roughness, metallic, f0)
     notes = []
-    if found.lobe == "lambert" and f0 > 0.0:
-        notes.append("specular layer folded into Lambert")
-    elif found.lobe == "phong":
+    if found.lobe == "phong":
         notes.append("GGX shown as Phong")
     return weights, found, why, notes + _left_out(node)
 

@@ -120,8 +120,8 @@ class SceneSettings(bpy.types.PropertyGroup):
 
     material_source: EnumProperty(
         name="Material",
-        items=[('MATERIAL', "From Material", "Principled BSDF: rough dielectrics are Lambert, "
-                "others Phong with sigma from the roughness"),
+        items=[('MATERIAL', "From Material", "Principled BSDF: Lambert and a Phong lobe with sigma from the "
+                "roughness (metals: Phong alone)"),
                ('LAMBERT', "Lambert", "Diffuse"),
                ('PHONG', "Phong", "Glossy lobe around the mirrored view, exponent sigma")],
         default='MATERIAL')

@@ -56,16 +56,21 @@ struct PrefilterLayout {
 /// samples outside [1, 4096].
 std::vector<float> prefilter_ggx(const Environment& environment, const PrefilterLayout& layout, int samples = 128);
 
-/// The lobe's directional albedo E(n·v, r) = F0·A + B of the split sum for Schlick's Fresnel
-/// F = F0 + (1 − F0)(1 − v·h)⁵: A = ∫ (1 − (1 − v·h)⁵) f₁ (n·l) dl, B = ∫ (1 − v·h)⁵ f₁ (n·l) dl with
-/// f₁ the GGX BRDF of F = 1 (single scattering, Smith height-correlated), by `samples` GGX-
-/// distributed half vectors (Hammersley). n_dot_v in (0, 1], roughness in [0, 1] (clamped to
-/// α >= 1e-4). Returns {A, B}. Throws std::invalid_argument outside those ranges.
-std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples = 1024);
+/// The lobe's directional albedo E(n·v, r) = F0·A + B of the split sum for a Fresnel term
+/// F = F0 + (1 − F0) s(v·h): A = ∫ (1 − s) f₁ (n·l) dl, B = ∫ s f₁ (n·l) dl with f₁ the GGX BRDF of
+/// F = 1 (single scattering, Smith height-correlated), by `samples` GGX-distributed half vectors
+/// (Hammersley). s is Schlick's (1 − v·h)⁵ for ior = 0; for ior > 1 it is the dielectric Fresnel
+/// of that IOR remapped to run from 0 at normal incidence to 1 at grazing, (F(v·h) − F(1)) /
+/// (1 − F(1)), the shape Cycles' Principled BSDF gives its dielectric layer at any F0 (its
+/// generalized Schlick with the real Fresnel). A + B is the same for both. n_dot_v in (0, 1],
+/// roughness in [0, 1] (clamped to α >= 1e-4). Returns {A, B}. Throws std::invalid_argument
+/// outside those ranges or for an ior that is neither 0 nor in (1, 1e6].
+std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples = 1024, double ior = 0.0);
 
 /// environment_brdf tabulated for the shader: (A, B) at n·v = (i + ½) / size (column i) and
-/// roughness j / (size − 1) (row j), `samples` half vectors each; float, row-major, size × size × 2.
-/// Both cores. Throws std::invalid_argument for size outside [2, 256] or samples outside [1, 2^20].
-std::vector<float> environment_brdf_table(int size = 32, int samples = 1024);
+/// roughness j / (size − 1) (row j), `samples` half vectors each, for `ior` (0: Schlick); float,
+/// row-major, size × size × 2. Both cores. Throws std::invalid_argument for size outside [2, 256],
+/// samples outside [1, 2^20] or an ior environment_brdf refuses.
+std::vector<float> environment_brdf_table(int size = 32, int samples = 1024, double ior = 0.0);
 
 }  // namespace sd

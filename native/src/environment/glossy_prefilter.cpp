@@ -235,16 +235,39 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
   return atlas;
 }
 
-std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples) {
+namespace {
+
+void check_ior(const char* caller, double ior) {
+  if (!(ior == 0.0 || (ior > 1.0 && ior <= 1e6)))
+    throw std::invalid_argument(std::string(caller) + ": ior must be 0 (Schlick) or in (1, 1e6], got " +
+                                std::to_string(ior));
+}
+
+/// Unpolarised Fresnel reflectance of a dielectric of relative IOR n > 1 seen from outside at
+/// cos θ = c (Walter et al. 2007, eq. 22).
+double dielectric_fresnel(double c, double n) {
+  const double g = std::sqrt(n * n - 1.0 + c * c);
+  const double a = (g - c) / (g + c), b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+  return 0.5 * a * a * (1.0 + b * b);
+}
+
+}  // namespace
+
+std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples, double ior) {
   if (!(n_dot_v > 0.0 && n_dot_v <= 1.0))
     throw std::invalid_argument("environment_brdf: n_dot_v must be in (0, 1], got " + std::to_string(n_dot_v));
   if (!(roughness >= 0.0 && roughness <= 1.0))
     throw std::invalid_argument("environment_brdf: roughness must be in [0, 1], got " + std::to_string(roughness));
   if (samples < 1 || samples > 1 << 20)
     throw std::invalid_argument("environment_brdf: samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_ior("environment_brdf", ior);
   const double alpha = std::max(roughness * roughness, kMinAlpha), a2 = alpha * alpha;
   const glm::dvec3 v(std::sqrt(1.0 - n_dot_v * n_dot_v), 0.0, n_dot_v);
   const auto lambda_term = [a2](double c) { return std::sqrt(a2 + (1.0 - a2) * c * c); };
+  const double normal_fresnel = ior > 0.0 ? dielectric_fresnel(1.0, ior) : 0.0;
+  const auto shape = [&](double c) {
+    return ior > 0.0 ? (dielectric_fresnel(c, ior) - normal_fresnel) / (1.0 - normal_fresnel) : std::pow(1.0 - c, 5.0);
+  };
   double a = 0.0, b = 0.0;
   for (int i = 0; i < samples; ++i) {
     const glm::dvec3 h = ggx_half_vector(hammersley(i, samples), alpha);
@@ -254,23 +277,24 @@ std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int sam
     // Smith height-correlated G2 (Heitz 2014, eq. 99); f₁ (n·l) / pdf(l) = G2 (v·h) / ((n·h) (n·v)).
     const double g2 = 2.0 * n_dot_l * n_dot_v / (n_dot_l * lambda_term(n_dot_v) + n_dot_v * lambda_term(n_dot_l));
     const double g_vis = g2 * v_dot_h / (h.z * n_dot_v);
-    const double fresnel = std::pow(1.0 - v_dot_h, 5.0);
+    const double fresnel = shape(v_dot_h);
     a += (1.0 - fresnel) * g_vis;
     b += fresnel * g_vis;
   }
   return {a / samples, b / samples};
 }
 
-std::vector<float> environment_brdf_table(int size, int samples) {
+std::vector<float> environment_brdf_table(int size, int samples, double ior) {
   if (size < 2 || size > 256)
     throw std::invalid_argument("environment_brdf_table: size must be in [2, 256], got " + std::to_string(size));
   if (samples < 1 || samples > 1 << 20)
     throw std::invalid_argument("environment_brdf_table: samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_ior("environment_brdf_table", ior);
   std::vector<float> table(static_cast<size_t>(size) * size * 2);
   parallel_for(static_cast<size_t>(size), 1, [&](size_t begin, size_t end) {
     for (size_t j = begin; j < end; ++j)
       for (int i = 0; i < size; ++i) {
-        const auto ab = environment_brdf((i + 0.5) / size, static_cast<double>(j) / (size - 1), samples);
+        const auto ab = environment_brdf((i + 0.5) / size, static_cast<double>(j) / (size - 1), samples, ior);
         table[2 * (j * size + i)] = static_cast<float>(ab[0]);
         table[2 * (j * size + i) + 1] = static_cast<float>(ab[1]);
       }

@@ -143,6 +143,33 @@ TEST(EnvironmentBrdf, AMirrorReflectsEverything) {
   }
 }
 
+TEST(EnvironmentBrdf, DielectricShapeAtAMirrorIsTheRemappedFresnel) {
+  // α → 0: B is the remapped Fresnel at n·v itself, here from the s- and p-polarised reflectances.
+  const double ior = 1.5, f0 = std::pow((ior - 1.0) / (ior + 1.0), 2.0);
+  for (double n_dot_v : {1.0, 0.7, 0.3, 0.05}) {
+    const double cos_t = std::sqrt(1.0 - (1.0 - n_dot_v * n_dot_v) / (ior * ior));
+    const double rs = std::pow((n_dot_v - ior * cos_t) / (n_dot_v + ior * cos_t), 2.0);
+    const double rp = std::pow((cos_t - ior * n_dot_v) / (cos_t + ior * n_dot_v), 2.0);
+    const auto ab = environment_brdf(n_dot_v, 0.0, 4096, ior);
+    EXPECT_NEAR(ab[0] + ab[1], 1.0, kQuasiMonteCarlo) << n_dot_v;
+    EXPECT_NEAR(ab[1], (0.5 * (rs + rp) - f0) / (1.0 - f0), kQuasiMonteCarlo) << n_dot_v;
+  }
+}
+
+TEST(EnvironmentBrdf, FresnelShapeLeavesTheLobesAlbedo) {
+  for (double n_dot_v : {0.9, 0.4})
+    for (double roughness : {0.3, 0.8}) {
+      const auto schlick = environment_brdf(n_dot_v, roughness, 4096);
+      const auto dielectric = environment_brdf(n_dot_v, roughness, 4096, 1.5);
+      EXPECT_NEAR(schlick[0] + schlick[1], dielectric[0] + dielectric[1], 1e-12);
+      EXPECT_GT(dielectric[1], schlick[1]);   // IOR 1.5 rises earlier than (1 - v.h)^5
+    }
+  for (double ior : {-1.0, 0.5, 1.0, 2e6}) {
+    EXPECT_THROW(environment_brdf(0.5, 0.5, 64, ior), std::invalid_argument) << ior;
+    EXPECT_THROW(environment_brdf_table(4, 64, ior), std::invalid_argument) << ior;
+  }
+}
+
 TEST(EnvironmentBrdf, RoughestLobeAtNormalIncidenceLosesLnTwo) {
   // α = 1, v = n: D is uniform in (n·h)², n·l = 2 (n·h)² − 1 uniform in [−1, 1], and the
   // height-correlated G2 = 2 n·l / (n·l + 1): A + B = ∫₀¹ n·l / (n·l + 1) = 1 − ln 2.

@@ -179,12 +179,17 @@ def left_out(checks, package):
     for names, value in ((("Coat Weight", "Clearcoat"), 0.5), (("Transmission Weight", "Transmission"), 1.0),
                          (("Alpha",), 0.5)):
         bsdf.inputs[next(name for name in names if name in bsdf.inputs)].default_value = value
+    tint = bsdf.inputs["Specular Tint"]
+    tint.default_value = (1.0, 0.5, 0.5, 1.0) if tint.type == 'RGBA' else 0.5
+    bsdf.inputs["Anisotropic"].default_value = 0.5
     value = material.node_tree.nodes.new("ShaderNodeValue")
     material.node_tree.links.new(value.outputs[0], bsdf.inputs["Roughness"])
     note = package.scene.materials.albedo(material).note
     checks.check(all(part in note for part in ("coat left out", "transmission left out", "shown opaque",
+                                                "specular tint left out", "anisotropy left out",
                                                 "Roughness from node")),
-                 "coat, transmission, alpha and a node-driven roughness are noted", repr(note))
+                 "coat, transmission, alpha, specular tint, anisotropy and a node-driven roughness are noted",
+                 repr(note))
 
 
 def glossy(checks, package, scene, preview, out):

@@ -9,7 +9,8 @@ inputs split it between a Lambert and a Phong lobe (scene/lobes.py); an object's
 that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the specular
 GGX's shape, colour computed by other nodes, a second image texture
 on one object, another slot's roughness) is approximated, and `Albedo.note` says how; so do the
-layers it leaves out (transmission, coat, sheen, subsurface, emission, alpha). A material
+layers it leaves out (transmission, coat, sheen, subsurface, emission, specular tint,
+anisotropy, alpha). A material
 without such a BSDF uses its viewport colour; a face without a material has Blender's default
 surface, a 0.8 grey diffuse (as Cycles renders it).
 """
@@ -87,8 +88,8 @@ def _first_input(node, names):
 
 def _left_out(node):
     """What of a Principled BSDF the lobes do not show: its other layers where they are on (or
-    driven by nodes), emission, alpha below 1, and lobe inputs driven by nodes (their default
-    values are used)."""
+    driven by nodes), emission, a specular tint, anisotropy, alpha below 1, and lobe inputs driven
+    by nodes (their default values are used)."""
     notes = []
     for layer, names in compat.PRINCIPLED_LAYERS:
         socket = _first_input(node, names)
@@ -100,6 +101,15 @@ def _left_out(node):
             (strength.is_linked or strength.default_value > 0.0)
             and (colour.is_linked or max(tuple(colour.default_value)[:3]) > 0.0)):
         notes.append("emission left out")
+    # Specular Tint: a colour from 4.0 (white shows nothing: the metal's F82 edge tint is then
+    # Schlick's), a share of the base colour before (0 shows nothing).
+    tint = node.inputs.get("Specular Tint")
+    if tint is not None and (tint.is_linked or (min(tuple(tint.default_value)[:3]) < 1.0 if tint.type == 'RGBA'
+                                                else tint.default_value > 0.0)):
+        notes.append("specular tint left out")
+    anisotropic = node.inputs.get("Anisotropic")
+    if anisotropic is not None and (anisotropic.is_linked or anisotropic.default_value > 0.0):
+        notes.append("anisotropy left out")
     alpha = node.inputs.get("Alpha")
     if alpha is not None and (alpha.is_linked or alpha.default_value < 1.0):
         notes.append("shown opaque")

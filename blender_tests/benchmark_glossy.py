@@ -57,6 +57,7 @@ def compare(name, scene, objects, out, size, block, defaults=False):
     stem = os.path.join(out, "".join(c for c in name.replace(" ", "_") if c.isalnum() or c in "_."))
     cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
     if defaults:
+        sdtest.default_settings(scene)
         sdtest.select_only(objects)
     else:
         sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)

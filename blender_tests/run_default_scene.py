@@ -1,7 +1,7 @@
 """The main job: the default scene, baked and shaded by the add-on, headless.
 
-Builds Suzanne (Subdivision modifier, a rough Principled material, so the lobes read from the
-material are Lambert and a broad Phong lobe for its specular layer) sitting on a subdivided ground plane, under a Blender-shipped HDRI (forest)
+Builds Suzanne (Subdivision modifier, a rough Principled material, so the lobe read from the
+material is Lambert, its specular layer lit live) sitting on a subdivided ground plane, under a Blender-shipped HDRI (forest)
 turned by a Mapping node, with a camera; installs and enables the add-on from its zip; bakes both
 objects against each other in the add-on's default automatic mode (per object the cheapest method,
 s, s' and rays whose error, measured on sampled vertices, is within 2 %; printed with the reasons),

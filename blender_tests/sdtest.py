@@ -368,6 +368,16 @@ def select_only(objects):
         bpy.context.view_layer.objects.active = objects[0]
 
 
+def default_settings(scene):
+    """Puts the scene's add-on settings back to the panel's defaults (bake_settings leaves its
+    choices in the scene, and empty_scene keeps them); returns them."""
+    settings = scene.sd_lighting
+    for prop in settings.bl_rna.properties:
+        if prop.identifier != "rna_type" and not prop.is_readonly and prop.type not in ('POINTER', 'COLLECTION'):
+            settings.property_unset(prop.identifier)
+    return settings
+
+
 def bake_settings(scene, method, material, light_order, visibility_order=None, rays=256,
                   phong_exponent=None, select=(), refine=False, least_squares=False):
     """Sets what the next bake uses (fixed orders, no automatic s; no refinement unless asked:

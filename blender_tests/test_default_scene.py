@@ -53,13 +53,13 @@ def main():
         # then says that no setting reaches it and takes one near the most accurate.
         target = bpy.context.scene.sd_lighting.target_error
         missed = "no setting reaches the %.1f %% target" % (100 * target) in info.get("automatic", "")
-        # Suzanne's clay (roughness 0.7) keeps its specular layer: Lambert and a broad Phong lobe;
-        # the ground has no material: Lambert alone.
-        lobe = ("phong", True) if obj is monkey else ("lambert", False)
-        checks.check("automatic" in info and (info["lobe"], bool(info.get("diffuse_lobe"))) == lobe and
+        # Suzanne's clay (roughness 0.7) is baked as Lambert, its specular layer lit live; the
+        # ground has no material: Lambert alone.
+        layer = obj is monkey
+        checks.check("automatic" in info and info["lobe"] == "lambert" and bool(info.get("lobe_weights")) == layer and
                      (info["predicted_error"] <= target or missed and info["predicted_error"] <= 1.25 * target),
                      "%s: the automatic mode chose %s at the target for %s from the material"
-                     % (obj.name, method.label, "Lambert + Phong" if lobe[1] else "Lambert"),
+                     % (obj.name, method.label, "Lambert + specular layer" if layer else "Lambert"),
                      "predicted %.4f; %s" % (info.get("predicted_error", -1), info.get("automatic", "")[:200]))
         names = {a.name for a in baked.attributes}
         stored = set(method.data.keys if method.data else ())

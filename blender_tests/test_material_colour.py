@@ -12,15 +12,16 @@ Corner data: a flat-shaded cube's baked copy has one vertex per face corner (24)
 normals; the smooth sphere keeps its vertices, split only along the material boundary and the UV
 seam; a flat-shaded icosphere shades flat like Cycles, unlike the same mesh baked smooth.
 
-Principled BSDFs (GLOSSY): a red plastic (roughness 0.3), gold (metallic 1, roughness 0.4) and a
-half-metallic blue (roughness 0.3) on a smooth icosphere, baked from the material (Lambert +
-Phong, or Phong alone for the metal, weighted per pixel by scene/lobes.py) and previewed with the
+Principled BSDFs (GLOSSY): a red plastic (roughness 0.3), gold (metallic 1, roughness 0.4), a
+half-metallic blue (roughness 0.3) and a rough blue plastic (0.6) on a smooth icosphere, baked
+from the material (Lambert + Phong, Phong alone for the metal, Lambert for the rough plastic with
+its specular layer lit live, weighted per pixel by scene/lobes.py) and previewed with the
 unshadowed formula at s = 12 and the prefiltered glossy light (the default), against Cycles from
 two seeds: relative RMS of block averages and bias per channel within GLOSSY's limits, the gold
 also with the world turned and tilted (the prefilter, run in a worker thread, keeps the first
 interactive draw waiting for nothing: the truncated lobe is drawn meanwhile); the gold shown with the seed's truncated Phong lobe instead
-is further off, and the plastic shown as one
-Phong lobe of its colour (the add-on before the split) far off.
+is further off, the plastic shown as one Phong lobe of its colour (the add-on before the split)
+far off, and the rough plastic with its layer folded into Lambert (no prefiltered light) further off.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR
 """
 
@@ -40,7 +41,8 @@ RED = (0.8, 0.15, 0.05, 1.0)
 GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, largest |bias| per channel
     ("plastic", RED, 0.3, 0.0, 0.03, 0.04),
     ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.11, 0.05),
-    ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.045, 0.03)]
+    ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.045, 0.03),
+    ("rough plastic", (0.3, 0.45, 0.8, 1.0), 0.6, 0.0, 0.03, 0.04)]
 
 
 def uv_sphere(scene):
@@ -271,7 +273,18 @@ def glossy(checks, package, scene, preview, out):
                          "a material changed to a Diffuse BSDF after a metal's bake shows its lobe "
                          "times the colour, not black", "mean %.3f (Cycles' metal %.3f)" % (
                              turned.mean(), b.mean()))
-        if metallic == 0.0:
+        if metallic == 0.0 and roughness >= package.scene.lobes.LAYER_MIN_ROUGHNESS:
+            # baked as Lambert, the specular layer lit live; folded into Lambert without the
+            # prefiltered light
+            scene.sd_lighting.prefiltered_glossy = False
+            folded = sdtest.block_averages(preview(name.replace(" ", "_") + "_folded.exr"), mask, BLOCK)
+            scene.sd_lighting.prefiltered_glossy = True
+            folded_error = np.sqrt(np.mean((folded - b) ** 2) / np.mean(b ** 2))
+            checks.check(ball["sd_bake"]["lobe"] == "lambert" and error < 0.75 * folded_error,
+                         "a rough plastic's Lambert bake with its specular layer is closer to Cycles "
+                         "than with the layer folded", "relative RMS %.1f %% against %.1f %%"
+                         % (100 * error, 100 * folded_error))
+        elif metallic == 0.0:
             sdtest.bake_settings(scene, 'unshadowed', 'PHONG', 12,
                                  phong_exponent=package.scene.lobes.exponent_from_roughness(roughness),
                                  select=[ball])

@@ -7,7 +7,8 @@ vertex-target, the texture-space variants of the methods whose data texels hold 
 pixel), and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_ORDERS each
 drawn variant with material albedos (slots and an image texture; Lambert + Phong with the slots'
 Principled weights, and Phong alone with them as a metal has; each of those also with the
-prefiltered glossy light): N_VARIANTS programs, each built by
+prefiltered glossy light; Lambert with the weights and prefiltered light of rough dielectrics'
+specular layers): N_VARIANTS programs, each built by
 gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
@@ -50,7 +51,7 @@ import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 454        # the programs variants() enumerates
+N_VARIANTS = 477        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
@@ -87,26 +88,31 @@ def variants(package):
                 textures = [()]
                 if method.band_limited_texture:
                     textures.append(shader_variant.band_limited_texture_size(s))
+                # with albedos (at ALBEDO_ORDERS): the lobes as they are, also with the prefiltered
+                # light where weighted, and a Lambert lobe 0 with the specular layers of rough
+                # dielectrics (weights and the prefiltered light)
+                albedo_cases = [(lobes, ())] + ([(lobes, prefiltered_atlas)] if both else []) + \
+                    ([({"lobe_weights": True}, prefiltered_atlas)] if not glossy else [])
                 if _module(package, "bake.lightmap").applies(method):   # texture-space data
                     yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
                                                  lightmap=LIGHTMAP, **lobes)
                     if (s, sv) == ALBEDO_ORDERS:
-                        for prefiltered in ((), prefiltered_atlas) if both else ((),):
+                        for weights, prefiltered in albedo_cases:
                             yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt, True,
                                                          material_count=3, material_slots=True,
                                                          albedo_texture=True, lightmap=LIGHTMAP,
-                                                         prefiltered=prefiltered, **lobes)
+                                                         prefiltered=prefiltered, **weights)
                 for per_pixel in (False, True):
                     for vertex_target in (False, True):
                         for texture in textures:
                             yield shader_variant.Variant(method, glossy, s, sv, stride, design, gaunt,
                                                          per_pixel, vertex_target, texture, **lobes)
                             if (s, sv) == ALBEDO_ORDERS and not vertex_target:
-                                for prefiltered in ((), prefiltered_atlas) if both else ((),):
+                                for weights, prefiltered in albedo_cases:
                                     yield shader_variant.Variant(
                                         method, glossy, s, sv, stride, design, gaunt, per_pixel,
                                         vertex_target, texture, material_count=3, material_slots=True,
-                                        albedo_texture=True, prefiltered=prefiltered, **lobes)
+                                        albedo_texture=True, prefiltered=prefiltered, **weights)
                                 if glossy and not both:   # Principled metals: weights, one lobe
                                     for prefiltered in ((), prefiltered_atlas):
                                         yield shader_variant.Variant(

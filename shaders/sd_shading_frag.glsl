@@ -60,7 +60,7 @@ vec3 sd_specular_albedo(vec3 f0, vec3 abe)
 #endif
 
 /* The surface's radiance from lobe 0's B (SD_PREFILTERED: its prefiltered light) and
- * (SD_DIFFUSE_LOBE) the Lambert lobe's: with
+ * (SD_DIFFUSE_LOBE) the Lambert lobe's (SD_LAMBERT_LAYER: lobe 0's B; `lobe0` its layers' light): with
  * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): lobe 0 times the specular layer's
  * albedo (sd_specular_albedo; below), Lambert times (1 - metallic) albedo, less the dielectric
  * layer's albedo for F0 where the layer lies over the diffuse (layer 1; 2: added to it; 0: no
@@ -85,7 +85,7 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
   vec3 specular = mix(sd_specular_albedo(mix(vec3(f0), albedo, metal), dielectric_shape),
                       mix(dielectric, sd_specular_albedo(albedo, brdf.xyz), metal), over);
   vec3 rgb = lobe0 * (layer * specular);
-#  ifdef SD_DIFFUSE_LOBE
+#  if defined(SD_DIFFUSE_LOBE) || defined(SD_LAMBERT_LAYER)
   rgb += diffuse * ((1.0 - metal) * (1.0 - over * dielectric.x)) * albedo;
 #  else
   /* A slot without a specular layer under the one glossy lobe (its material changed since the
@@ -101,13 +101,13 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 }
 
 #ifdef SD_PREFILTERED
-/* Lobe 0's light at the pixel (times 2^exposure): the environment prefiltered by the slot's GGX
+/* The glossy light at the pixel (times 2^exposure): the environment prefiltered by the slot's GGX
  * lobe around the mirrored view, times its strength (the atlas is without it) and the share
  * `visibility` of it the bake lets through. */
 vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
 {
   return (sd.params.x * sd.prefiltered_scale.x * visibility) *
-         sd_prefiltered_light(sd_lobe_axis(normal, view), sd_lobe_weights.z);
+         sd_prefiltered_light(sd_mirrored_view(normal, view), sd_lobe_weights.z);
 }
 #endif
 
@@ -174,13 +174,16 @@ void main()
 #    ifdef SD_LIGHTMAP
   visibility = (total > 0.0) ? visibility : 0.0;   /* no texel stored here: nothing, as before */
 #    endif
+#    ifdef SD_LAMBERT_LAYER
+  diffuse = rgb;
+#    endif
   rgb = sd_glossy_light(visibility, normal, view);
 #  else
   rgb *= sd.params.x;
 #  endif
   fragColor = vec4(sd_surface(rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
 #else
-#  ifdef SD_DIFFUSE_LOBE
+#  if defined(SD_DIFFUSE_LOBE) || defined(SD_LAMBERT_LAYER)
   diffuse = sd_diffuse_color;
 #  endif
 #  ifdef SD_PREFILTERED

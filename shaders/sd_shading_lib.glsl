@@ -48,6 +48,9 @@
  *                        (sd_visibility_ratio; SD_OPEN_ORDER: the order the method's B reaches
  *                        where V = 1; SD_HORIZON_LOBE: the block's row of horizon factors,
  *                        SD_HORIZON_ORDER their order)
+ *   SD_LAMBERT_LAYER     (with SD_PREFILTERED, without SD_GLOSSY) lobe 0 is the diffuse, and the
+ *                        prefiltered light, shadowed by lobe 0's visibility ratio, lights the
+ *                        slots' specular layers (rough dielectrics: scene/lobes.py)
  *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
  *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it
  *                        for sd_equirect.glsl) at g R x (sd.local_to_environment) instead of
@@ -184,12 +187,17 @@ void sd_lobe_basis(vec3 a, int lobe, out float y[SD_BASIS_COUNT])
 }
 #endif
 
-/* Lobe 0's axis a: the normal for Lambert, the mirrored view v_n = 2 (n.v) n - v for Phong;
- * normalised (as the CPU evaluator does). */
+/* The mirrored view v_n = 2 (n.v) n - v, normalised (as the CPU evaluator does). */
+vec3 sd_mirrored_view(vec3 normal, vec3 view)
+{
+  return normalize(2.0 * dot(normal, view) * normal - view);
+}
+
+/* Lobe 0's axis a: the normal for Lambert, the mirrored view for Phong. */
 vec3 sd_lobe_axis(vec3 normal, vec3 view)
 {
 #ifdef SD_GLOSSY
-  return normalize(2.0 * dot(normal, view) * normal - view);
+  return sd_mirrored_view(normal, view);
 #else
   return normalize(normal);
 #endif

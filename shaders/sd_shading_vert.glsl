@@ -13,7 +13,8 @@
  * attribute material_slot, else slot 0), passed on with the UV of the albedo texture, and with
  * SD_LOBE_WEIGHTS the slot's lobe weights and n.v. SD_DIFFUSE_LOBE: the Lambert lobe's B goes in
  * sd_diffuse_color. SD_PREFILTERED (per vertex): instead of lobe 0's B and n.v, its visibility
- * ratio, and the position and normal with which the fragment looks the glossy light up.
+ * ratio, and the position and normal with which the fragment looks the glossy light up;
+ * SD_LAMBERT_LAYER: lobe 0's B is the diffuse, in sd_diffuse_color.
  */
 void main()
 {
@@ -69,8 +70,10 @@ void main()
 #  else
   sd_color = sd.params.x * b0;
 #  endif
-#  ifdef SD_DIFFUSE_LOBE
+#  if defined(SD_DIFFUSE_LOBE)
   sd_diffuse_color = sd.params.x * b1;
+#  elif defined(SD_LAMBERT_LAYER)
+  sd_diffuse_color = sd.params.x * b0;
 #  endif
 #  if defined(SD_LOBE_WEIGHTS) && !defined(SD_PREFILTERED)
   sd_n_dot_v = dot(normal, view);

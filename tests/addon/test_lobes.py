@@ -63,13 +63,19 @@ def test_reflected_light_per_lobe():
     assert lobes.reflected((1.0, 0.0, 0.0), lobes.DIFFUSE_ONLY)[1] == pytest.approx(0.2126)
 
 
-def test_rough_dielectrics_keep_their_specular_layer():
-    # Blender's default material: roughness 0.5, F0 0.04; the roughest lobe is clamped to sigma 1
+def test_rough_dielectrics_are_lambert_with_their_specular_layer():
+    # Blender's default material (roughness 0.5, F0 0.04): baked as Lambert, its layer lit live
     found, why = lobes.lobes_from_principled(0.5, 0.0, F0)
-    assert found == lobes.Lobes("phong", 7.5, True, True)
-    assert why == "roughness 0.50 -> Lambert + Phong sigma 7.5"
+    assert found == lobes.Lobes("lambert", 1.0, False, True) and found.layer
+    assert (why, found.label) == ("rough dielectric -> Lambert + specular layer", "Lambert + specular layer")
     assert lobes.principled_weights(1.0, 0.0, F0) == (0.0, F0, 1.0, lobes.LAYER_OVER)
-    assert lobes.lobes_from_principled(1.0, 0.0, F0)[0].exponent == lobes.MIN_EXPONENT
+    assert not lobes.Lobes().layer and not lobes.lobes_from_principled(0.3, 0.0, F0)[0].layer
+
+
+def test_the_layer_roughness_threshold_is_half():
+    assert lobes.lobes_from_principled(0.49, 0.0, F0)[0].lobe == "phong"
+    assert lobes.lobes_from_principled(0.5, 0.0, F0)[0].layer
+    assert lobes.lobes_from_principled(0.5, 0.01, F0)[0].lobe == "phong"
 
 
 def test_a_bake_record_names_its_lobes():

@@ -16,18 +16,18 @@ from sd_lighting.live.shader_variant import BlockField, Variant
 def all_variants():
     for method in methods.METHODS:
         for lobes, per_pixel, target, texture, albedo in itertools.product(
-                ("lambert", "phong", "metal", "both"), (False, True), (False, True), (False, True),
+                ("lambert", "layer", "phong", "metal", "both"), (False, True), (False, True), (False, True),
                 (False, True)):
             if texture and not method.band_limited_texture:
                 continue
             both = lobes == "both"
-            if lobes != "lambert" and method.lambert_only:
+            if lobes not in ("lambert", "layer") and method.lambert_only:
                 continue
-            weights = lobes in ("metal", "both")
+            weights = lobes in ("layer", "metal", "both")
             for texels, prefiltered in itertools.product(
                     (False, True) if per_pixel and lightmap.applies(method) else (False,),
-                    (False, True) if weights else (False,)):
-                yield Variant(method, lobes != "lambert", 4, 2, 0 if method.data is None else 3,
+                    (True,) if lobes == "layer" else (False, True) if weights else (False,)):
+                yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
                               shader_variant.band_limited_texture_size(4) if texture else (),
@@ -235,3 +235,19 @@ def test_prefiltered_lookup_reads_the_horizon_factors_to_s_prime(sdnative):
                          prefiltered=(1024, 7))
     assert unshadowed.horizon_order == 0
     assert not dataclasses.replace(variant, material_count=0).prefiltered_lookup   # the vertex target
+
+
+def test_lambert_layer_variant_passes_lobe_0_on_as_the_diffuse(sdnative):
+    """A rough dielectric's Lambert lobe with its specular layers (scene/lobes.Lobes.layer)."""
+    variant = Variant(methods.get("prt_diffuse"), False, 4, 0, data_stride=7, material_count=1,
+                      lobe_weights=True, prefiltered=(1024, 7))
+    assert variant.lambert_layer and variant.prefiltered_lookup and variant.lobe_count == 2
+    assert variant.defines(sdnative.sh_recurrence_constants)["SD_LAMBERT_LAYER"] == "1"
+    assert ("smooth", "vec3", "sd_diffuse_color") in variant.interface()
+    assert dataclasses.replace(variant, per_pixel=True).lambert_layer
+    assert not dataclasses.replace(variant, material_count=0).lambert_layer   # the vertex target: B
+    with pytest.raises(ValueError, match="prefiltered light"):
+        Variant(methods.get("prt_diffuse"), False, 4, 0, data_stride=7, material_count=1, lobe_weights=True)
+    with pytest.raises(ValueError, match="Lambert lobe 1"):
+        Variant(methods.get("prt_matrix"), False, 4, 2, data_stride=7, material_count=1, lobe_weights=True,
+                diffuse_lobe=True, prefiltered=(1024, 7))

@@ -344,11 +344,13 @@ class ObjectData:
         self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
         # the atlas's layout where glossy weights are lit by the prefiltered environment, else ()
         self.prefiltered = prefiltered_layout() if prefiltered and self.lobes.weighted else ()
+        # a Lambert lobe's specular layers need the prefiltered light; folded into it without
+        self.lobe_weights = self.lobes.weighted and (not self.lobes.layer or bool(self.prefiltered))
         design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
-                               lobe_weights=self.lobes.weighted, diffuse_lobe=self.lobes.diffuse,
+                               lobe_weights=self.lobe_weights, diffuse_lobe=self.lobes.diffuse,
                                diffuse_design_size=design_sizes[1], lightmap=self.lightmap,
                                prefiltered=self.prefiltered)
         self.shader = shader_program(self.variant)
@@ -441,11 +443,13 @@ class ObjectData:
             if albedo.image is not None and self.has_uvs:
                 rows[slot, 3] = 1.0
                 image = albedo.image
-        white = not self.lobes.weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
+        prefiltered = self.prefiltered if prefiltered else ()
+        weighted = self.lobe_weights and (not self.lobes.layer or bool(prefiltered))
+        white = not weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
-                                      albedo_texture=image is not None,
-                                      prefiltered=self.prefiltered if prefiltered else ())
+                                      albedo_texture=image is not None, lobe_weights=weighted,
+                                      prefiltered=prefiltered)
         if variant != self.variant:
             self.variant = variant
             self.shader = shader_program(variant)
@@ -453,7 +457,7 @@ class ObjectData:
         self.albedo_image = image
         if white:
             return {}
-        return dict(albedo=rows, **({"lobe_weights": weights} if self.lobes.weighted else {}))
+        return dict(albedo=rows, **({"lobe_weights": weights} if weighted else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0):

@@ -94,7 +94,8 @@ class Variant:
     material_count: int = 0       # albedos in the block, one per material slot (0: white, none)
     material_slots: bool = False  # the vertices carry their slot (objects with several)
     albedo_texture: bool = False  # a slot's albedo is an image texture, read through `uv`
-    lobe_weights: bool = False    # the slots' Principled weights colour the Phong lobe 0 (glossy)
+    lobe_weights: bool = False    # the slots' Principled weights colour the Phong lobe 0 (glossy),
+                                  # or add the specular layers of a Lambert lobe 0 (prefiltered)
     diffuse_lobe: bool = False    # a Lambert lobe 1 besides it (lobe_weights)
     diffuse_design_size: int = 0  # nodes of lobe 1's design (methods with lobe_design)
     lightmap: tuple = ()          # (width, height) of texture-space data (per pixel), or ()
@@ -102,8 +103,10 @@ class Variant:
                                   # looked up in (drawn with weights), or () for its SH result
 
     def __post_init__(self):
-        if (self.lobe_weights and not self.glossy) or (self.diffuse_lobe and not self.lobe_weights):
-            raise ValueError("lobe weights go with a Phong lobe 0, a Lambert lobe 1 with weights")
+        if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \
+                (self.diffuse_lobe and not (self.lobe_weights and self.glossy)):
+            raise ValueError("lobe weights go with a Phong lobe 0 or with the prefiltered light of a "
+                             "Lambert lobe's specular layers; a Lambert lobe 1 with a weighted Phong lobe 0")
         if self.prefiltered and not self.lobe_weights:
             raise ValueError("the prefiltered glossy light needs the slots' lobe weights (roughness)")
         if self.lightmap and not self.per_pixel:
@@ -118,6 +121,12 @@ class Variant:
     def prefiltered_lookup(self):
         """Whether lobe 0's light is looked up in the prefiltered atlas (where weights are drawn)."""
         return bool(self.prefiltered) and self.weighted
+
+    @property
+    def lambert_layer(self):
+        """Whether lobe 0 is Lambert and the slots' specular layers are lit by the prefiltered
+        light, shadowed by its visibility ratio (scene/lobes.Lobes.layer)."""
+        return self.prefiltered_lookup and not self.glossy
 
     @property
     def open_order(self):
@@ -215,6 +224,8 @@ class Variant:
             d["SD_OPEN_ORDER"] = str(self.open_order)
             d["SD_HORIZON_LOBE"] = str(self.shaded_lobes)
             d["SD_HORIZON_ORDER"] = str(self.horizon_order)
+            if self.lambert_layer:
+                d["SD_LAMBERT_LAYER"] = "1"
         return d
 
     def vertex_inputs(self):
@@ -241,7 +252,7 @@ class Variant:
         elif self.prefiltered_lookup:
             out = [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal"),
                    ("smooth", "float", "sd_visibility")]
-            if self.diffuse_lobe:
+            if self.diffuse_lobe or self.lambert_layer:
                 out.append(("smooth", "vec3", "sd_diffuse_color"))
         else:
             out = [("smooth", "vec3", "sd_color")]

@@ -1,12 +1,15 @@
 """The BRDF lobes of a material: Lambert, Phong with exponent sigma, or both (msd-notes, "The
 problem"), and the weights that give each lobe its colour for a Principled BSDF.
 
-- A metal (metallic 1) is Phong alone; a dielectric whose specular layer reflects nothing (F0 = 0,
-  metallic 0) is Lambert alone; anything else - a dielectric at any roughness, a partly metallic
-  surface - is Lambert and Phong, both read from the same per-vertex data. Blender's default
-  material (roughness 0.5, F0 = 0.04) is one of these: its specular layer, a few percent of the
-  light at normal incidence, brightens every rim (msd-notes, "Glossy light", measures what folding
-  it into Lambert cost).
+- A metal (metallic 1) is Phong alone; a smooth dielectric (roughness below 0.5) or a partly
+  metallic surface is Lambert and Phong, both read from the same per-vertex data; a dielectric
+  whose specular layer reflects nothing (F0 = 0, metallic 0) is Lambert alone.
+- A rough dielectric (roughness >= 0.5, metallic 0; Blender's default material) is Lambert with its
+  specular layer (Lobes.layer): the bake has the Lambert lobe alone, as cheap as a diffuse one,
+  and the live shading lights the layer - a few percent of the light at normal incidence, which
+  brightens every rim - by the environment prefiltered by its GGX lobe, shadowed by the Lambert
+  lobe's own visibility ratio (a lobe this broad sees about what the diffuse sees); without the
+  prefiltered light the layer is folded into Lambert (msd-notes, "Glossy light", measures both).
 - The lobes' colours, per pixel, as the Principled BSDF splits its energy: Phong times the
   specular layer's directional albedo E = F0 A + B, with (A, B) the split-sum scale and bias of a
   GGX lobe at the view's n.v and the roughness (sdnative.environment_brdf_table, integrated
@@ -34,6 +37,7 @@ import numpy as np
 LUMINANCE = (0.2126, 0.7152, 0.0722)   # of linear Rec. 709 RGB (Blender's default scene-linear)
 MIN_EXPONENT = 1.0
 MAX_EXPONENT = 1000.0
+LAYER_MIN_ROUGHNESS = 0.5     # a dielectric this rough is Lambert with its specular layer
 DIELECTRIC_SHAPE_IOR = 1.5   # the dielectric layer's Fresnel shape (its F0 is the slot's own)
 LAYER_OVER = 1.0     # the specular layer takes its energy from the diffuse under it (4.0+)
 LAYER_ADDED = 2.0    # the specular layer adds to the diffuse (before 4.0)
@@ -43,8 +47,9 @@ DIFFUSE_ONLY = (0.0, 0.0, 1.0, 0.0)   # principled_weights of a slot without a s
 @dataclass(frozen=True)
 class Lobes:
     """The lobes an object is baked and shaded with: `lobe` ("lambert" or "phong") with its
-    exponent; for "phong", whether a Lambert lobe is shaded besides it (`diffuse`) and whether the
-    slots' Principled weights colour the lobes (`weighted`; else the albedo alone does);
+    exponent; for "phong", whether a Lambert lobe is shaded besides it (`diffuse`); whether the
+    slots' Principled weights colour the lobes (`weighted`; else the albedo alone does) - for
+    "lambert", that its slots' specular layers are lit by the prefiltered environment (`layer`);
     `diffuse_share`: the Lambert lobe's share of the light the surface reflects, which weighs the
     two lobes' errors when the automatic mode measures them (plan/accuracy.py)."""
     lobe: str = "lambert"
@@ -60,6 +65,11 @@ class Lobes:
         return cls(str(bake["lobe"]), float(bake["exponent"]), bool(bake.get("diffuse_lobe", False)),
                    bool(bake.get("lobe_weights", False)), float(bake.get("diffuse_share", 0.0)))
 
+    @property
+    def layer(self):
+        """Whether this is a Lambert lobe whose slots' specular layers the live shading adds."""
+        return self.lobe == "lambert" and self.weighted
+
     def shaded(self):
         """(lobe, exponent) of lobe 0 and, with a Lambert lobe besides it, of lobe 1 (the
         shader's order)."""
@@ -67,6 +77,8 @@ class Lobes:
 
     @property
     def label(self):
+        if self.layer:
+            return "Lambert + specular layer"
         return ("Lambert + " if self.diffuse else "") + label(self.lobe, self.exponent)
 
 
@@ -113,6 +125,8 @@ def lobes_from_principled(roughness, metallic, f0):
     metal, _, _, layer = principled_weights(roughness, metallic, f0)
     if layer == 0.0:
         return Lobes(), "no specular layer (F0 = 0) -> Lambert"
+    if metal == 0.0 and roughness >= LAYER_MIN_ROUGHNESS:
+        return Lobes("lambert", 1.0, False, True), "rough dielectric -> Lambert + specular layer"
     sigma = exponent_from_roughness(roughness)
     both = metal < 1.0
     return Lobes("phong", sigma, both, True), "%sroughness %.2f -> %sPhong sigma %.1f" % (

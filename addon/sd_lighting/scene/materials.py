@@ -130,6 +130,8 @@ def _principled(node):
     notes = []
     if found.lobe == "phong":
         notes.append("GGX shown as Phong")
+    elif found.layer:
+        notes.append("specular layer shadowed as the diffuse")
     return weights, found, why, notes + _left_out(node)
 
 
@@ -201,7 +203,9 @@ def albedo_summary(obj):
 
 def lobes_from_material(obj):
     """The object's Lobes from its materials, and a line saying why: Lambert when a slot needs a
-    diffuse lobe, Phong with the first glossy slot's exponent when one needs a glossy lobe."""
+    diffuse lobe, Phong with the first glossy slot's exponent when one needs a glossy lobe, and
+    Lambert with specular layers when the slots have no glossy lobe but a rough dielectric's
+    layer."""
     slots = list(getattr(obj, "material_slots", ()))
     if not slots:
         return lobes.Lobes(), "no material -> Lambert"
@@ -209,6 +213,9 @@ def lobes_from_material(obj):
     names = [slot.material.name if slot.material is not None else "an empty slot" for slot in slots]
     glossy = [(a, name) for a, name in zip(albedos, names) if a.bsdf_lobes.lobe == "phong"]
     if not glossy:
+        layered = next((i for i, a in enumerate(albedos) if a.bsdf_lobes.layer), None)
+        if layered is not None:
+            return lobes.Lobes("lambert", 1.0, False, True), "%s: %s" % (names[layered], albedos[layered].why)
         return lobes.Lobes(), "%s: %s" % (names[0], albedos[0].why)
     first, name = glossy[0]
     diffuse = [n for a, n in zip(albedos, names) if a.weights[0] < 1.0]   # not wholly metal

@@ -120,8 +120,8 @@ class SceneSettings(bpy.types.PropertyGroup):
 
     material_source: EnumProperty(
         name="Material",
-        items=[('MATERIAL', "From Material", "Principled BSDF: Lambert and a Phong lobe with sigma from the "
-                "roughness (metals: Phong alone)"),
+        items=[('MATERIAL', "From Material", "Principled BSDF: metals Phong (sigma from the roughness), glossy "
+                "plastics Lambert and Phong, rough dielectrics Lambert with their specular layer"),
                ('LAMBERT', "Lambert", "Diffuse"),
                ('PHONG', "Phong", "Glossy lobe around the mirrored view, exponent sigma")],
         default='MATERIAL')

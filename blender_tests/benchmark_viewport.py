@@ -18,7 +18,9 @@ methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the 
 texture (the band-limited texture option). It ends with MSD (13) and (12), SH and texture,
 as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) with the lobes a
 material can ask for - Lambert, Phong (sigma 61, a roughness of 0.3) and both, weighted per pixel as
-from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone.
+from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth times that
+Principled pair with the glossy lobe truncated per vertex against the prefiltered glossy light,
+per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4.
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
 """
@@ -104,17 +106,18 @@ LAMBERT = {"lobe": "lambert", "exponent": 1.0}
 
 
 def baked_object(package, scene, positions, normals, triangles, real_counts, method="msd_visibility",
-                 lobes=LAMBERT):
-    """A mesh object carrying a (synthetic) bake of the method with the lobes (sd_bake's lobe
-    keys), as the bake operator stores it."""
+                 lobes=LAMBERT, s=4, sv=2):
+    """A mesh object carrying a (synthetic) bake of the method at s, s' with the lobes (sd_bake's
+    lobe keys), as the bake operator stores it."""
     mesh = package.store.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
                                        np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
-    result = synthetic_result(package, method, normals, real_counts)
+    result = synthetic_result(package, method, normals, real_counts, s, sv)
     floats = package.store.attributes.write(mesh, normals, result)
     record = package.store.record.BakeRecord.from_dict(dict(
-        lobes, method=method, light_order=4, visibility_order=2, rays=0, seed=0, environment="synthetic",
+        lobes, method=method, light_order=s, visibility_order=sv, rays=0, seed=0, environment="synthetic",
         refine=False, refine_target=0.0, refine_max_vertices=0, least_squares=False, lightmap=0,
-        floats_per_vertex=floats, bake_id="benchmark-%s-%d-%s" % (method, len(positions), sorted(lobes.items()))))
+        floats_per_vertex=floats, bake_id="benchmark-%s-%d-%d-%d-%s" % (method, len(positions), s, sv,
+                                                                        sorted(lobes.items()))))
     mesh["sd_bake"] = record.to_dict()
     mesh.use_fake_user = True
     obj = bpy.data.objects.new("Benchmark", mesh)
@@ -181,6 +184,35 @@ def remove_object(package, obj):
     mesh = obj.data
     bpy.data.objects.remove(obj)
     bpy.data.meshes.remove(mesh)
+
+
+def glossy_table(package, scene, view, mesh, real_counts, frames):
+    """The prefiltered glossy light's frame cost (issue 28): Lambert + Phong weighted as from a
+    Principled BSDF (roughness 0.3), its lobe truncated at s per vertex (the seed's way) against
+    the prefiltered lookup per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4."""
+    env, shading = package.scene.environment, package.live.gpu_shading
+    if shading.prefiltered_texture(env.source(scene), True) is None:
+        raise RuntimeError("the prefiltered environment was not made")
+    width, levels = shading.prefiltered_layout()
+    sigma = package.scene.lobes.exponent_from_roughness(0.3)
+    lobes = {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True, "lobe_weights": True, "diffuse_share": 0.9}
+    settings = scene.sd_lighting
+    print("\nThe prefiltered glossy light, %d vertices, Lambert + Phong (roughness 0.3), frame ms "
+          "(atlas %d x %d RGBA32F, %.1f MB, and a %d x %d BRDF table):" % (
+              len(mesh[0]), width, 3 * width // 4, width * 3 * width // 4 * 16 / 1e6,
+              package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE))
+    print("%-28s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex", "prefiltered / pixel"))
+    for method, s, sv in (("prt_gaunt", 8, 2), ("msd_visibility", 4, 2)):
+        obj = baked_object(package, scene, *mesh, real_counts, method, lobes, s, sv)
+        cells = []
+        for prefiltered, per_pixel in ((False, False), (True, False), (True, True)):
+            settings.prefiltered_glossy = prefiltered
+            cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel),
+                                     frames if not per_pixel else 1))
+        settings.prefiltered_glossy = True
+        remove_object(package, obj)
+        print("%-28s" % ("%s, s = %d" % (package.methods.get(method).label, s)) +
+              "".join("%20s" % ("%.2f (%.2fx)" % (1e3 * t, t / cells[0])) for t in cells), flush=True)
 
 
 def main():
@@ -285,6 +317,7 @@ def main():
                 remove_object(package, obj)
             print("%-28s" % method.label + "".join("%14.2f (%4.2fx)" % (1e3 * t, t / cells[0]) for t in cells),
                   flush=True)
+        glossy_table(package, scene, view, (positions, normals, triangles), real_counts, opts["frames"])
     return 0
 
 

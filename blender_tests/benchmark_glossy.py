@@ -9,7 +9,7 @@ Cycles renders it with direct light, pixel filter off, from two seeds (its noise
 
 --models: also Debian's assimp test models (MODELS: a smooth and a faceted Wuson, the low-poly
 spider) in gold, red plastic and polished steel under three HDRIs, and the smooth Wuson in
-Blender's default material under two, baked at the panel's defaults
+Blender's default material under three, baked at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
 Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
@@ -46,6 +46,7 @@ MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness
     ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.3, 1.0, "forest.exr"),
     ("PLY/Wuson.ply", "red plastic", RED, 0.2, 0.0, "courtyard.exr"),
     ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "studio.exr"),
+    ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "forest.exr"),
     ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "studio.exr"),
     ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "courtyard.exr")]
 ASSIMP = "/usr/share/assimp/models/"

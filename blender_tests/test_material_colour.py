@@ -167,7 +167,28 @@ def main():
     facets.hide_render = True
     glossy(checks, package, scene, preview, args.out)
     left_out(checks, package)
+    mixed_slots(checks, package, scene)
     return checks.summary()
+
+
+def mixed_slots(checks, package, scene):
+    """An object's lobes from slots of different kinds: a rough dielectric's specular layer beside
+    a Diffuse BSDF keeps the Lambert bake; beside a glossy plastic, the Phong lobe is baked (and
+    the rough slot is folded into Lambert wherever the prefiltered light is missing)."""
+    ball = sdtest.ico_sphere(scene, "Slots", subdivisions=1)
+    lobes_of = package.scene.materials.lobes_from_material
+    ball.data.materials.append(sdtest.principled_material("Rough", roughness=0.6))
+    ball.data.materials.append(sdtest.diffuse_material("Matte"))
+    layered, why = lobes_of(ball)
+    ball.data.materials[1] = sdtest.principled_material("Glossy", roughness=0.2)
+    glossy, _ = lobes_of(ball)
+    checks.check(layered.layer and why == "Rough: rough dielectric -> Lambert + specular layer"
+                 and glossy.lobe == "phong" and glossy.diffuse and not glossy.layer,
+                 "a rough dielectric beside a Diffuse BSDF bakes Lambert with its layer; beside a "
+                 "glossy plastic, Lambert + Phong", "%s (%s); %s" % (layered.label, why, glossy.label))
+    mesh = ball.data
+    bpy.data.objects.remove(ball)
+    bpy.data.meshes.remove(mesh)
 
 
 def left_out(checks, package):

@@ -76,6 +76,9 @@ def test_the_layer_roughness_threshold_is_half():
     assert lobes.lobes_from_principled(0.49, 0.0, F0)[0].lobe == "phong"
     assert lobes.lobes_from_principled(0.5, 0.0, F0)[0].layer
     assert lobes.lobes_from_principled(0.5, 0.01, F0)[0].lobe == "phong"
+    assert lobes.rough_layer(lobes.principled_weights(0.5, 0.0, F0))
+    assert not any(lobes.rough_layer(lobes.principled_weights(*inputs))
+                   for inputs in ((0.49, 0.0, F0), (0.5, 0.01, F0), (0.9, 0.0, 0.0)))
 
 
 def test_a_bake_record_names_its_lobes():

@@ -244,7 +244,9 @@ def test_lambert_layer_variant_passes_lobe_0_on_as_the_diffuse(sdnative):
     assert variant.lambert_layer and variant.prefiltered_lookup and variant.lobe_count == 2
     assert variant.defines(sdnative.sh_recurrence_constants)["SD_LAMBERT_LAYER"] == "1"
     assert ("smooth", "vec3", "sd_diffuse_color") in variant.interface()
-    assert dataclasses.replace(variant, per_pixel=True).lambert_layer
+    per_pixel = dataclasses.replace(variant, per_pixel=True)
+    assert per_pixel.defines(sdnative.sh_recurrence_constants)["SD_LAMBERT_LAYER"] == "1"
+    assert ("smooth", "vec3", "sd_diffuse_color") not in per_pixel.interface()   # B per pixel
     assert not dataclasses.replace(variant, material_count=0).lambert_layer   # the vertex target: B
     with pytest.raises(ValueError, match="prefiltered light"):
         Variant(methods.get("prt_diffuse"), False, 4, 0, data_stride=7, material_count=1, lobe_weights=True)

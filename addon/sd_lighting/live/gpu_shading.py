@@ -344,13 +344,11 @@ class ObjectData:
         self.uses_band_limited_texture = bool(band_limited_texture) and self.method.band_limited_texture
         # the atlas's layout where glossy weights are lit by the prefiltered environment, else ()
         self.prefiltered = prefiltered_layout() if prefiltered and self.lobes.weighted else ()
-        # a Lambert lobe's specular layers need the prefiltered light; folded into it without
-        self.lobe_weights = self.lobes.weighted and (not self.lobes.layer or bool(self.prefiltered))
         design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
                                gaunt_count, per_pixel, vertex_target,
                                band_limited_texture_size(s) if self.uses_band_limited_texture else (),
-                               lobe_weights=self.lobe_weights, diffuse_lobe=self.lobes.diffuse,
+                               lobe_weights=self._weighted(self.prefiltered), diffuse_lobe=self.lobes.diffuse,
                                diffuse_design_size=design_sizes[1], lightmap=self.lightmap,
                                prefiltered=self.prefiltered)
         self.shader = shader_program(self.variant)
@@ -427,6 +425,11 @@ class ObjectData:
             self._lobe_factors = (key, out)
         return self._lobe_factors[1]
 
+    def _weighted(self, prefiltered):
+        """Whether the slots' lobe weights are drawn, with the prefiltered atlas's layout or ():
+        a Lambert lobe's specular layers need the prefiltered light (folded into it without)."""
+        return self.lobes.weighted and (not self.lobes.layer or bool(prefiltered))
+
     def _use_albedos(self, albedos, prefiltered):
         """The block's albedo and lobe weight rows for the materials' current albedos
         (materials.object_albedos), switching to the variant they need: none for a lobe without
@@ -436,15 +439,16 @@ class ObjectData:
         rows = np.zeros((self.slot_count, 4))
         rows[:, :3] = materials.DEFAULT_SURFACE   # slots the bake had and the object lost
         weights = np.tile(lobes.DIFFUSE_ONLY, (self.slot_count, 1))
+        prefiltered = self.prefiltered if prefiltered else ()
         image = None
         for slot, albedo in enumerate(albedos[:self.slot_count]):
             rows[slot, :3] = albedo.colour
-            weights[slot] = albedo.weights
+            # a rough dielectric's layer (beside another slot's Phong lobe) needs the prefiltered light
+            weights[slot] = albedo.weights if prefiltered or not lobes.rough_layer(albedo.weights) else lobes.DIFFUSE_ONLY
             if albedo.image is not None and self.has_uvs:
                 rows[slot, 3] = 1.0
                 image = albedo.image
-        prefiltered = self.prefiltered if prefiltered else ()
-        weighted = self.lobe_weights and (not self.lobes.layer or bool(prefiltered))
+        weighted = self._weighted(prefiltered)
         white = not weighted and image is None and bool(np.all(rows[:, :3] == 1.0))
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,

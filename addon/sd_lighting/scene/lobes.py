@@ -15,7 +15,8 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
   GGX lobe at the view's n.v and the roughness (sdnative.environment_brdf_table, integrated
   natively), times the light that multiple scattering adds as Cycles computes it (Kulla and
   Conty's F_ms with E_avg from `average_albedo`: a metal keeps its energy, a rough plastic's layer
-  gains hardly any). As in Cycles, the dielectric layer's Fresnel is the real one (of IOR
+  gains hardly any) - Cycles' Multiscatter GGX, the default from 4.0; the node's distribution is
+  not read (msd-notes, "Glossy light", on 3.x's single-scattering default). As in Cycles, the dielectric layer's Fresnel is the real one (of IOR
   DIELECTRIC_SHAPE_IOR; the slot's F0) remapped to F0..1, which rises earlier than Schlick's;
   from 4.0 the metal is Schlick's of the base colour, mixed with the dielectric by metallic,
   before 4.0 one lobe of F0' = mix(F0, base colour, metallic) with the dielectric's shape.
@@ -109,6 +110,13 @@ def principled_weights(roughness, metallic, f0, layer_over=True):
     return (metallic, float(f0), roughness, LAYER_OVER if layer_over else LAYER_ADDED)
 
 
+def rough_layer(weights):
+    """Whether principled_weights are a rough dielectric's: its specular layer is lit by the
+    prefiltered environment only, and folded into Lambert without it."""
+    metal, _, roughness, layer = weights
+    return layer > 0.0 and metal == 0.0 and roughness >= LAYER_MIN_ROUGHNESS
+
+
 def reflected(colour, weights):
     """(specular, diffuse): the luminance a slot of this linear RGB colour and principled_weights
     reflects in each lobe at normal incidence (F0 for the specular layer)."""
@@ -122,10 +130,11 @@ def reflected(colour, weights):
 
 def lobes_from_principled(roughness, metallic, f0):
     """The Lobes of a Principled BSDF's inputs, and why (a line for the panel)."""
-    metal, _, _, layer = principled_weights(roughness, metallic, f0)
+    weights = principled_weights(roughness, metallic, f0)
+    metal, _, _, layer = weights
     if layer == 0.0:
         return Lobes(), "no specular layer (F0 = 0) -> Lambert"
-    if metal == 0.0 and roughness >= LAYER_MIN_ROUGHNESS:
+    if rough_layer(weights):
         return Lobes("lambert", 1.0, False, True), "rough dielectric -> Lambert + specular layer"
     sigma = exponent_from_roughness(roughness)
     both = metal < 1.0

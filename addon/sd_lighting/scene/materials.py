@@ -6,11 +6,10 @@ Surface, else the first such node in its tree. Its albedo is the BSDF's base col
 or an Image Texture plugged straight into it (read through the UV map the node's Vector input
 names, or the mesh's active render UV map). A Principled BSDF's metallic, roughness and specular
 inputs split it between a Lambert and a Phong lobe (scene/lobes.py); an object's Phong exponent is
-that of its first glossy slot. What Lambert and Phong with an albedo cannot express (the specular
-GGX's shape, colour computed by other nodes, a second image texture
-on one object, another slot's roughness) is approximated, and `Albedo.note` says how; so do the
-layers it leaves out (transmission, coat, sheen, subsurface, emission, specular tint,
-anisotropy, alpha). A material
+that of its first glossy slot. What Lambert and Phong with an albedo cannot express (GGX's shape,
+colour computed by other nodes, a second image texture on one object, another slot's roughness)
+is approximated, and `Albedo.note` says how; so do the layers it leaves out (transmission, coat,
+sheen, subsurface, emission, specular tint, anisotropy, alpha). A material
 without such a BSDF uses its viewport colour; a face without a material has Blender's default
 surface, a 0.8 grey diffuse (as Cycles renders it).
 """
@@ -131,7 +130,8 @@ def _principled(node):
     if found.lobe == "phong":
         notes.append("GGX shown as Phong")
     elif found.layer:
-        notes.append("specular layer shadowed as the diffuse")
+        notes.append("specular layer shadowed as the diffuse (folded into Lambert without "
+                     "Prefiltered Glossy)")
     return weights, found, why, notes + _left_out(node)
 
 

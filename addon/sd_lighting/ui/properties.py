@@ -190,7 +190,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Light glossy Principled materials with the environment prefiltered by their "
                     "GGX lobe (the split sum: sharp at any roughness, looked up per pixel), times "
                     "the share of the lobe's light the bake's visibility lets through; off: the "
-                    "seed's Phong lobe truncated at order s")
+                    "seed's Phong lobe truncated at order s, and rough dielectrics' specular "
+                    "layers folded into Lambert")
     ringing_window: EnumProperty(
         name="Ringing Window",
         items=[(name.upper(), ringing.LABELS[name], description) for name, description in (

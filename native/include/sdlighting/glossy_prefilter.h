@@ -61,8 +61,9 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
 /// F = 1 (single scattering, Smith height-correlated), by `samples` GGX-distributed half vectors
 /// (Hammersley). s is Schlick's (1 − v·h)⁵ for ior = 0; for ior > 1 it is the dielectric Fresnel
 /// of that IOR remapped to run from 0 at normal incidence to 1 at grazing, (F(v·h) − F(1)) /
-/// (1 − F(1)), the shape Cycles' Principled BSDF gives its dielectric layer at any F0 (its
-/// generalized Schlick with the real Fresnel). A + B is the same for both. n_dot_v in (0, 1],
+/// (1 − F(1)), the shape Cycles' Principled BSDF gives its dielectric layer (its generalized
+/// Schlick with the real Fresnel of the layer's own IOR: this shape is that IOR's). A + B is the
+/// same for both. n_dot_v in (0, 1],
 /// roughness in [0, 1] (clamped to α >= 1e-4). Returns {A, B}. Throws std::invalid_argument
 /// outside those ranges or for an ior that is neither 0 nor in (1, 1e6].
 std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples = 1024, double ior = 0.0);

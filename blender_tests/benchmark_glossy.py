@@ -1,11 +1,12 @@
 """Glossy Principled materials against Cycles (issue 28): the prefiltered GGX light (the split sum
 with the bake's visibility ratio, the default) beside the seed's Phong lobe truncated at order s.
 
-Scenes: a smooth sphere in gold (metallic 1) at roughness 0.05, 0.15, 0.3 and 0.5, in red
-plastic at 0.2, in Blender's default material (grey, roughness 0.5) and in red clay at 0.8; a subdivided Suzanne in gold (roughness 0.3) on a red plastic floor (0.2), where
-the shadows and the floor's reflection of the head need the baked visibility. Each is baked from
-its materials with MSD (13) at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex;
-Cycles renders it with direct light, pixel filter off, from two seeds (its noise printed).
+Scenes: a smooth sphere in gold (metallic 1) at roughness 0.05, 0.15, 0.3 and 0.5, in red plastic
+at 0.2, in Blender's default material (grey, roughness 0.5) and in red clay at 0.8; a subdivided
+Suzanne in gold (roughness 0.3) on a red plastic floor (0.2), where the shadows and the floor's
+reflection of the head need the baked visibility. Each is baked from its materials with MSD (13)
+at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex; Cycles renders it with direct
+light, pixel filter off, from two seeds (its noise printed).
 
 --models: also Debian's assimp test models (MODELS: a smooth and a faceted Wuson, the low-poly
 spider) in gold, red plastic and polished steel under three HDRIs, and the smooth Wuson in

@@ -1,14 +1,15 @@
 """The main job: the default scene, baked and shaded by the add-on, headless.
 
 Builds Suzanne (Subdivision modifier, a rough Principled material, so the lobe read from the
-material is Lambert, its specular layer lit live) sitting on a subdivided ground plane, under a Blender-shipped HDRI (forest)
-turned by a Mapping node, with a camera; installs and enables the add-on from its zip; bakes both
-objects against each other in the add-on's default automatic mode (per object the cheapest method,
-s, s' and rays whose error, measured on sampled vertices, is within 2 %; printed with the reasons),
-so Suzanne shadows herself and the ground (contact shadows); saves the .blend (the bake lives in it:
-open it with the add-on enabled and the viewport shades it live) and renders the live shading from
-the scene camera to a PNG (Standard view transform) and an EXR (scene-linear), plus a PNG with the
-world turned by 120 degrees. Prints the paths.
+material is Lambert, its specular layer lit live) sitting on a subdivided ground plane, under a
+Blender-shipped HDRI (forest) turned by a Mapping node, with a camera; installs and enables the
+add-on from its zip; bakes both objects against each other in the add-on's default automatic mode
+(per object the cheapest method, s, s' and rays whose error, measured on sampled vertices, is
+within 2 %; printed with the reasons), so Suzanne shadows herself and the ground (contact
+shadows); saves the .blend (the bake lives in it: open it with the add-on enabled and the viewport
+shades it live) and renders the live shading from the scene camera to a PNG (Standard view
+transform) and an EXR (scene-linear), plus a PNG with the world turned by 120 degrees. Prints the
+paths.
 
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/run_default_scene.py -- \
          --zip build/sd_lighting.zip --out out/

@@ -16,15 +16,16 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
   natively), times the light that multiple scattering adds as Cycles computes it (Kulla and
   Conty's F_ms with E_avg from `average_albedo`: a metal keeps its energy, a rough plastic's layer
   gains hardly any) - Cycles' Multiscatter GGX, the default from 4.0; the node's distribution is
-  not read (msd-notes, "Glossy light", on 3.x's single-scattering default). As in Cycles, the dielectric layer's Fresnel is the real one (of IOR
-  DIELECTRIC_SHAPE_IOR; the slot's F0) remapped to F0..1, which rises earlier than Schlick's;
-  from 4.0 the metal is Schlick's of the base colour, mixed with the dielectric by metallic,
-  before 4.0 one lobe of F0' = mix(F0, base colour, metallic) with the dielectric's shape.
-  Lambert times (1 - metallic) x base colour, less the dielectric layer's E where the layer lies over the
-  diffuse and takes its energy from it (the Principled BSDF of Blender 4.0 and later; before 4.0
-  the layer adds to the diffuse) (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is
-  `principled_weights`: (metallic, F0, roughness, layer), layer 0 for a slot without a specular
-  layer (Diffuse BSDF, F0 = 0), LAYER_OVER or LAYER_ADDED.
+  not read (msd-notes, "Glossy light", on 3.x's single-scattering default). As in Cycles, the
+  dielectric layer's Fresnel is the real one (of IOR DIELECTRIC_SHAPE_IOR; the slot's F0) remapped
+  to F0..1, which rises earlier than Schlick's; from 4.0 the metal is Schlick's of the base
+  colour, mixed with the dielectric by metallic, before 4.0 one lobe of F0' = mix(F0, base colour,
+  metallic) with the dielectric's shape. Lambert times (1 - metallic) x base colour, less the
+  dielectric layer's E where the layer lies over the diffuse and takes its energy from it (the
+  Principled BSDF of Blender 4.0 and later; before 4.0 the layer adds to the diffuse)
+  (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is `principled_weights`: (metallic,
+  F0, roughness, layer), layer 0 for a slot without a specular layer (Diffuse BSDF, F0 = 0),
+  LAYER_OVER or LAYER_ADDED.
 - The Phong exponent is sigma = 1 / (2 alpha^2) - 1/2, alpha = roughness^2 (Blender's GGX alpha):
   the Beckmann-equivalent Blinn-Phong exponent 2/alpha^2 - 2 divided by 4, the usual factor
   between a half-vector lobe and a lobe around the mirrored view; clamped to [1, 1000]

@@ -213,9 +213,9 @@ def lobes_from_material(obj):
     names = [slot.material.name if slot.material is not None else "an empty slot" for slot in slots]
     glossy = [(a, name) for a, name in zip(albedos, names) if a.bsdf_lobes.lobe == "phong"]
     if not glossy:
-        layered = next((i for i, a in enumerate(albedos) if a.bsdf_lobes.layer), None)
+        layered = next(((a, name) for a, name in zip(albedos, names) if a.bsdf_lobes.layer), None)
         if layered is not None:
-            return lobes.Lobes("lambert", 1.0, False, True), "%s: %s" % (names[layered], albedos[layered].why)
+            return layered[0].bsdf_lobes, "%s: %s" % (layered[1], layered[0].why)
         return lobes.Lobes(), "%s: %s" % (names[0], albedos[0].why)
     first, name = glossy[0]
     diffuse = [n for a, n in zip(albedos, names) if a.weights[0] < 1.0]   # not wholly metal

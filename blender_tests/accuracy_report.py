@@ -378,10 +378,14 @@ def strip_vertices(package, sdnative, data, bakes, designs, hdri_path, config, s
 
 def stored_floats(package, method, arrays):
     """The floats per vertex a bake of the method stores, counted as its floats_per_vertex
-    (attributes.write: the ambient occlusion and the method's vec4 groups; sd_normal not), from
-    the arrays it would store (shade_inputs' keywords)."""
+    (attributes.write: the ambient occlusion and the method's vec4 groups, or its designs at their
+    own length with a node count; sd_normal not), from the arrays it would store (shade_inputs'
+    keywords)."""
     data = package.methods.get(method).data
-    groups = data.texels(arrays).shape[1] if data is not None and data.grouped else 0
+    if data is not None and data.packing == "design":
+        offsets = np.asarray(arrays["design_offsets"])
+        return 2 + 3 * offsets[-1] / (len(offsets) - 1)
+    groups = data.groups(arrays).shape[1] if data is not None and data.grouped else 0
     return 1 + 4 * groups
 
 
@@ -451,7 +455,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
                              "rays": int(info["rays"]) if method != "unshadowed" else None, "shading": shading,
                              "light": "texture" if band_limited else "sh", "setting": label,
                              "rel_rms": rms, "p99": p99, "reference_se": noise, "points": int(len(ours)),
-                             "bake_seconds": float(info["seconds"]), "bytes_per_vertex": int(info["bytes_per_vertex"]),
+                             "bake_seconds": float(info["seconds"]), "bytes_per_vertex": float(info["bytes_per_vertex"]),
                              "vertices": int(info["vertices"]),
                              "design_nodes_mean": info.get("design_nodes_mean"),
                              "design_nodes_max": info.get("design_nodes_max")})
@@ -488,7 +492,7 @@ def glossy_case(package, name, scene, objects, config, work, progress, rows):
                      "method": "msd_visibility", "s": int(info["light_order"]), "s_v": 2, "rays": 256,
                      "shading": shading, "light": "sh", "setting": RECOMMENDED, "rel_rms": rms, "p99": p99,
                      "reference_se": noise, "points": int(mask.sum() // BLOCK ** 2),
-                     "bake_seconds": float(info["seconds"]), "bytes_per_vertex": int(info["bytes_per_vertex"]),
+                     "bake_seconds": float(info["seconds"]), "bytes_per_vertex": float(info["bytes_per_vertex"]),
                      "vertices": int(info["vertices"])})
     progress.step("%s: Principled -> Phong against Cycles' GGX" % name, 4.0)
     accuracy_scenes.white(objects)
@@ -520,7 +524,7 @@ def gpu_frames(package, name, scene, objects, config, progress, gpu_rows):
                                  "light": "texture" if texture else "sh", "frame_ms": 1e3 * seconds,
                                  "vertices": int(info["vertices"]),
                                  "ns_per_vertex": 1e9 * seconds / int(info["vertices"]),
-                                 "bytes_per_vertex": int(info["bytes_per_vertex"]),
+                                 "bytes_per_vertex": float(info["bytes_per_vertex"]),
                                  "bake_seconds": float(info["seconds"]),
                                  "design_nodes_mean": info.get("design_nodes_mean"),
                                  "design_nodes_max": info.get("design_nodes_max")})
@@ -664,7 +668,7 @@ def attach_costs(package, sdnative, rows, costs, vertex_counts):
         "unshadowed": "4 (AO)", "ambient_occlusion": "4 (AO)",
         "prt_diffuse": "4 + 16 ceil((s+1)^2 / 4)", "prt_gaunt": "4 + 16 ceil((s'+1)^2 / 4)",
         "msd_lobe": "4 + 16 ceil((s'+1)^2 / 4)", "prt_matrix": "4 + 16 ceil((s+1)^2 (s'+1)^2 / 4)",
-        "msd_visibility": "4 + 16 N_V,max (x, y, z, lambda per node, padded to the largest design)",
+        "msd_visibility": "8 + 12 N_V,mean (a node count, and lambda x per node at the design's own length)",
         "note": "as the bake's bytes_per_vertex counts them; sd_normal (12 bytes) comes with every bake"}
     return model
 

@@ -7,8 +7,8 @@ mean over several frames after a warm-up frame. The live shading is the add-on's
 MSD Theorem 2.2 (eq. 13) with s = 4, s' = 2 and a Lambert lobe, per vertex (the seed's way) and,
 as an extra column, per pixel. Baking 1M vertices would take long, so the per-vertex designs are
 synthetic: each vertex gets as many nodes as a vertex of a real bake of a small scene (node counts
-drawn from that bake's distribution, padded to its maximum like the bake stores them) - the frame
-time depends on the node counts, not on the values.
+drawn from that bake's distribution, stored at their own length like a bake's) - the frame time
+depends on the node counts, not on the values.
 
 Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/benchmark_viewport.py -- --zip Z
      (or blender -b ...: the GPU then comes from a Workbench render)
@@ -71,12 +71,11 @@ def heightfield(vertex_count):
 
 def synthetic_designs(normals, real_counts, seed=0):
     """Per-vertex designs with node counts drawn from a real bake's, nodes on the upper hemisphere
-    of each normal, weights summing to 0.5 (an unoccluded vertex); the padding to the largest
-    count is as in a real bake, so the shader's work is the same."""
+    of each normal, weights summing to 0.5 (an unoccluded vertex): the shader's work is a real
+    bake's."""
     rng = np.random.default_rng(seed)
     n = len(normals)
     counts = rng.choice(np.asarray(real_counts), size=n)
-    counts[0] = max(real_counts)   # the texture stride is the bake's largest design
     offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     owner = np.repeat(np.arange(n), counts)
@@ -112,11 +111,11 @@ def baked_object(package, scene, positions, normals, triangles, real_counts, met
     mesh = package.store.attributes.new_mesh("Benchmark", positions, triangles.ravel(),
                                        np.arange(0, 3 * len(triangles), 3), np.full(len(triangles), 3))
     result = synthetic_result(package, method, normals, real_counts, s, sv)
-    floats = package.store.attributes.write(mesh, normals, result)
+    stored = package.store.attributes.write(mesh, normals, result)
     record = package.store.record.BakeRecord.from_dict(dict(
         lobes, method=method, light_order=s, visibility_order=sv, rays=0, seed=0, environment="synthetic",
         refine=False, refine_target=0.0, refine_max_vertices=0, least_squares=False, lightmap=0,
-        floats_per_vertex=floats, bake_id="benchmark-%s-%d-%d-%d-%s" % (method, len(positions), s, sv,
+        floats_per_vertex=stored / 4, bytes_per_vertex=stored, bake_id="benchmark-%s-%d-%d-%d-%s" % (method, len(positions), s, sv,
                                                                         sorted(lobes.items()))))
     mesh["sd_bake"] = record.to_dict()
     mesh.use_fake_user = True
@@ -183,6 +182,7 @@ def remove_object(package, obj):
     package.live.drawing.clear_cache()
     mesh = obj.data
     bpy.data.objects.remove(obj)
+    package.store.attributes.remove_all(mesh)
     bpy.data.meshes.remove(mesh)
 
 
@@ -265,12 +265,12 @@ def main():
         t_uniform = time_frames(draw_uniform, opts["frames"])
         print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
               % (len(positions), 1e3 * t_uniform))
-        print("%-44s %10s %12s %8s" % ("method", "floats/v", "frame (ms)", "ratio"))
+        print("%-44s %10s %12s %8s" % ("method", "bytes/v", "frame (ms)", "ratio"))
         settings = scene.sd_lighting
         times = {}
         for method in package.methods.METHODS:
             obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
-            floats = obj["sd_bake"]["floats_per_vertex"]
+            stored = obj["sd_bake"]["bytes_per_vertex"]
             textures = (False, True) if method.band_limited_texture else (False,)
             for texture in textures:
                 settings.band_limited_texture = texture
@@ -278,7 +278,7 @@ def main():
                                 opts["frames"])
                 times[method.id, texture] = t
                 label = method.label + (", band-limited texture" if texture else "")
-                print("%-44s %10d %12.2f %8.1f" % (label, floats, 1e3 * t, t / t_uniform), flush=True)
+                print("%-44s %10.1f %12.2f %8.1f" % (label, stored, 1e3 * t, t / t_uniform), flush=True)
             settings.band_limited_texture = False
             remove_object(package, obj)
         del batch

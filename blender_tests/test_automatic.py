@@ -125,8 +125,10 @@ def main():
                  "; ".join(info["automatic"].splitlines()[-1] for info in (lone_info, resting_info)))
 
     cost = package.plan.cost
-    checks.check(all(info["floats_per_vertex"] == cost.stored_floats(
-        package.methods.get(info["method"]), info["light_order"], info["visibility_order"])
+    # exact but for designs, whose mean node count the model takes as the generic count
+    checks.check(all(abs(info["floats_per_vertex"] - cost.stored_floats(
+        package.methods.get(info["method"]), info["light_order"], info["visibility_order"])) <=
+        (0.3 * info["floats_per_vertex"] if package.methods.get(info["method"]).designs_per_vertex else 0.0)
         for info in (lone_info, resting_info)),
         "the cost model's stored floats are what the bakes store",
         ", ".join(str(info["floats_per_vertex"]) for info in (lone_info, resting_info)))

@@ -46,23 +46,29 @@ def main():
                  "the object's own mesh is untouched")
     checks.check(baked.use_fake_user, "baked mesh has a fake user")
     names = sorted(a.name for a in baked.attributes if a.name.startswith("sd_"))
-    design_names = [n for n in names if n.startswith("sd_design_")]
-    checks.check("sd_normal" in names and "sd_ambient_occlusion" in names and design_names and
-                 not any(n.startswith(("sd_visibility", "sd_product_matrix", "sd_transfer")) for n in names),
-                 "MSD 2.2 stores normal, AO and designs only", ", ".join(names[:6]) + "...")
-    for name in ("sd_normal", "sd_ambient_occlusion", "sd_design_000"):
+    checks.check(names == ["sd_ambient_occlusion", "sd_design_count", "sd_normal"],
+                 "MSD 2.2 stores normal, AO and the designs' node counts", ", ".join(names))
+    for name, data_type in (("sd_normal", 'FLOAT_VECTOR'), ("sd_ambient_occlusion", 'FLOAT'),
+                            ("sd_design_count", 'INT')):
         attribute = baked.attributes[name]
-        checks.check(attribute.domain == 'POINT' and attribute.data_type in
-                     {'FLOAT', 'FLOAT_VECTOR', 'FLOAT_COLOR'}, "attribute %s is POINT float 1-4" % name)
+        checks.check(attribute.domain == 'POINT' and attribute.data_type == data_type,
+                     "attribute %s is POINT %s" % (name, data_type))
+    holder = attributes.design_nodes_mesh(baked)
+    data = attributes.read(baked)
+    offsets = data["design_offsets"]
+    checks.check(holder is not None and holder.name == "SD Ball Design" and holder.use_fake_user and
+                 len(holder.vertices) == holder["sd_design_total"] == offsets[-1],
+                 "the designs' nodes are the points of their mesh, at their own length",
+                 "%s: %d points, %d nodes" % (holder and holder.name, holder and len(holder.vertices), offsets[-1]))
     info = dict(ball["sd_bake"])
     checks.check(info["method"] == "msd_visibility" and info["light_order"] == 3 and
                  info["visibility_order"] == 1 and info["rays"] == 128 and info["lobe"] == "lambert",
                  "bake settings in the object's custom properties", str(info))
-    checks.check(info["bytes_per_vertex"] == 4 * (1 + 4 * len(design_names)) and info["seconds"] > 0,
-                 "memory per vertex and time recorded",
-                 "%d B, %.3f s" % (info["bytes_per_vertex"], info["seconds"]))
-    data = attributes.read(baked)
-    offsets = data["design_offsets"]
+    mean = offsets[-1] / len(baked.vertices)
+    checks.check(abs(info["bytes_per_vertex"] - (4 + 4 + 12 * mean)) < 1e-6 and
+                 info["design_nodes_mean"] == mean and info["seconds"] > 0,
+                 "memory per vertex (AO, node count, 12 bytes a node) and time recorded",
+                 "%.1f B, %.1f nodes, %.3f s" % (info["bytes_per_vertex"], mean, info["seconds"]))
     sums = np.add.reduceat(data["design_weights"], offsets[:-1]) if len(data["design_weights"]) else []
     nonempty = np.diff(offsets) > 0
     checks.check(np.allclose(np.asarray(sums)[nonempty], data["ambient_occlusion"][nonempty], atol=1e-5),
@@ -117,8 +123,10 @@ def main():
     names = {a.name for a in baked.attributes}
     checks.check("sd_visibility_000" in names and not any(n.startswith("sd_design") for n in names),
                  "rebake stores V~ and no designs")
-    checks.check(baked.name == "SD Ball" and len(bpy.data.meshes) == len(old_names),
-                 "the old baked meshes were replaced", str(sorted(m.name for m in bpy.data.meshes)))
+    checks.check(baked.name == "SD Ball" and
+                 {m.name for m in bpy.data.meshes} == old_names - {"SD Ball Design", "SD Ground Design"},
+                 "the old baked meshes and their designs' nodes were replaced",
+                 str(sorted(m.name for m in bpy.data.meshes)))
     visibility = attributes.read(baked)["visibility"].copy()
 
     # Environment sources: the world's file, the same image packed (read from its pixels), a file
@@ -242,18 +250,36 @@ def main():
     sdtest.select_only([copy])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'} and "SD Copy" in bpy.data.meshes, "bake a copy")
     bpy.ops.object.delete()
+    orphan = bpy.data.meshes.new("SD Orphan Design")   # a nodes' mesh whose baked mesh went
+    orphan["sd_design_total"] = 0
+    orphan.use_fake_user = True
     path = os.path.join(args.out, "test_bake_deleted.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path, copy=True)   # 4.2+ loads no data from the open file
     with bpy.data.libraries.load(path) as (saved, _):
         meshes = list(saved.meshes)
-    checks.check("Copy" not in bpy.data.objects and "SD Copy" not in meshes and "SD Ball" in meshes,
-                 "a deleted object's baked mesh is not saved, a live one's is", ", ".join(meshes))
+    checks.check("Copy" not in bpy.data.objects and "SD Copy" not in meshes and "SD Copy Design" not in meshes
+                 and "SD Orphan Design" not in meshes and "SD Ball" in meshes,
+                 "a deleted object's baked mesh (and designs' nodes) is not saved, nor nodes no baked mesh "
+                 "links; a live one's is", ", ".join(meshes))
     ball = bpy.data.objects["Ball"]
+
+    # The seed's storage claim (issue 30): at s = 4, s' = 2 MSD (13) stores a fraction of PRT (8)'s
+    # bytes, its designs at their own length (the seed's counts: 72 floats against 225).
+    stored = {}
+    for method in ("prt_matrix", "msd_visibility"):
+        sdtest.bake_settings(scene, method, 'LAMBERT', 4, 2, rays=128, select=[ball])
+        checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake %s at s = 4, s' = 2" % method)
+        stored[method] = ball["sd_bake"]["bytes_per_vertex"]
+    checks.check(stored["msd_visibility"] <= 0.40 * stored["prt_matrix"],
+                 "MSD (13) stores at most 0.40x PRT (8)'s bytes per vertex",
+                 "%.1f B against %.1f B: %.2fx" % (stored["msd_visibility"], stored["prt_matrix"],
+                                                   stored["msd_visibility"] / stored["prt_matrix"]))
 
     sdtest.select_only([ball])
     result = bpy.ops.sd_lighting.clear_bake()
-    checks.check(result == {'FINISHED'} and "sd_bake" not in ball and "SD Ball" not in bpy.data.meshes,
-                 "clear bake removes the baked mesh and properties")
+    checks.check(result == {'FINISHED'} and "sd_bake" not in ball and "SD Ball" not in bpy.data.meshes and
+                 "SD Ball Design" not in bpy.data.meshes,
+                 "clear bake removes the baked mesh, its designs' nodes and the properties")
     return checks.summary()
 
 

@@ -98,7 +98,7 @@ def main():
     sdtest.bake_settings(scene, 'msd_visibility', 'LAMBERT', 3, 2, rays=64, select=[ball, ground])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake")
     baked = package.store.baked.baked_mesh(ball)
-    checks.check(baked is not None and "sd_design_000" in baked.attributes and
+    checks.check(baked is not None and "sd_design_count" in baked.attributes and
                  "sd_normal" in baked.attributes, "baked mesh with its attributes")
     path = os.path.join(args.out, "extension_preview.png")
     checks.check(bpy.ops.sd_lighting.render_preview(filepath=path, width=160, height=120) == {'FINISHED'},

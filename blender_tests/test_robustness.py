@@ -353,8 +353,9 @@ def check_without_addon(checks, package, scene, ball, args):
         ball = bpy.data.objects["Ball"]
         mesh = ball.get("sd_baked_mesh")
         checks.check(not hasattr(bpy.types.Scene, "sd_lighting") and mesh is not None and
-                     "sd_design_000" in mesh.attributes and ball["sd_bake"]["method"] == "msd_visibility",
-                     "the .blend opens without the add-on, its bake data present")
+                     "sd_design_count" in mesh.attributes and ball["sd_bake"]["method"] == "msd_visibility" and
+                     isinstance(mesh.get("sd_design_nodes"), bpy.types.Mesh),
+                     "the .blend opens without the add-on, its bake data present (with the designs' nodes)")
         path = os.path.join(args.out, "test_robustness_saved_without.blend")
         bpy.ops.wm.save_as_mainfile(filepath=path)
     finally:

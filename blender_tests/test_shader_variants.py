@@ -47,13 +47,11 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
 N_VARIANTS = 477        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
-DESIGN_TEXELS = 8          # per-vertex design nodes of MSD (13): any count compiles the same way
 PHONG_EXPONENT = 8.0
 
 
@@ -70,13 +68,7 @@ def variants(package):
         for glossy, both in (((False, False),) if method.lambert_only else
                              ((False, False), (True, False), (True, True))):
             for s, sv in ORDERS:
-                data = method.data
-                if data is None:
-                    stride = 0
-                elif data.packing == "coefficients":
-                    stride = (int(np.prod(data.shape(s, sv))) + 3) // 4
-                else:
-                    stride = {"scalar": 1, "design": DESIGN_TEXELS}[data.packing]
+                stride = method.data.stride(s, sv) if method.data else 0
                 design = diffuse_design = 0
                 if method.lobe_design:  # the Gauss rule the live shading starts with: the largest
                     design = len(sd.zonal_design("phong" if glossy else "lambert", PHONG_EXPONENT,

@@ -5,12 +5,12 @@
  * Equation numbers are the seed's (msd-notes.md).
  *
  * Everything happens in the baked object's bake space (its local space with its scale applied:
- * baking.py): the per-vertex data (normals, visibility, designs) were baked there, and the
+ * bake/geometry.py): the per-vertex data (normals, visibility, designs) were baked there, and the
  * environment coefficients in sd.light[] are those of x -> L(g R x), with g the environment
  * rotation and R the rotation part of the object's matrix (rotated on the CPU once per frame and
  * per object).
  *
- * The shader is specialised with defines (addon/sd_lighting/utils/shader_variant.py, from the
+ * The shader is specialised with defines (addon/sd_lighting/live/shader_variant.py, from the
  * method table methods.py); exactly one SD_METHOD_* is defined:
  *   SD_METHOD_UNSHADOWED         sum_l w_l sum_m L_lm y_lm(a)                 (V = 1)
  *   SD_METHOD_AMBIENT_OCCLUSION  AO x unshadowed
@@ -32,8 +32,8 @@
  *                        follow lobe 0's in sd.lobe[]
  *   SD_LOBE_DESIGN_SIZE  nodes of the lobe design (eq. 12); SD_DIFFUSE_DESIGN_SIZE those of lobe
  *                        1's, after lobe 0's in sd.design[]
- *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none); for eq. (13) the nodes
- *                        of the vertex's design of V
+ *   SD_DATA_STRIDE       texels of per-vertex data per vertex (0: none); for eq. (13) one, the
+ *                        header of the vertex's design of V
  *   SD_TEXTURE_WIDTH_LOG2  log2 of the data textures' width
  *   SD_LIGHTMAP          (with SD_PER_PIXEL) the data are texture-space: one entry per stored texel
  *                        of a SD_LIGHTMAP_WIDTH x SD_LIGHTMAP_HEIGHT lightmap (its row in the R32F
@@ -59,7 +59,9 @@
  * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
  * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture
  * (2^SD_TEXTURE_WIDTH_LOG2 texels wide); they are the method's stored array, the bake's
- * FLOAT_COLOR attributes in order (addon/sd_lighting/utils/bake_data.py).
+ * FLOAT_COLOR attributes in order, or for eq. (13) a header texel (column and row of the vertex's
+ * first node texel, its node count) followed, after all headers, by every vertex's nodes at their
+ * own count (addon/sd_lighting/store/bake_data.py).
  *
  * Metal-safe: explicit float literals, no implicit int/float conversions.
  */
@@ -203,13 +205,18 @@ vec3 sd_lobe_axis(vec3 normal, vec3 view)
 #endif
 }
 
-/* Per-vertex data: texel k of vertex p. The texture is 2^SD_TEXTURE_WIDTH_LOG2 texels wide, so
- * the row and column are a shift and a mask (integer division is slow on CPU rasterisers). */
+/* Per-vertex data: texel `index` of the data texture, and texel k of vertex p. The texture is
+ * 2^SD_TEXTURE_WIDTH_LOG2 texels wide, so the row and column are a shift and a mask (integer
+ * division is slow on CPU rasterisers). */
 #if SD_DATA_STRIDE > 0
+vec4 sd_data_texel(int index)
+{
+  return texelFetch(sd_data, ivec2(index & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), index >> SD_TEXTURE_WIDTH_LOG2), 0);
+}
+
 vec4 sd_vertex_texel(int p, int k)
 {
-  int index = p * SD_DATA_STRIDE + k;
-  return texelFetch(sd_data, ivec2(index & ((1 << SD_TEXTURE_WIDTH_LOG2) - 1), index >> SD_TEXTURE_WIDTH_LOG2), 0);
+  return sd_data_texel(p * SD_DATA_STRIDE + k);
 }
 
 /* Coefficient i of a vertex's SH data whose texels start at `first`. */
@@ -432,12 +439,13 @@ void sd_shade_pair(int p, vec3 a0, vec3 a1, out vec3 b0, out vec3 b1)
   SD_LOBE1(b1 = sd_lobe_design_sum(v, a1, 1);)
 
 #elif defined(SD_METHOD_MSD_VISIBILITY)
-  /* Eq. (13), Theorem 2.2: the vertex's design of V, L~ and the truncated lobe at its nodes. */
-  for (int nu = 0; nu < SD_DATA_STRIDE; nu++) {
-    vec4 node = sd_vertex_texel(p, nu); /* x, y, z, lambda; lambda = 0 pads after the last node */
-    if (node.w <= 0.0) {
-      break;
-    }
+  /* Eq. (13), Theorem 2.2: the vertex's design of V, L~ and the truncated lobe at its nodes; the
+   * header says where its nodes start (column, row) and how many it has. */
+  vec4 header = sd_vertex_texel(p, 0);
+  int first = (int(header.y) << SD_TEXTURE_WIDTH_LOG2) + int(header.x);
+  int count = int(header.z);
+  for (int nu = 0; nu < count; nu++) {
+    vec4 node = sd_data_texel(first + nu); /* x, y, z, lambda */
     vec3 light = node.w * sd_light_at(node.xyz);
     b0 += sd_legendre_sum(dot(node.xyz, a0), 0, SD_VIS_ORDER) * light;
     SD_LOBE1(b1 += sd_legendre_sum(dot(node.xyz, a1), 1, SD_VIS_ORDER) * light;)

@@ -79,7 +79,8 @@ def test_frame_terms_and_stored_floats_follow_the_formulas(sdnative):
     assert cost.stored_floats(prt8, 4, 2) == 1 + 228
     assert cost.stored_floats(methods.get("unshadowed"), 4, 2) == 1
     assert cost.stored_floats(methods.get("ambient_occlusion"), 4, 2) == 1
-    assert cost.stored_floats(msd13, 4, 2) == 1 + 4 * 49
+    # a design at its own length: AO, node count, three floats (lambda x) per node of the generic design
+    assert cost.stored_floats(msd13, 4, 2) == 2 + 3 * 17
     # eq. (10) sums over the non-zero Gaunt coefficients only: fewer than the full triple product
     assert 0 < cost.gaunt_terms(sdnative, 4, 2) < 25 * 9 * 49
 

@@ -8,7 +8,8 @@ What a draw reads:
   `bary` (the corner's barycentric coordinates);
 - per-vertex data in the RGBA32F texture `sd_data`: vertex p's texels are
   [p * stride, (p + 1) * stride), row-major over the texture, read with texelFetch by
-  gl_VertexID (the index of an indexed batch) - the method's stored array (store/bake_data.py);
+  gl_VertexID (the index of an indexed batch) - the method's stored array (store/bake_data.py;
+  a design's texel is a header, its nodes follow every vertex's header);
 - texture-space data (a bake with a lightmap, bake/lightmap.py): the same texels, one entry per
   stored lightmap texel (the texels' mesh's attributes), found through the R32F index map
   `sd_lightmap_index` and read per pixel at the vertex attribute `lightmap_uv` (the baked mesh's
@@ -334,9 +335,8 @@ class ObjectData:
             self.lightmap_index = _texture(self.lightmap[0], self.lightmap[1], index, 'R32F')
         self.data_texture, stride = None, 0
         if self.method.data is not None:
-            texels = attributes.read_texels(mesh if texels_mesh is None else texels_mesh, self.method.data)
-            stride = texels.shape[1]
-            self.data_texture = float_texture(texels.reshape(-1, 4))
+            texels, stride = attributes.read_texels(mesh if texels_mesh is None else texels_mesh, self.method.data)
+            self.data_texture = float_texture(texels)
         self.gaunt_texture, gaunt_count = (None, 0)
         if self.method.gaunt_table:
             self.gaunt_texture, gaunt_count = gaunt_texture(s, sv)

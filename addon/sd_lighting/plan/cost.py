@@ -34,15 +34,16 @@ def gaunt_terms(sdnative, s, sv):
 
 def stored_floats(method, s, sv):
     """Floats per vertex the method's bake stores (methods.Method) as the bake counts them
-    (`floats_per_vertex`; its normal excluded): the ambient occlusion, which every bake keeps, and
-    the method's array in vec4 groups. Designs are padded to the largest one, which reaches the
-    moment count (t+1)^2 (Caratheodory's bound; the report measured 49 nodes at degree 6)."""
+    (`floats_per_vertex`, its normal excluded; a design's node count, an int, as one float): the
+    ambient occlusion, which every bake keeps, and the method's array in vec4 groups, or a design at
+    its own length, three floats a node (store/bake_data.py), the generic node count, which the
+    designs meet on average."""
     data = method.data
     if data is None or data.packing == "scalar":
         return 1
     if data.packing == "design":
-        return 1 + 4 * (s + sv + 1) ** 2
-    return 1 + 4 * math.ceil(math.prod(data.shape(s, sv)) / 4)
+        return 2 + 3 * design_nodes(s + sv)
+    return 1 + 4 * data.stride(s, sv)
 
 
 # The peak memory of a bake (native arrays are float64; blender_tests/benchmark_bake.py --memory

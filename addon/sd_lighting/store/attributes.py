@@ -1,5 +1,5 @@
-"""Bake results as POINT attributes of the baked mesh: writing and reading them, and the mesh's
-geometry as arrays. What is stored and how is the table in bake_data.py; README.md
+"""Bake results as POINT attributes of the baked mesh (and the points of its designs' nodes' mesh):
+writing and reading them, and the mesh's geometry as arrays. What is stored and how is the table in bake_data.py; README.md
 ("Attributes of the baked mesh") is the user's reference.
 """
 
@@ -10,6 +10,8 @@ from . import bake_data
 from .bake_data import BAKE, NORMAL, PREFIX
 from .record import BakeRecord
 
+DESIGN_SUFFIX = " Design"   # a nodes' mesh is named after the mesh whose designs it holds
+
 
 def _group_names(mesh, array):
     names = []
@@ -18,61 +20,117 @@ def _group_names(mesh, array):
     return names
 
 
+def design_nodes_mesh(mesh):
+    """The nodes' mesh a mesh with designs links (bake_data.py), or None."""
+    import bpy
+    nodes = mesh.get(bake_data.DESIGN_NODES)
+    return nodes if isinstance(nodes, bpy.types.Mesh) else None
+
+
 def is_stored(mesh, array):
+    if array.packing == "design":
+        return bake_data.DESIGN_COUNT in mesh.attributes and design_nodes_mesh(mesh) is not None
     return (array.group_name(0) if array.grouped else array.attribute) in mesh.attributes
 
 
 def remove_all(mesh):
-    """Removes every sd_ attribute."""
+    """Removes every sd_ attribute, and the nodes' mesh of its designs."""
     for name in [a.name for a in mesh.attributes if a.name.startswith(PREFIX)]:
         mesh.attributes.remove(mesh.attributes[name])
+    nodes = design_nodes_mesh(mesh)
+    if bake_data.DESIGN_NODES in mesh:
+        del mesh[bake_data.DESIGN_NODES]
+    if nodes is not None and nodes.library is None:
+        import bpy
+        bpy.data.meshes.remove(nodes)
 
 
-def _new(mesh, name, data_type, prop, values):
+def _new(mesh, name, data_type, prop, values, dtype=np.float32):
     attribute = mesh.attributes.new(name, data_type, 'POINT')
-    attribute.data.foreach_set(prop, np.ascontiguousarray(values, dtype=np.float32).ravel())
+    attribute.data.foreach_set(prop, np.ascontiguousarray(values, dtype=dtype).ravel())
+
+
+def _write_design(mesh, offsets, nodes, weights):
+    """Stores designs at their own length (bake_data.py); returns their bytes."""
+    import bpy
+    counts = np.diff(np.asarray(offsets, dtype=np.int64))
+    _new(mesh, bake_data.DESIGN_COUNT, 'INT', 'value', counts, np.int32)
+    holder = bpy.data.meshes.new(mesh.name + DESIGN_SUFFIX)
+    mesh[bake_data.DESIGN_NODES] = holder      # linked first: removing `mesh` removes it too
+    holder.use_fake_user = True
+    holder.vertices.add(len(weights))
+    holder.vertices.foreach_set("co", bake_data.weighted_nodes(nodes, weights).ravel())
+    holder[bake_data.DESIGN_TOTAL] = len(weights)
+    return 4 * len(counts) + 12 * len(weights)
 
 
 def write(mesh, normals, result):
     """Stores the normals and a bake result (sdnative.bake_transfer's dict) on the mesh; returns
-    the floats per vertex of the bake data. A bake stores what its method reads (and the ambient
-    occlusion, which every bake returns)."""
+    the bytes per vertex of the bake data (the normals not counted). A bake stores what its method
+    reads (and the ambient occlusion, which every bake returns)."""
     remove_all(mesh)
     _new(mesh, NORMAL, 'FLOAT_VECTOR', 'vector', normals)
-    floats = 0
+    stored = 0
     for array in bake_data.ARRAYS:
         if not array.in_result(result):
             continue
-        if array.grouped:
-            texels = array.texels(result)
-            for index in range(texels.shape[1]):
-                _new(mesh, array.group_name(index), 'FLOAT_COLOR', 'color', texels[:, index])
-            floats += texels[0].size
+        if array.packing == "design":
+            stored += _write_design(mesh, *(result[key] for key in array.keys))
+        elif array.grouped:
+            groups = array.groups(result)
+            for index in range(groups.shape[1]):
+                _new(mesh, array.group_name(index), 'FLOAT_COLOR', 'color', groups[:, index])
+            stored += 4 * groups.size
         else:
             _new(mesh, array.attribute, 'FLOAT', 'value', result[array.keys[0]])
-            floats += 1
-    return floats
+            stored += 4 * len(mesh.vertices)
+    return stored / max(len(mesh.vertices), 1)
 
 
-def _read(mesh, name, prop, components):
+def _read(mesh, name, prop, components, dtype=np.float32):
     attribute = mesh.attributes[name]
-    values = np.empty(len(attribute.data) * components, dtype=np.float32)
+    values = np.empty(len(attribute.data) * components, dtype=dtype)
     attribute.data.foreach_get(prop, values)
     return values.reshape(-1, components) if components > 1 else values
 
 
-def read_texels(mesh, array):
-    """A stored array as the shader's texels, float32 [N, G, 4]."""
-    if not is_stored(mesh, array):
-        raise ValueError("%s stores no %s data (baked by another version?): bake it again"
-                         % (mesh.name, array.name))
+def _stored_groups(mesh, array):
+    """A scalar or coefficient array as stored: float32 [N, G, 4] vec4 groups."""
     if not array.grouped:
-        return array.texels({array.keys[0]: _read(mesh, array.attribute, 'value', 1)})
+        return array.groups({array.keys[0]: _read(mesh, array.attribute, 'value', 1)})
     names = _group_names(mesh, array)
     out = np.zeros((len(mesh.vertices), len(names), 4), dtype=np.float32)
     for index, name in enumerate(names):
         out[:, index, :] = _read(mesh, name, 'color', 4)
     return out
+
+
+def _stored_design(mesh):
+    """The designs as stored, in sdnative's arrays: offsets int64 [N+1], nodes float64 [total, 3],
+    weights float64 [total]."""
+    holder = design_nodes_mesh(mesh)
+    offsets = np.zeros(len(mesh.vertices) + 1, dtype=np.int64)
+    np.cumsum(_read(mesh, bake_data.DESIGN_COUNT, 'value', 1, np.int32), out=offsets[1:])
+    if not len(holder.vertices) == holder.get(bake_data.DESIGN_TOTAL) == offsets[-1]:
+        raise ValueError("the design nodes of %s (%s) do not match its node counts: bake it again"
+                         % (mesh.name, holder.name))
+    return (offsets,) + bake_data.split_weighted_nodes(read_positions(holder))
+
+
+def _check_stored(mesh, array):
+    if not is_stored(mesh, array):
+        raise ValueError("%s stores no %s data (baked by another version?): bake it again"
+                         % (mesh.name, array.name))
+
+
+def read_texels(mesh, array):
+    """A stored array as the data texture's texels: (float32 [M, 4], texels per vertex)
+    (bake_data.VertexArray.texels)."""
+    _check_stored(mesh, array)
+    if array.packing == "design":
+        return array.texels(dict(zip(array.keys, _stored_design(mesh))))
+    groups = _stored_groups(mesh, array)
+    return groups.reshape(-1, 4), groups.shape[1]
 
 
 def write_texels(mesh, entries):
@@ -188,6 +246,10 @@ def read(mesh, record=None):
         record = BakeRecord.from_dict(mesh[BAKE].to_dict())
     orders = record.light_order, record.visibility_order
     for array in bake_data.ARRAYS:
-        if is_stored(mesh, array):
-            out.update(array.from_texels(read_texels(mesh, array), *orders))
+        if not is_stored(mesh, array):
+            continue
+        if array.packing == "design":
+            out.update(zip(array.keys, _stored_design(mesh)))
+        else:
+            out.update(array.from_groups(_stored_groups(mesh, array), *orders))
     return out

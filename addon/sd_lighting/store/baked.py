@@ -6,7 +6,8 @@ copy of the evaluated geometry carrying the results as `sd_` attributes (attribu
 user so it persists, and the bake record (record.py) in `sd_bake`, on the mesh and, as a copy, on
 the object. A bake with texture-space data also has the UV map "SD Lightmap" and links the
 texels' mesh "SD Lightmap <object>" (one point per texel stored, the same attributes) in the baked
-mesh's `sd_lightmap` property. Shift+D and Alt+D copies of a baked object link the same baked mesh:
+mesh's `sd_lightmap` property. A bake with designs (eq. 13) links their nodes' mesh "SD <object>
+Design" (attributes.py). Shift+D and Alt+D copies of a baked object link the same baked mesh:
 it is removed only when no object links it any more (Clear Bake), and before the file is saved
 once the objects that linked it were deleted (remove_unlinked).
 """
@@ -19,7 +20,7 @@ import numpy as np
 from ..errors import BakeError
 from ..scene import materials, transforms
 from . import attributes
-from .bake_data import BAKE, BAKED_MESH, LIGHTMAP, LIGHTMAP_UV, UV
+from .bake_data import BAKE, BAKED_MESH, DESIGN_TOTAL, LIGHTMAP, LIGHTMAP_UV, TEXEL, UV
 from .record import BakeRecord, RecordError
 
 MESH_PREFIX = "SD "
@@ -51,13 +52,12 @@ def store(bakes):
                 raise BakeError("%s was deleted during the bake" % bake.object_name)
             mesh = bake.geometry.build_mesh(MESH_PREFIX + bake.object_name)
             built.append((obj, mesh))
-            floats = attributes.write(mesh, bake.result["normals"], bake.result)
+            stored = attributes.write(mesh, bake.result["normals"], bake.result)
             attributes.write_surface(mesh, bake.geometry.material_slots, bake.geometry.uvs, bake.geometry.sides)
             if "lightmap" in bake.result:
                 mesh.uv_layers.new(name=LIGHTMAP_UV).data.foreach_set("uv", bake.geometry.lightmap_uvs.ravel())
                 mesh[LIGHTMAP] = _lightmap_mesh(LIGHTMAP_PREFIX + bake.object_name, bake.result["lightmap"])
-            record = dataclasses.replace(bake.record, floats_per_vertex=int(floats),
-                                         bytes_per_vertex=int(4 * floats))
+            record = dataclasses.replace(bake.record, floats_per_vertex=stored / 4, bytes_per_vertex=stored)
             mesh[BAKE] = record.to_dict()
             mesh.use_fake_user = True
     except Exception:
@@ -77,6 +77,9 @@ def store(bakes):
         name = MESH_PREFIX + obj.name
         if mesh.name != name and name not in bpy.data.meshes:  # free now that the old one went
             mesh.name = name
+        nodes = attributes.design_nodes_mesh(mesh)
+        if nodes is not None and nodes.name != mesh.name + attributes.DESIGN_SUFFIX:
+            nodes.name = mesh.name + attributes.DESIGN_SUFFIX
     return [obj.name for obj, _ in built]
 
 
@@ -189,13 +192,21 @@ def lightmap_mesh(mesh):
     return texels if isinstance(texels, bpy.types.Mesh) else None
 
 
-def _remove_baked_mesh(mesh):
-    """Removes a baked mesh and its texels' mesh."""
-    import bpy
+def _owned_meshes(mesh):
+    """The meshes that go with a baked mesh: its texels' mesh and the nodes' meshes of both."""
     texels = lightmap_mesh(mesh)
+    holders = [m for m in (mesh, texels) if m is not None]
+    return [m for m in [texels] + [attributes.design_nodes_mesh(h) for h in holders] if m is not None]
+
+
+def _remove_baked_mesh(mesh):
+    """Removes a baked mesh and the meshes that go with it."""
+    import bpy
+    owned = _owned_meshes(mesh)
     bpy.data.meshes.remove(mesh)
-    if texels is not None and texels.library is None:
-        bpy.data.meshes.remove(texels)
+    for other in owned:
+        if other.library is None:
+            bpy.data.meshes.remove(other)
 
 
 def _release(mesh):
@@ -206,21 +217,28 @@ def _release(mesh):
 
 
 def remove_unlinked():
-    """Removes the baked meshes (with their texels' meshes) that no object in use links: those of
-    deleted objects, which their fake user would otherwise keep in the file. Returns their names."""
+    """Removes the baked meshes (with the meshes that go with them) that no object in use links:
+    those of deleted objects, which their fake user would otherwise keep in the file; and texels'
+    or nodes' meshes that no baked mesh links any more. Returns their names."""
     import bpy
     linked = set()
     for obj in bpy.data.objects:
         mesh = obj.get(BAKED_MESH)
         if obj.users > 0 and isinstance(mesh, bpy.types.Mesh):
             linked.add(mesh.as_pointer())
-    # Chosen before anything is removed: removing one also removes its texels' mesh, which a
-    # loop over bpy.data.meshes would reach afterwards.
+    # Chosen before anything is removed: removing one also removes the meshes that go with it,
+    # which a loop over bpy.data.meshes would reach afterwards.
     unlinked = [mesh for mesh in bpy.data.meshes
                 if mesh.library is None and BAKE in mesh and mesh.as_pointer() not in linked]
     removed = [mesh.name for mesh in unlinked]
     for mesh in unlinked:
         _remove_baked_mesh(mesh)
+    owned = {other.as_pointer() for mesh in bpy.data.meshes if BAKE in mesh for other in _owned_meshes(mesh)}
+    orphans = [mesh for mesh in bpy.data.meshes if mesh.library is None and mesh.as_pointer() not in owned
+               and (TEXEL in mesh.attributes or DESIGN_TOTAL in mesh)]
+    removed += [mesh.name for mesh in orphans]
+    for mesh in orphans:
+        bpy.data.meshes.remove(mesh)
     return removed
 
 

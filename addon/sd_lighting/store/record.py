@@ -65,8 +65,8 @@ class BakeRecord:
     faces_doubled: int = _found(0)
     seconds: float = _found(0.0)
     vertices: int = _found(0)
-    floats_per_vertex: int = _found(0)
-    bytes_per_vertex: int = _found(0)
+    floats_per_vertex: float = _found(0.0)   # the bake data's mean per vertex (designs vary)
+    bytes_per_vertex: float = _found(0.0)
     design_nodes_max: Optional[int] = _found()     # methods with per-vertex designs
     design_nodes_mean: Optional[float] = _found()
     unrefined_vertices: Optional[int] = _found()   # with refinement

@@ -396,8 +396,8 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
         _value(col, context, "Orders", "s %d, s' %d" % (record.light_order, record.visibility_order))
         _value(col, context, "Rays", "%d" % record.rays)
         _value(col, context, "Vertices", "%d" % record.vertices)
-        _value(col, context, "Floats", "%d per vertex" % record.floats_per_vertex)
-        _value(col, context, "Bytes", "%d per vertex" % record.bytes_per_vertex)
+        _value(col, context, "Floats", "%.4g per vertex" % record.floats_per_vertex)
+        _value(col, context, "Bytes", "%.4g per vertex" % record.bytes_per_vertex)
         if record.design_nodes_max is not None:     # the designs' nodes
             _value(col, context, "Nodes", "%.1f per vertex" % record.design_nodes_mean)
             _value(col, context, "Max Nodes", "%d" % record.design_nodes_max)

@@ -282,7 +282,7 @@ def main():
             settings.band_limited_texture = False
             remove_object(package, obj)
         del batch
-        width, height = package.live.shader_variant.band_limited_texture_size(4)
+        width, height = package.live.band_limited_map.texture_size(4)
         print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
               "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
         print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))

@@ -117,7 +117,7 @@ def main():
                                  "GPU = CPU: " + label,
                                  "max rel %.2e (per-vertex rel %.2e), |B| max %.3g" % (
                                      relative, per_vertex, abs(cpu).max()))
-            table.append((name + (" texture %dx%d" % package.live.shader_variant.band_limited_texture_size(s)
+            table.append((name + (" texture %dx%d" % package.live.band_limited_map.texture_size(s)
                                   if texture else ""), worst))
         settings.band_limited_texture = False
     print("\nGPU vs CPU, max |gpu - cpu| / max |cpu| over both objects and both paths:")

@@ -79,7 +79,7 @@ def variants(package):
                 gaunt = len(sd.gaunt_coefficients(s, sv, s + sv)[1]) if method.gaunt_table else 0
                 textures = [()]
                 if method.band_limited_texture:
-                    textures.append(shader_variant.band_limited_texture_size(s))
+                    textures.append(_module(package, "live.band_limited_map").texture_size(s))
                 # with albedos (at ALBEDO_ORDERS): the lobes as they are, also with the prefiltered
                 # light where weighted, and a Lambert lobe 0 with the specular layers of rough
                 # dielectrics (weights and the prefiltered light)

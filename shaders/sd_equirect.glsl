@@ -1,6 +1,6 @@
-/* sd-lighting: bilinear lookup in an equirect map, for the band-limited texture of the shading
- * (sd_shading_lib.glsl), the world background (sd_background_frag.glsl) and the levels of the
- * prefiltered environment (sd_shading_lib.glsl: sd_prefiltered_light). SD_EQUIRECT_MAP names the
+/* sd-lighting: bilinear lookup in an equirect map, for the world background
+ * (sd_background_frag.glsl) and the levels of the prefiltered environment (sd_shading_lib.glsl:
+ * sd_prefiltered_light). SD_EQUIRECT_MAP names the
  * sampler2D holding one map, SD_PREFILTERED_MAP the atlas of prefiltered levels (defined by the
  * shader that uses them; without either this file is empty).
  *

@@ -51,10 +51,10 @@
  *   SD_LAMBERT_LAYER     (with SD_PREFILTERED, without SD_GLOSSY) lobe 0 is the diffuse, and the
  *                        prefiltered light, shadowed by lobe 0's visibility ratio, lights the
  *                        slots' specular layers (rough dielectrics: scene/lobes.py)
- *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited equirect
- *                        texture sd_band_limited_texture (unrotated L~; SD_EQUIRECT_MAP names it
- *                        for sd_equirect.glsl) at g R x (sd.local_to_environment) instead of
- *                        summed from sd.light[]
+ *   SD_BAND_LIMITED_TEXTURE  (MSD 12, 13 only) L~ is looked up in the band-limited texture
+ *                        sd_band_limited_texture (unrotated L~ on cube faces, by bilinear cell of
+ *                        SD_BAND_LIMITED_CELLS per face edge) at g R x (sd.local_to_environment)
+ *                        instead of summed from sd.light[]
  *
  * Per-vertex data live in the RGBA32F texture sd_data: vertex p's texels are
  * [p * SD_DATA_STRIDE, (p + 1) * SD_DATA_STRIDE), row-major over the texture
@@ -155,11 +155,39 @@ vec3 sd_light_at(vec3 d)
 #endif
 
 #ifdef SD_BAND_LIMITED_TEXTURE
-/* L~(g R d) from the band-limited texture of the unrotated L~ (sd_equirect.glsl: SD_EQUIRECT_MAP
- * is sd_band_limited_texture). */
+/* L~(g R d) from the band-limited texture of the unrotated L~: cube faces by bilinear cell
+ * (addon/sd_lighting/live/band_limited_map.py, whose lookup() this is): the face of e = g R d's
+ * largest component, (u, v) the other two over it, and the cell of the four texel centres around
+ * them, three texels holding their RGB. Texel k of a face is centred at -1 + (k - 0.5) 2 / n,
+ * n = SD_BAND_LIMITED_CELLS - 1; the gutter (k = 0, n + 1) continues the face past its edges. */
 vec3 sd_light_at(vec3 d)
 {
-  return sd_equirect(normalize(mat3(sd.local_to_environment) * d));
+  vec3 e = mat3(sd.local_to_environment) * d;
+  vec3 a = abs(e);
+  int face;
+  vec2 uv;
+  if (a.x >= a.y && a.x >= a.z) {
+    face = (e.x < 0.0) ? 1 : 0;
+    uv = e.yz / a.x;
+  }
+  else if (a.y >= a.z) {
+    face = (e.y < 0.0) ? 3 : 2;
+    uv = e.xz / a.y;
+  }
+  else {
+    face = (e.z < 0.0) ? 5 : 4;
+    uv = e.xy / a.z;
+  }
+  vec2 t = (uv + vec2(1.0)) * (0.5 * float(SD_BAND_LIMITED_CELLS - 1)) + vec2(0.5);
+  vec2 corner = clamp(floor(t), vec2(0.0), vec2(float(SD_BAND_LIMITED_CELLS - 1)));
+  vec2 f = t - corner;
+  ivec2 cell = ivec2(3 * int(corner.x), face * SD_BAND_LIMITED_CELLS + int(corner.y));
+  vec4 p = texelFetch(sd_band_limited_texture, cell, 0);
+  vec4 q = texelFetch(sd_band_limited_texture, cell + ivec2(1, 0), 0);
+  vec4 r = texelFetch(sd_band_limited_texture, cell + ivec2(2, 0), 0);
+  vec3 bottom = mix(p.xyz, vec3(p.w, q.xy), f.x);
+  vec3 top = mix(vec3(q.zw, r.x), r.yzw, f.x);
+  return mix(bottom, top, f.y);
 }
 
 #endif

@@ -35,7 +35,8 @@ _SUBMODULES = ("background", "compat", "errors", "native", "redraw",
                "bake.corners", "bake.least_squares", "plan.automatic", "plan.analysis", "bake.lightmap",
                "store.baked", "bake.sides", "bake.refine", "bake.geometry", "bake.task", "bake.job", "bake.unwrap",
                "bake.prepare",
-               "live.gpu_context", "live.lobe_designs", "live.rebake_schedule", "live.shader_variant",
+               "live.gpu_context", "live.lobe_designs", "live.rebake_schedule", "live.band_limited_map",
+               "live.shader_variant",
                "live.gpu_shading", "live.staleness", "live.drawing", "live.live_rebake", "live.preview",
                "ui.limits", "ui.prediction", "ui.operators", "ui.panels", "ui.properties", "registration")
 

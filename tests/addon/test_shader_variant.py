@@ -9,7 +9,7 @@ import pytest
 
 from sd_lighting import methods
 from sd_lighting.bake import lightmap
-from sd_lighting.live import shader_variant
+from sd_lighting.live import band_limited_map
 from sd_lighting.live.shader_variant import BlockField, Variant
 
 
@@ -30,7 +30,7 @@ def all_variants():
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
-                              shader_variant.band_limited_texture_size(4) if texture else (),
+                              band_limited_map.texture_size(4) if texture else (),
                               material_count=2 if albedo else 0, material_slots=albedo,
                               albedo_texture=albedo, lobe_weights=weights,
                               diffuse_lobe=both,
@@ -69,12 +69,13 @@ def test_texture_space_variant_reads_the_lightmap_uv_per_pixel(sdnative):
 
 def test_band_limited_texture_variant(sdnative):
     variant = Variant(methods.get("msd_visibility"), False, 8, 2, data_stride=20,
-                      band_limited_texture=shader_variant.band_limited_texture_size(8))
+                      band_limited_texture=band_limited_map.texture_size(8))
     defines = variant.defines(sdnative.sh_recurrence_constants)
     assert "SD_BASIS_ORDER" not in defines           # L~ from the texture: no SH basis at all
-    assert defines["SD_EQUIRECT_MAP"] == "sd_band_limited_texture"   # sd_equirect.glsl reads it
+    cells = band_limited_map.side(8) + 1
+    assert defines["SD_BAND_LIMITED_CELLS"] == str(cells) and "SD_EQUIRECT_MAP" not in defines
     assert variant.samplers() == [(0, "sd_data"), (2, "sd_band_limited_texture")]
-    assert shader_variant.band_limited_texture_size(1) == (256, 128)
+    assert band_limited_map.texture_size(8) == (3 * cells, 6 * cells)
 
 
 def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source, sdnative):
@@ -88,7 +89,7 @@ def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source,
         samplers |= {name for _, name in variant.samplers()}
     defined_in_glsl = set(re.findall(r"#\s*define\s+(SD_[A-Z0-9_]+)", source))
     used = set(re.findall(r"\b(SD_[A-Z0-9_]*[A-Z0-9])\b", source)) - defined_in_glsl
-    assert used == produced
+    assert used == produced | {"SD_EQUIRECT_MAP"}    # that one the background shader's
     assert set(re.findall(r"\bsd\.([a-z_]+)", source)) == fields
     glsl_samplers = set(re.findall(r"(?:texelFetch|texture)\((sd_[a-z_]+)", source))
     # sd_equirect.glsl reads the maps they name

@@ -19,8 +19,8 @@ What a draw reads:
   worker thread, is there; then the variant is swapped);
 - for PRT (10), the real Gaunt coefficients as texels (a, b, c, G) in `sd_gaunt`;
 - with the band-limited texture option (methods that can read it), the band-limited environment
-  L~ (unrotated) as an equirect RGBA32F texture `sd_band_limited_texture`, looked up at g R x
-  instead of summing (s+1)^2 SH terms per direction;
+  L~ (unrotated) on cube faces, by bilinear cell (live/band_limited_map.py), in the RGBA32F texture
+  `sd_band_limited_texture`, looked up at g R x instead of summing (s+1)^2 SH terms per direction;
 - the albedo B is multiplied by (materials.py), read from the object's materials at every draw:
   one colour per material slot in the block, a vertex attribute `material_slot` where the bake
   kept several, and the image texture `sd_albedo_texture` with the vertex attribute `uv`; for
@@ -39,9 +39,10 @@ from ..bake import lightmap
 from ..scene import environment, lobes, materials, transforms
 from ..store import attributes, baked
 from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
+from . import band_limited_map
 from . import lobe_designs as lobe_design_cache
 from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BRDF_TABLE_SAMPLER, BRDF_TABLE_SIZE, DATA_SAMPLER, GAUNT_SAMPLER,
-                             LIGHTMAP_INDEX_SAMPLER, Variant, band_limited_texture_size)
+                             LIGHTMAP_INDEX_SAMPLER, Variant)
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
@@ -168,21 +169,18 @@ def float_texture(texels):
 
 def band_limited_texture(source, light):
     """The band-limited environment L~ of the unrotated coefficients `light` ([(s+1)^2, 3]: the
-    source's, strength and ringing window applied, drawing.shading_light) as an RGBA32F equirect
-    texture of band_limited_texture_size(s), Blender's orientation, rows bottom-first as GPU
-    textures hold them (v = 0 at the south pole) (cached per source and coefficients)."""
+    source's, strength and ringing window applied, drawing.shading_light) as the RGBA32F cell
+    texture of live/band_limited_map.py (cached per source and coefficients)."""
     light = np.ascontiguousarray(light, dtype=np.float64)
     order = int(round(np.sqrt(light.shape[0]))) - 1
-    width, height = band_limited_texture_size(order)
+    width, height = band_limited_map.texture_size(order)
     key = (source.key, light.tobytes(), width, height)
     texture = _band_limited_textures.get(key)
     if texture is None:
-        image = np.asarray(native.get().band_limited_texture(light, width, height),
-                           dtype=np.float32).reshape(height, width, 3)
-        texels = np.zeros((height, width, 4), dtype=np.float32)
-        texels[..., :3] = image[::-1]     # sdnative's rows are top-first
-        texels[..., 3] = 1.0
-        texture = _texture(width, height, texels)
+        n = band_limited_map.side(order)
+        directions = band_limited_map.texel_directions(n).reshape(-1, 3)
+        faces = (native.get().sh_basis(order, directions) @ light).reshape(6, n + 2, n + 2, 3)
+        texture = _texture(width, height, band_limited_map.cell_texels(faces))
         _band_limited_textures[key] = texture
     return texture
 
@@ -347,7 +345,7 @@ class ObjectData:
         design_sizes = [len(d.weights) for d in self.designs] + [0, 0]
         self.variant = Variant(self.method, self.lobe == "phong", s, sv, stride, design_sizes[0],
                                gaunt_count, per_pixel, vertex_target,
-                               band_limited_texture_size(s) if self.uses_band_limited_texture else (),
+                               band_limited_map.texture_size(s) if self.uses_band_limited_texture else (),
                                lobe_weights=self._weighted(self.prefiltered), diffuse_lobe=self.lobes.diffuse,
                                diffuse_design_size=design_sizes[1], lightmap=self.lightmap,
                                prefiltered=self.prefiltered)

@@ -18,20 +18,13 @@ from ..store.bake_data import TEXTURE_WIDTH_LOG2
 # (slot, name) of the shader's samplers
 DATA_SAMPLER = (0, "sd_data")                               # per-vertex texels
 GAUNT_SAMPLER = (1, "sd_gaunt")                             # (a, b, c, G) of eq. (10)
-BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ as an equirect image
+BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ on cube faces (band_limited_map.py)
 ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
 LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texel's data row, or -1
 PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment prefiltered per roughness
 BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's (A, B) over n.v, roughness
 BRDF_TABLE_SIZE = 32   # its side (sdnative.environment_brdf_table)
 
-
-def band_limited_texture_size(order):
-    """Width and height of the band-limited texture of order s: bilinear interpolation of L~_s
-    between texel centres is then within about 5e-4 of max |L~| (measured: 4.3e-4 at s = 4,
-    4.8e-4 at s = 8, 4.6e-4 at s = 12 on forest.exr)."""
-    width = max(256, 64 * (order + 1))
-    return width, width // 2
 
 
 def glsl_floats(values):
@@ -90,7 +83,7 @@ class Variant:
     gaunt_count: int = 0          # real Gaunt coefficients (methods with gaunt_table)
     per_pixel: bool = False
     vertex_target: bool = False   # tests: vertex p drawn as pixel p of a float target
-    band_limited_texture: tuple = ()   # (width, height) of L~'s texture, or () for the SH sum
+    band_limited_texture: tuple = ()   # (width, height) of L~'s cell texture, or () for the SH sum
     material_count: int = 0       # albedos in the block, one per material slot (0: white, none)
     material_slots: bool = False  # the vertices carry their slot (objects with several)
     albedo_texture: bool = False  # a slot's albedo is an image texture, read through `uv`
@@ -206,7 +199,7 @@ class Variant:
             d["SD_VERTEX_TARGET"] = "1"
         if self.band_limited_texture:
             d["SD_BAND_LIMITED_TEXTURE"] = "1"
-            d["SD_EQUIRECT_MAP"] = BAND_LIMITED_TEXTURE_SAMPLER[1]
+            d["SD_BAND_LIMITED_CELLS"] = str(self.band_limited_texture[0] // 3)
         if self.material_count:
             d["SD_ALBEDO"] = "1"
             if self.material_slots:

@@ -408,10 +408,22 @@ def markdown(report, averaged, plots, strip_file):
     lines += ["", "## The seed's Table 1 (s = 4, s' = 2) with measured costs", "",
               "The seed counts terms per vertex and floats per vertex; beside them the measured CPU cost "
               "(sdnative.shade, ns per vertex, median over the scenes: the whole call on both cores, the "
-              "rotation of L included, over the scene's 642-3966 vertices), the floats the add-on stores "
-              "(without the normal; a design is padded to the object's largest) and the design nodes.", "",
-              "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) | stored floats | design nodes mean / max |",
-              "|---|---|---|---|---|---|"]
+              "rotation of L included, over the scene's %d-%d vertices), the GPU frame time per vertex "
+              "against PRT (8) for MSD (13) and PRT (10) for MSD (12) (the table above: L~ from the "
+              "band-limited texture, and summed; at these sizes the frame's fixed cost is much of it: "
+              "blender_tests/benchmark_viewport.py measures 100k vertices), the floats the add-on stores "
+              "(without the normal; a design at its own length, three floats a node and its count) and "
+              "the design nodes." % (min(report["vertices"].values()), max(report["vertices"].values())), "",
+              "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) "
+              "| GPU frame / PRT (texture; SH sum) | stored floats | design nodes mean / max |",
+              "|---|---|---|---|---|---|---|"]
+    gpu = report["gpu_rows"]
+
+    def gpu_ratios(method, base, light):
+        values = [row["frame_ms"] / ref["frame_ms"] for row in gpu
+                  if row["method"] == method and row["light"] == light and row["shading"] == "vertex"
+                  for ref in gpu if ref["scene"] == row["scene"] and ref["method"] == base and ref["shading"] == "vertex"]
+        return "%.2f-%.2fx" % (min(values), max(values)) if values else "-"
     frame = defaultdict(list)
     for row in report["rows"]:
         if row["reference"] == "monte_carlo" and row["s"] == 4 and row.get("s_v") in (2, None) \
@@ -425,9 +437,11 @@ def markdown(report, averaged, plots, strip_file):
         if not rows:
             continue
         nodes = [r for r in rows if r.get("design_nodes_mean")]
-        lines.append("| %s | %s | %s | %.0f, %.0f | %d | %s |" % (
+        base = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}.get(method)
+        lines.append("| %s | %s | %s | %.0f, %.0f | %s | %d | %s |" % (
             LABELS[method], terms, floats, np.median([r["frame_ns_per_vertex"] for r in lam]) if lam else float("nan"),
             np.median([r["frame_ns_per_vertex"] for r in pho]) if pho else float("nan"),
+            "%s; %s" % (gpu_ratios(method, base, "texture"), gpu_ratios(method, base, "sh")) if base else "-",
             int(np.median([r["bytes_per_vertex"] for r in rows]) // 4),
             "%.1f / %d" % (np.mean([r["design_nodes_mean"] for r in nodes]), max(r["design_nodes_max"] for r in nodes))
             if nodes else "-"))

@@ -184,8 +184,11 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       }
       const double eta = std::max(kOriginOffset * shortest, floor);
       glm::dvec3 into_faces = (centre / area - p) / shortest;
+      // Across the normal only, and at most as long: at a convex hard edge the faces beyond it pull
+      // back along −n, which left q in the plane of p's own faces.
+      into_faces -= glm::dot(into_faces, n) * n;
       const double reach = glm::length(into_faces);
-      if (reach > 1.0) into_faces /= reach;  // never dominates the normal, so q stays clear of the faces
+      if (reach > 1.0) into_faces /= reach;
 
       probed.clear();  // the largest faces, chosen only when a candidate needs them
       auto passes = [&](const glm::dvec3& q) {
@@ -222,7 +225,7 @@ TracedScene::TracedScene(const std::vector<glm::dvec3>& vertices, const std::vec
       };
       auto at = [&](const glm::dvec3& u) { return p + eta * glm::normalize(u); };
 
-      const glm::dvec3 first = glm::length(n + into_faces) > 1e-6 ? at(n + into_faces) : at(n);
+      const glm::dvec3 first = at(n + into_faces);
       // The given normal first; then the faces' own (a flipped normal points into the solid).
       const glm::dvec3 outward = glm::length(faces_normal) > 0.0 ? glm::normalize(faces_normal) : n;
       glm::dvec3 chosen = first;

@@ -11,9 +11,11 @@
 //   η = kOriginOffset × the shortest edge of the triangles around p (the size of the local
 //       geometry: thin slabs and fine detail stay resolved, the scale of the object does not
 //       matter), at least kOriginFloat × |p|∞ in the traced space (above float32 rounding);
-//   u is the first of these candidates whose q passes the probes: n + (c − p)/h — along the normal
-//       and into the faces around p, towards the area-weighted mean c of their centroids (h the
-//       shortest edge), as Cycles' bakes move their ray origins into the face —, then n, then the
+//   u is the first of these candidates whose q passes the probes: n + t, t the part of (c − p)/h
+//       across n, at most unit length — along the normal and into the faces around p, towards the
+//       area-weighted mean c of their centroids (h the shortest edge), as Cycles' bakes move their
+//       ray origins into the face; across n only, since at a convex hard edge c lies back along −n
+//       and the whole (c − p)/h cancelled n, leaving q in the plane of p's faces —, then n, then the
 //       faces' own area-weighted normal m (by their winding: it survives a flipped n), then
 //       kCandidateDirections spherical-Fibonacci directions by decreasing u·m;
 //   q fails a probe when the first surface a segment from q meets is met from behind (the side

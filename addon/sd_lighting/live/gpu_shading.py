@@ -55,6 +55,7 @@ _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
+_BASIS_BLOCK = 16384          # directions per SH basis evaluated at once for that texture
 _prefiltered_textures = {}    # source key -> GPUTexture
 _brdf_table = []              # the GPUTexture of environment_brdf_table, once made
 _background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
@@ -179,8 +180,11 @@ def band_limited_texture(source, light):
     if texture is None:
         n = band_limited_map.side(order)
         directions = band_limited_map.texel_directions(n).reshape(-1, 3)
-        faces = (native.get().sh_basis(order, directions) @ light).reshape(6, n + 2, n + 2, 3)
-        texture = _texture(width, height, band_limited_map.cell_texels(faces))
+        # in blocks: the basis of every texel at once would be (n + 2)^2 6 (s + 1)^2 floats (1.9 GB
+        # at s = 16), on the thread that draws
+        faces = np.concatenate([native.get().sh_basis(order, directions[start:start + _BASIS_BLOCK]) @ light
+                                for start in range(0, len(directions), _BASIS_BLOCK)])
+        texture = _texture(width, height, band_limited_map.cell_texels(faces.reshape(6, n + 2, n + 2, 3)))
         _band_limited_textures[key] = texture
     return texture
 

@@ -1,6 +1,6 @@
 """Bake results as POINT attributes of the baked mesh (and the points of its designs' nodes' mesh):
-writing and reading them, and the mesh's geometry as arrays. What is stored and how is the table in bake_data.py; README.md
-("Attributes of the baked mesh") is the user's reference.
+writing and reading them, and the mesh's geometry as arrays. What is stored and how is the table in
+bake_data.py; README.md ("Attributes of the baked mesh") is the user's reference.
 """
 
 import numpy as np

@@ -186,8 +186,9 @@ def share_shader_caches(blender, user):
 
 
 def run_one(blender, name, needs, limit, zip_path, out, script_out=None, options=(), arguments=()):
-    """Runs one script; logs and Blender's user folders go under `out`, the script writes its
-    files to `script_out` (default `out`)."""
+    """Runs one script; its log goes under `out`, the script writes its files to `script_out`
+    (default `out`). Blender's user folders (the installed add-on, about 50 MB) are removed
+    afterwards: kept, the full tier's 130 runs filled CI's disk."""
     user = os.path.join(out, "blender_user", name)
     shutil.rmtree(user, ignore_errors=True)
     os.makedirs(user, exist_ok=True)
@@ -207,6 +208,7 @@ def run_one(blender, name, needs, limit, zip_path, out, script_out=None, options
         except subprocess.TimeoutExpired:
             code = "timeout"
     seconds = time.perf_counter() - start
+    shutil.rmtree(user, ignore_errors=True)   # unlinks the shared caches' links, not the caches
     with open(log_path, errors="replace") as log:
         text = log.read()
     return code, seconds, text, log_path

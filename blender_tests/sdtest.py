@@ -543,9 +543,11 @@ def cycles_pair(scene, path_stem, size, samples, block):
     return 0.5 * (a + b), noise
 
 
-def imported(path):
+def imported(path, join=True):
     """Imports a mesh file (glTF, OBJ, PLY, STL) with Blender's own importer, joins its meshes into
-    one object with its transforms applied and removes the empties: (object, a description)."""
+    one object with its transforms applied and removes the empties: (object, a description).
+    join=False keeps the parts as the importer made them, as a user bakes them (their transforms
+    and shared meshes kept, parents cleared): (the parts, a description)."""
     import numpy as np
     before = set(bpy.data.objects)
     ext = os.path.splitext(path)[1].lower()
@@ -578,11 +580,13 @@ def imported(path):
         obj.select_set(True)
     bpy.context.view_layer.objects.active = meshes[0]
     bpy.ops.object.parent_clear(type='CLEAR_KEEP_TRANSFORM')
-    if len(meshes) > 1:
+    if len(meshes) > 1 and join:
         bpy.ops.object.join()
-    obj = bpy.context.view_layer.objects.active
     for name in others:   # empties the importer made parents
         bpy.data.objects.remove(bpy.data.objects[name])
+    if not join:
+        return meshes, "%s (%d parts)" % (os.path.basename(path), len(meshes))
+    obj = bpy.context.view_layer.objects.active
     bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
     return obj, "%s (%d parts joined)" % (os.path.basename(path), len(meshes))
 

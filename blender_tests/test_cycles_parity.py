@@ -72,7 +72,14 @@ def place(obj, scene):
     centre = 0.5 * (low + high) * scale
     obj.location = [a + b for a, b in zip(obj.location, (-centre[0], -centre[1], -low[2] * scale))]
     size = (high - low) * scale
-    target = np.array([0.0, 0.0, 0.5 * size[2]])
+    return frame(scene, np.array([-0.5 * size[0], -0.5 * size[1], 0.0]),
+                 np.array([0.5 * size[0], 0.5 * size[1], size[2]]))
+
+
+def frame(scene, low, high):
+    """A camera from the front above whose view holds the box low..high."""
+    size = high - low
+    target = np.array([0.5 * (low[0] + high[0]), 0.5 * (low[1] + high[1]), low[2] + 0.5 * size[2]])
     radius = 0.5 * float(np.linalg.norm(size))
     lens = 35.0
     distance = 1.05 * radius / math.sin(math.atan(18.0 / lens))   # the sphere around it in view

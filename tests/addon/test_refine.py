@@ -261,3 +261,16 @@ def test_common_rotation_makes_points_that_see_alike_bake_alike(sdnative):
     own = sdnative.bake_transfer(floor.vertices, floor.normals, floor.triangles, **kwargs)["transfer"]
     assert np.abs(common - common[0]).max() < 1e-12
     assert np.abs(own - own[0]).max() > 1e-3
+
+
+def test_a_larger_predicted_error_elsewhere_stops_the_refinement_sooner():
+    """refine.aim: under a bake whose own predicted error is twice the target, the interpolation
+    is refined only to BALANCE of that, with fewer vertices and an estimate within it."""
+    assert refine.aim(0.02) == refine.INTERPOLATION_SHARE * 0.02
+    assert refine.aim(0.02, 0.005) == refine.INTERPOLATION_SHARE * 0.02
+    assert refine.aim(0.02, 0.08) == refine.BALANCE * 0.08
+    shadowed = _synthetic_bake(lambda p: np.where(p[:, 0] < 0.13, 0.2, 1.0))
+    to_target = refine.refine(_grid(8), shadowed, WEIGHTS, 0.02, 10 ** 6)
+    balanced = refine.refine(_grid(8), shadowed, WEIGHTS, 0.02, 10 ** 6, aimed=refine.aim(0.02, 0.08))
+    assert len(balanced.surface.vertices) < len(to_target.surface.vertices)
+    assert balanced.estimated_left <= refine.BALANCE * 0.08

@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import methods, native
 from ..errors import BakeError
-from ..plan import analysis, automatic
+from ..plan import analysis, automatic, budget
 from ..scene import environment, materials, transforms
 from ..scene.view import View
 from ..store import baked
@@ -156,7 +156,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
         return any(np.all(b_lo <= hi + reach) and np.all(b_hi >= lo - reach)
                    for part, b_lo, b_hi in boxes if part.instance or part.name != obj.name_full)
 
-    tasks, skipped = [], []
+    tasks, skipped, areas = [], [], []
     for obj in objects:
         reason = _refusal(obj)
         if reason is None:
@@ -187,11 +187,18 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
                          surrounded(obj, transforms.transform_points(placement, geometry.mesh_positions)),
                          None if lobe[0] == "lambert" or inputs.eye is None else tuple(np.round(inputs.eye, 6)))
         tasks.append(BakeTask(obj.name, geometry, occluders, settings, inputs, share_key))
+        areas.append(budget.surface_area(transforms.transform_points(placement, geometry.mesh_positions),
+                                         geometry.mesh_triangles))
         if unwrap:
             unwrap_lightmap(context, tasks[-1])
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
                         "select one or more mesh objects to bake")
+    if settings_of is bake_settings:   # a re-bake keeps the share its bake had (recorded_settings)
+        selection_vertices = int(scene.sd_lighting.refine_max_vertices)
+        for task, share in zip(tasks, budget.shares(areas)):
+            task.settings.update(refine_max_vertices=max(int(share * selection_vertices), 1),
+                                 bake_seconds_budget=float(share * budget.SELECTION_SECONDS))
     warnings = ["skipped: " + reason for reason in skipped]
     if env_source.kind == "uniform":
         warnings.append("world '%s' has no Environment Texture: lit by its %s"

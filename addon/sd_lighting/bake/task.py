@@ -3,6 +3,7 @@ texels - sdnative.bake_transfer on the arrays prepare.py gathered, never touchin
 
 import functools
 import hashlib
+import os
 import time
 import uuid
 from dataclasses import dataclass
@@ -11,7 +12,7 @@ import numpy as np
 
 from .. import methods
 from ..errors import BakeError
-from ..plan import analysis, automatic, cost
+from ..plan import analysis, automatic, bake_time, budget, cost
 from ..scene import lobes
 from ..store.record import BakeRecord
 from . import geometry as geometry_module, least_squares, lightmap, refine
@@ -101,7 +102,7 @@ class BakeTask:
             # The refinement's settings as the types they are asked in (an ID property keeps a
             # bool as an int): a bake and its recorded settings give one digest.
             refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
-                          int(self.settings.get("refine_max_vertices", 0)))
+                          int(self.settings.get("refine_max_vertices", 0)), self.settings.get("bake_seconds_budget"))
             arguments = dict(self.bake_arguments(), refine=refinement, lightmap=int(self.settings.get("lightmap", 0)))
             for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
@@ -133,7 +134,7 @@ class BakeTask:
                                  lobes.Lobes.of_bake(self.settings), stop,
                                  fitted=bool(self.settings.get("least_squares")),
                                  texels=lightmap.expected_texels(int(self.settings.get("lightmap", 0))),
-                                 progress=progress)
+                                 progress=progress, bake_budget=self.bake_seconds_budget)
         per_pixel, evaluation = automatic.evaluation(self.analysis.triangle_pixels)
         self.settings.update(
             per_pixel=per_pixel, automatic="\n".join(choice.reasons + (evaluation,)),
@@ -247,9 +248,35 @@ class BakeTask:
                 "seconds": time.perf_counter() - start}
 
     @property
+    def bake_seconds_budget(self):
+        """The seconds its rays may take: its share of the selection's (plan/budget.py), or, for a
+        re-bake of a bake from before the share, the confirmation's."""
+        seconds = self.settings.get("bake_seconds_budget")
+        return bake_time.CONFIRM_SECONDS if seconds is None else float(seconds)
+
+    @property
     def refines(self):
-        """Whether the bake refines its copy first (Refine on, without texture-space data)."""
+        """Whether the bake refines its copy first: Refine on, without texture-space data, and not
+        for a method that stores no visibility - the refinement splits where the shadowed transfer
+        bends, which the unshadowed shading never draws."""
+        method = self.settings["method"]
+        if method != analysis.AUTOMATIC and methods.get(method).data is None:
+            return False
         return bool(self.settings.get("refine")) and not self.lightmap_size
+
+    def refine_budget(self):
+        """The vertices its refinement may reach: its share of Max Verts, and, once its method is
+        chosen, no more than its share of the selection's seconds affords at its rays - with least
+        squares each vertex also traces about two face centres (plan/budget.py)."""
+        s = self.settings
+        vertices = int(s["refine_max_vertices"])
+        if s["method"] == analysis.AUTOMATIC or s.get("bake_seconds_budget") is None:
+            return vertices
+        method = methods.get(s["method"])
+        fitted = bool(s.get("least_squares")) and least_squares.applies(method)
+        return min(vertices, budget.affordable_vertices(
+            float(s["bake_seconds_budget"]), method, int(s["light_order"]), int(s["visibility_order"]),
+            int(s["rays"]), os.cpu_count() or 1, 3.0 if fitted else 1.0))
 
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
@@ -258,8 +285,7 @@ class BakeTask:
         self.baked = self.geometry
         if not self.refines:
             return
-        self.refinement = self._refined(sd, self.geometry.surface(), int(self.settings["refine_max_vertices"]),
-                                        progress)
+        self.refinement = self._refined(sd, self.geometry.surface(), self.refine_budget(), progress)
         if self.refinement.levels:
             self.baked = self.geometry.refined(self.refinement.surface)
 
@@ -289,7 +315,9 @@ class BakeTask:
             return result["transfer"]
 
         weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
-        refinement = refine.refine(surface, bake, weights, float(s["refine_target"]), max_vertices)
+        target = float(s["refine_target"])
+        refinement = refine.refine(surface, bake, weights, target, max_vertices,
+                                   aimed=refine.aim(target, self.predicted_error))
         if levels is not None:
             levels.extend(timed)
         return refinement
@@ -303,9 +331,9 @@ class BakeTask:
         if not self.refines:
             return None
         surface = self.geometry.surface()
-        budget = int(self.settings["refine_max_vertices"])
+        vertices_allowed = self.refine_budget()
         rows = np.asarray(rows)
-        if len(surface.vertices) >= budget or len(rows) == 0:   # at its budget already: not refined
+        if len(surface.vertices) >= vertices_allowed or len(rows) == 0:   # at its budget already: not refined
             return RefinementEstimate(0.0, 1.0, 1.0)
         total = len(surface.triangles)
         unsampled = np.ones(total, dtype=bool)
@@ -314,11 +342,11 @@ class BakeTask:
         others = [(surface.vertices, surface.triangles[unsampled])] if unsampled.any() else []
         scale = total / max(len(rows), 1)
         levels = []
-        sample_budget = int(budget * len(sample.vertices) / len(surface.vertices))
+        sample_budget = int(vertices_allowed * len(sample.vertices) / len(surface.vertices))
         refined = self._refined(sd, sample, max(sample_budget, len(sample.vertices) + 1),
                                 lambda done, count: not stop(), others, levels).surface
         seconds = sum(setup + (elapsed - setup) * scale for setup, elapsed in levels)
-        vertex_growth = min(len(refined.vertices) / len(sample.vertices), budget / len(surface.vertices))
+        vertex_growth = min(len(refined.vertices) / len(sample.vertices), vertices_allowed / len(surface.vertices))
         triangle_growth = vertex_growth * (len(refined.triangles) / len(refined.vertices)) / (
             len(sample.triangles) / len(sample.vertices))
         return RefinementEstimate(seconds, vertex_growth, triangle_growth)

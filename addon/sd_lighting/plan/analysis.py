@@ -65,17 +65,19 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
                                stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress)
 
 
-def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None):
+def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None,
+           bake_budget=bake_time.CONFIRM_SECONDS):
     """The automatic.Choice for one object (any thread): geometry a bake/geometry.Geometry, occluders
     bake_transfer's occluder keywords (or {}), lobe_set its scene/lobes.Lobes, fitted: whether the
     bake fits least squares (its rays then start at the face centres too); texels: the texels a
-    texture-space bake adds for the methods they hold (which then fit no least squares); stop()
-    True cancels (InterruptedError)."""
+    texture-space bake adds for the methods they hold (which then fit no least squares);
+    bake_budget: the seconds its rays may take (its share of the selection's, plan/budget.py);
+    stop() True cancels (InterruptedError)."""
     sd = native.get()
     table = _table(inputs, geometry, occluders, lobe_set, [m.id for m in methods.METHODS],
                    inputs.max_order, int(inputs.fixed.get("rays", MEASURED_RAYS)), stop, progress)
     return automatic.choose(table, inputs.target_error, lambda s, sv: cost.gaunt_terms(sd, s, sv),
-                            len(geometry.vertices), os.cpu_count() or 1, bake_time.CONFIRM_SECONDS,
+                            len(geometry.vertices), os.cpu_count() or 1, bake_budget,
                             inputs.fixed,
                             len(geometry.vertices) + texels if texels else
                             len(geometry.vertices) + len(geometry.triangles) if fitted else None)

@@ -51,6 +51,9 @@ class BakeRecord:
     diffuse_lobe: bool = False   # a Lambert lobe besides `lobe` (records before it: none)
     lobe_weights: bool = False
     diffuse_share: float = 0.0
+    # The seconds of rays its share of the selection's budget allows (plan/budget.py; None: a bake
+    # from before the budget, whose choice had CONFIRM_SECONDS and whose refinement had Max Verts)
+    bake_seconds_budget: Optional[float] = None
     # What the automatic mode chose besides method, orders and rays (None: not automatic).
     automatic: Optional[str] = None       # its reasons, one per line
     per_pixel: Optional[bool] = None

@@ -148,8 +148,9 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "3x the rays; all methods but MSD (13), whose designs are kept as baked)")
     refine_max_vertices: IntProperty(
         name="Max Verts", default=refine.DEFAULT_MAX_VERTICES, min=1, soft_max=2_000_000,
-        description="Most vertices a refined copy may have (its bake time and memory grow with "
-                    "them); a copy that has as many already is not refined")
+        description="Most vertices the refined copies of the objects baked together may have "
+                    "(the bake's time and memory grow with them), shared by their surface areas; a "
+                    "copy that has its share already is not refined")
 
     texture_space: BoolProperty(
         name="Texture Space", default=False,

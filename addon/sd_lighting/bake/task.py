@@ -315,9 +315,11 @@ class BakeTask:
             return result["transfer"]
 
         weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
+        # the automatic mode's prediction, which its settings record: a chosen method's bake
+        # predicts none (the panel's estimate does), and the two would refine differently
         target = float(s["refine_target"])
         refinement = refine.refine(surface, bake, weights, target, max_vertices,
-                                   aimed=refine.aim(target, self.predicted_error))
+                                   aimed=refine.aim(target, s.get("predicted_error")))
         if levels is not None:
             levels.extend(timed)
         return refinement

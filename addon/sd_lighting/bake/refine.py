@@ -25,8 +25,9 @@ mean square over a triangle of area T is 16 ∫ λ_i² λ_j² / T = 16 · 2 · 2
 (the bumps' cross terms need signs the rotation average does not keep) - until E is within
 INTERPOLATION_SHARE of the target: the bake's own errors (truncation, rays) take the rest, adding
 in quadrature - or, where the automatic mode predicts those to be larger than the target, until E
-is within BALANCE of them (aim). So a smooth, dense mesh whose edges are off here and there by a little more than
-the target is left as it is, while a shadow across a large face is split down to its edge.
+is within BALANCE of them (aim). So a smooth, dense mesh whose edges are off here and there by a
+little more than the target is left as it is, while a shadow across a large face is split down to
+its edge.
 
 The split is conforming, so no crack opens: an edge is marked as a place (the vertices at one
 point - copies split at a hard edge or seam, the corners of a triangle soup - share a `weld` id
@@ -49,8 +50,7 @@ CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
 INTERPOLATION_SHARE = 0.5   # of the target error, what the interpolation may take (the module's doc)
 # Of the bake's own predicted error (truncation and rays), what the interpolation may keep: errors
-# add in quadrature, so refining below half of it lowers the total by under 12 % - the low-poly
-# spider's last 48,000 of 66,000 vertices bought 1.5 % -> 1.3 % against Cycles at 5x the bake time.
+# add in quadrature, so refining below half of it lowers the total by under 12 % (README, Use, items 5 and 6).
 BALANCE = 0.5
 BUMP_MEAN_SQUARE = 8.0 / 45.0   # an edge's bump over a triangle beside it (the module's doc)
 DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity, benchmark_refine)

@@ -1,14 +1,13 @@
 """The selection's budget (issue 30, item 4): one bake of many objects spends its vertices and its
-seconds where they show, not 250,000 refined vertices and a minute of rays per part.
+seconds where they show, instead of the whole Max Verts and a minute of rays for every part (a
+CAD model imported as dozens of parts baked for minutes where the same model joined into one
+object took under one: README, Use, item 6).
 
 The panel's Max Verts and SELECTION_SECONDS are the selection's. Each object gets the share of both
 that its surface area is of the selection's: what it covers of the view, whichever way the user
-turns it (a camera's view would favour one side, and the viewport is turned). Within its share an
-object's automatic choice takes the most accurate rays it affords for its copy as it is, and its
-refinement stops where the vertices it adds would take the bake past its share at those rays: a
-67-part engine refined each part up to 250,000 vertices with up to a minute of rays each (847,000
-vertices, 6 minutes) where the same engine joined into one object bakes in under a minute at the
-same error (README, "Bake time").
+turns it (a camera's view would favour one side, and the viewport is turned). Within its share of
+the seconds the automatic mode chooses among the settings its copy as it is affords, and its
+refinement stops where the vertices it adds would take the bake past that share at the chosen rays.
 
 Nothing here needs Blender.
 """

@@ -133,7 +133,7 @@ class SD_PT_lighting(_Sidebar, bpy.types.Panel):
                 _text(col, context, "Bake time: " + predicted.text(),
                       icon='ERROR' if predicted.needs_confirmation else 'TIME')
                 if settings.refine:
-                    _text(col, context, "+ refinement, up to {:,} vertices".format(
+                    _text(col, context, "+ refinement, up to {:,} vertices in all".format(
                         settings.refine_max_vertices), icon='BLANK1')
             elif problem:
                 _text(layout, context, "No bake time prediction: " + problem, icon='ERROR')
@@ -487,7 +487,7 @@ class SD_PT_lighting_refinement(_SubPanel, bpy.types.Panel):
         if record.refine_budget_reached:
             col = layout.column()
             col.alert = True
-            _text(col, context, "Max Verts stopped it", icon='ERROR')
+            _text(col, context, "Its share of the budget stopped it", icon='ERROR')
 
 
 def _draw_choice(layout, context, chosen, setting, reasons, inset=0.0):

@@ -4,7 +4,8 @@ it took), the bake (its seconds, the process's peak memory during it, the bake's
 thread: gathering the arrays before the worker and storing after it), the bytes stored per vertex,
 and the viewport's frame time per vertex against Blender's own uniform-colour shader on the same
 mesh (benchmark_viewport's frame: 1280x720 offscreen, one-pixel readback). A size whose bake is
-refused for its memory says so with the figures and the table stops there.
+predicted not to fit the free memory is baked as a user's bake would be (without go_ahead): what
+the prediction and the bake said ends the table.
 
 Peak memory: the bake's own, against the predicted: Linux's VmHWM of the process, reset before each
 bake (/proc/self/clear_refs), less its resident memory just before (Blender and the mesh).
@@ -88,15 +89,21 @@ def main():
     for size in [int(s) for s in opts.sizes.split(",") if s]:
         obj, positions, triangles = heightfield_object(package, scene, size)
         sdtest.select_only([obj])
+        peak_reset()
+        before = resident_bytes()
         start = time.perf_counter()
         predicted = prediction.for_confirmation(bpy.context, wait=None)
         took = time.perf_counter() - start
+        print("prediction of %d vertices: %.1f s, its own peak memory %s" % (
+            len(positions), took, package.plan.cost.memory_text(resident_bytes("VmHWM") - before)), flush=True)
         needed = prediction.memory(bpy.context)
         row = (len(positions), predicted.text() if predicted else "-", took,
                package.plan.cost.memory_text(needed[1]) if needed else "-")
-        if needed and needed[1] > needed[2]:   # the bake a user asks for is refused: show it
+        problem = prediction.error(bpy.context)
+        if problem or (needed and needed[1] > needed[2]):   # what the bake a user asks for does
             result, reports = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
-            print("%10d %10s %6.1f %10s  %s: %s" % (row + (sorted(result), " ".join(reports))), flush=True)
+            print("%10d %10s %6.1f %10s  prediction: %s; bake: %s %s" % (
+                row + (problem or "-", sorted(result), reports.strip())), flush=True)
             break
         peak_reset()
         before = resident_bytes()
@@ -104,7 +111,7 @@ def main():
         result, reports = sdtest.operator_reports(bpy.ops.sd_lighting.bake, go_ahead=True)   # over a minute: asks
         seconds = time.perf_counter() - start
         if result != {'FINISHED'}:
-            print("%10d %10s %6.1f %10s  failed: %s" % (row + (" ".join(reports),)), flush=True)
+            print("%10d %10s %6.1f %10s  failed: %s" % (row + (reports.strip(),)), flush=True)
             break
         record = obj["sd_bake"]
         setting = "%s s=%d s'=%d %d rays" % (record["method"], record["light_order"], record["visibility_order"],

@@ -220,3 +220,25 @@ def test_a_refinement_adds_its_time_and_the_points_it_makes():
     added = refined.prediction().seconds - plain.prediction().seconds
     assert added == pytest.approx(2.0 + 3 * FakeNative.PER_VERTEX * len(vertices), rel=0.3)
     assert grown == [3.0]
+
+
+def test_a_job_that_may_not_fit_the_free_memory_is_not_sampled():
+    """Its sample bakes would build the whole scene (bake_time.MEMORY_MARGIN): the prediction fails
+    saying so, and nothing is baked; with the memory to spare it samples as before."""
+    vertices, normals, triangles = grid(10)
+    baked = []
+
+    class Counting(FakeNative):
+        def bake_transfer(self, *args, **kwargs):
+            baked.append(1)
+            return super().bake_transfer(*args, **kwargs)
+
+    def job():
+        return SampleJob((vertices, normals, triangles), {}, memory=lambda: (int(2e9), "Sheet"))
+    short = BakeTimePredictor(Counting(), [job()], threads=1, available=lambda: int(2.9e9))
+    short.start()
+    short.join(30)
+    assert not short.finished and "Sheet's bake needs about 2.0 GB" in short.error and not baked
+    roomy = BakeTimePredictor(Counting(), [job()], threads=1, available=lambda: int(3.1e9))
+    roomy.start()
+    assert roomy.join(30) and baked

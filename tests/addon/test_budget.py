@@ -16,6 +16,7 @@ SQUARE = (np.array([[0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0]], dtype=float), n
 def test_surface_area_of_a_rectangle_and_of_nothing():
     assert budget.surface_area(*SQUARE) == pytest.approx(6.0)
     assert budget.surface_area(SQUARE[0], np.zeros((0, 3), int)) == 0.0
+    assert budget.surface_area(*SQUARE, block=1) == pytest.approx(6.0)   # summed over blocks
 
 
 def test_shares_follow_the_areas_and_sum_to_one():

@@ -38,6 +38,11 @@ TASK_SECONDS = 0.05
 ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each): the first, then one more
 REFINE_SAMPLE = 512          # triangles whose refinement predicts the copy's
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
+# A job whose bake is predicted to need more than the free memory over this is not sampled: its
+# sample bakes build the scene of the whole mesh, about as large as the bake's own (a 4M-vertex
+# sheet's prediction peaked at 9.3 GB, its bake at 10.6 GB: blender_tests/benchmark_scale.py), and
+# the memory model runs up to 1.4x low for an open mesh that bakes a reverse copy of each face.
+MEMORY_MARGIN = 1.5
 
 
 def sample_rows(triangle_count, count, seed=0, run=1):
@@ -130,13 +135,15 @@ class SampleJob:
     per point (texels), a count or a function returning one, called in the worker after the
     keywords; `refinement`: None, or a function of (sdnative, stop) returning None or a
     BakeTask.refinement_estimate of a refinement before the bake, called in the worker after the
-    keywords (the traced mesh grows as its triangles do)."""
+    keywords (the traced mesh grows as its triangles do); `memory`: None, or a function returning
+    the bake's predicted peak bytes and the name it is told by."""
     mesh: object
     bake_arguments: object
     task: object = None
     after_rays: object = None
     extra_points: object = 0
     refinement: object = None
+    memory: object = None
 
     def points(self):
         return int(self.extra_points() if callable(self.extra_points) else self.extra_points)
@@ -153,8 +160,11 @@ class BakeTimePredictor(Worker):
 
     thread_name = "sd_lighting bake time"
 
-    def __init__(self, sdnative, jobs, threads):
+    def __init__(self, sdnative, jobs, threads, available=None):
+        """available: None, or a function returning the free bytes (or None where unknown): a job
+        that may not fit them is not sampled (MEMORY_MARGIN) and the prediction fails saying so."""
         super().__init__()
+        self._available = available
         self._sd = sdnative
         self._jobs = jobs
         self._threads = max(int(threads), 1)
@@ -189,6 +199,7 @@ class BakeTimePredictor(Worker):
     def run(self):
         try:
             for index, job in enumerate(self._jobs):
+                self._check_memory(job)
                 self._sample(index, job)
         except Exception as exc:  # the panel shows it; the bake itself reports its own errors
             if not self.cancel_requested:
@@ -201,6 +212,16 @@ class BakeTimePredictor(Worker):
     @property
     def jobs(self):
         return self._jobs
+
+    def _check_memory(self, job):
+        """Raises MemoryError when the job's bake may not fit the free memory (MEMORY_MARGIN)."""
+        free = self._available() if self._available is not None else None
+        if job.memory is None or free is None:
+            return
+        needed, name = job.memory()
+        if needed * MEMORY_MARGIN > free:
+            raise MemoryError("%s's bake needs about %.1f GB of memory and %.1f GB are free: not sampled, "
+                              "its sample bakes would need nearly as much" % (name, needed / 1e9, free / 1e9))
 
     def _sample(self, index, job):
         arguments = job.arguments(lambda: self.cancel_requested)

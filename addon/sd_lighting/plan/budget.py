@@ -19,13 +19,15 @@ from . import cost
 SELECTION_SECONDS = 40.0   # the rays a selection's bake may spend at the defaults, all objects together
 
 
-def surface_area(positions, triangles):
-    """The area of a triangle mesh (positions [n, 3] in world space, triangles [t, 3])."""
+def surface_area(positions, triangles, block=1 << 20):
+    """The area of a triangle mesh (positions [n, 3] in world space, triangles [t, 3]), summed over
+    blocks of `block` triangles (a 10M-vertex mesh's corners at once would take gigabytes)."""
     positions, triangles = np.asarray(positions, dtype=np.float64), np.asarray(triangles).reshape(-1, 3)
-    if len(triangles) == 0:
-        return 0.0
-    a, b, c = (positions[triangles[:, k]] for k in range(3))
-    return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    area = 0.0
+    for first in range(0, len(triangles), block):
+        a, b, c = (positions[triangles[first:first + block, k]] for k in range(3))
+        area += float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    return area
 
 
 def shares(areas):

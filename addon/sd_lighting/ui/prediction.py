@@ -87,7 +87,8 @@ def sample_jobs(tasks):
     return [bake_time.SampleJob(lambda task=task: traced(task), lambda stop, task=task: arguments(task, stop), task,
                                 lambda sd, result, growth, task=task: fit_seconds(task, sd, result, growth),
                                 lambda task=task: lightmap.expected_texels(task.lightmap_size),
-                                lambda sd, stop, task=task, index=index: refinement(task, index, sd, stop))
+                                lambda sd, stop, task=task, index=index: refinement(task, index, sd, stop),
+                                lambda task=task: (task.predicted_bytes(), task.object_name))
             for index, task in enumerate(tasks)]
 
 
@@ -105,7 +106,8 @@ def start(context):
         tasks, _ = prepare.prepare(context, context.selected_objects, unwrap=False)
     except BakeError:
         return None
-    predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1)
+    predictor = bake_time.BakeTimePredictor(native.get(), sample_jobs(tasks), os.cpu_count() or 1,
+                                            cost.available_bytes)
     for old in list(_predictors)[:max(len(_predictors) - _KEPT + 1, 0)]:
         _predictors.pop(old).cancel()
     _predictors[key] = predictor

@@ -50,7 +50,8 @@ CRITERION_RAYS = 256   # rays per point of the test (at most the bake's)
 MAX_LEVELS = 4         # each level halves the edges it splits
 INTERPOLATION_SHARE = 0.5   # of the target error, what the interpolation may take (the module's doc)
 # Of the bake's own predicted error (truncation and rays), what the interpolation may keep: errors
-# add in quadrature, so refining below half of it lowers the total by under 12 % (README, Use, items 5 and 6).
+# add in quadrature, so refining below half of it lowers the total by under 12 % (README, Use,
+# items 5 and 6).
 BALANCE = 0.5
 BUMP_MEAN_SQUARE = 8.0 / 45.0   # an edge's bump over a triangle beside it (the module's doc)
 DEFAULT_MAX_VERTICES = 250_000   # the default vertex budget (test_cycles_parity, benchmark_refine)

@@ -39,9 +39,9 @@ ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each
 REFINE_SAMPLE = 512          # triangles whose refinement predicts the copy's
 SAMPLE_BUDGET = 5.0          # seconds a further round may take
 # A job whose bake is predicted to need more than the free memory over this is not sampled: its
-# sample bakes build the scene of the whole mesh, about as large as the bake's own (a 4M-vertex
-# sheet's prediction peaked at 9.3 GB, its bake at 10.6 GB: blender_tests/benchmark_scale.py), and
-# the memory model runs up to 1.4x low for an open mesh that bakes a reverse copy of each face.
+# sample bakes build the scene of the whole mesh, nearly as large as the bake's own, and the memory
+# model runs low for an open mesh that bakes a reverse copy of each face (README, Accuracy against
+# cost, Scale).
 MEMORY_MARGIN = 1.5
 
 

@@ -158,36 +158,33 @@ vec3 sd_light_at(vec3 d)
 /* L~(g R d) from the band-limited texture of the unrotated L~: cube faces by bilinear cell
  * (addon/sd_lighting/live/band_limited_map.py, whose lookup() this is): the face of e = g R d's
  * largest component, (u, v) the other two over it, and the cell of the four texel centres around
- * them, three texels holding their RGB. Texel k of a face is centred at -1 + (k - 0.5) 2 / n,
- * n = SD_BAND_LIMITED_CELLS - 1; the gutter (k = 0, n + 1) continues the face past its edges. */
+ * them, two texels holding their RGB as 16-bit codes in 24-bit integer floats.
+ * Texel k of a face is centred at -1 + (k - 0.5) 2 / n, n = SD_BAND_LIMITED_CELLS - 1; the gutter
+ * (k = 0, n + 1) continues the face past its edges. The face is chosen by selects, not branches:
+ * a software rasteriser runs every branch its lanes take. */
 vec3 sd_light_at(vec3 d)
 {
   vec3 e = mat3(sd.local_to_environment) * d;
   vec3 a = abs(e);
-  int face;
-  vec2 uv;
-  if (a.x >= a.y && a.x >= a.z) {
-    face = (e.x < 0.0) ? 1 : 0;
-    uv = e.yz / a.x;
-  }
-  else if (a.y >= a.z) {
-    face = (e.y < 0.0) ? 3 : 2;
-    uv = e.xz / a.y;
-  }
-  else {
-    face = (e.z < 0.0) ? 5 : 4;
-    uv = e.xy / a.z;
-  }
+  bool x_major = a.x >= a.y && a.x >= a.z;
+  bool y_major = !x_major && a.y >= a.z;
+  float major = x_major ? e.x : (y_major ? e.y : e.z);
+  vec2 uv = (x_major ? e.yz : (y_major ? e.xz : e.xy)) / abs(major);
+  int face = (x_major ? 0 : (y_major ? 2 : 4)) + ((major < 0.0) ? 1 : 0);
   vec2 t = (uv + vec2(1.0)) * (0.5 * float(SD_BAND_LIMITED_CELLS - 1)) + vec2(0.5);
   vec2 corner = clamp(floor(t), vec2(0.0), vec2(float(SD_BAND_LIMITED_CELLS - 1)));
   vec2 f = t - corner;
-  ivec2 cell = ivec2(3 * int(corner.x), face * SD_BAND_LIMITED_CELLS + int(corner.y));
-  vec4 p = texelFetch(sd_band_limited_texture, cell, 0);
-  vec4 q = texelFetch(sd_band_limited_texture, cell + ivec2(1, 0), 0);
-  vec4 r = texelFetch(sd_band_limited_texture, cell + ivec2(2, 0), 0);
-  vec3 bottom = mix(p.xyz, vec3(p.w, q.xy), f.x);
-  vec3 top = mix(vec3(q.zw, r.x), r.yzw, f.x);
-  return mix(bottom, top, f.y);
+  ivec2 cell = ivec2(2 * int(corner.x), face * SD_BAND_LIMITED_CELLS + int(corner.y));
+  /* each texel: (low, high) words of the cell's bottom row, then of its top row, 24 bits each */
+  uvec4 w0 = uvec4(texelFetch(sd_band_limited_texture, cell, 0));
+  uvec4 w1 = uvec4(texelFetch(sd_band_limited_texture, cell + ivec2(1, 0), 0));
+  /* codes A, B, C of both rows at once: texel 0 holds r0 r1 g0, texel 1 g1 b0 b1 (x = 0, 1) */
+  vec2 r0 = vec2(w0.xz & 0xffffu), r1 = vec2((w0.xz >> 16) | ((w0.yw & 0xffu) << 8)), g0 = vec2(w0.yw >> 8);
+  vec2 g1 = vec2(w1.xz & 0xffffu), b0 = vec2((w1.xz >> 16) | ((w1.yw & 0xffu) << 8)), b1 = vec2(w1.yw >> 8);
+  vec2 r = mix(r0, r1, f.x);   /* (bottom, top) */
+  vec2 g = mix(g0, g1, f.x);
+  vec2 b = mix(b0, b1, f.x);
+  return (mix(vec3(r.x, g.x, b.x), vec3(r.y, g.y, b.y), f.y) - vec3(32768.0)) * sd.band_limited_scale.x;
 }
 
 #endif

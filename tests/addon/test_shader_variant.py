@@ -75,7 +75,7 @@ def test_band_limited_texture_variant(sdnative):
     cells = band_limited_map.side(8) + 1
     assert defines["SD_BAND_LIMITED_CELLS"] == str(cells) and "SD_EQUIRECT_MAP" not in defines
     assert variant.samplers() == [(0, "sd_data"), (2, "sd_band_limited_texture")]
-    assert band_limited_map.texture_size(8) == (3 * cells, 6 * cells)
+    assert band_limited_map.texture_size(8) == (2 * cells, 6 * cells)
 
 
 def test_every_define_and_field_is_one_the_glsl_uses_and_vice_versa(glsl_source, sdnative):

@@ -185,13 +185,13 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     source = source or environment.source(scene)
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
     prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
+    textures = {}
+    if data.uses_band_limited_texture:
+        textures[BAND_LIMITED_TEXTURE_SAMPLER[1]], kwargs["band_limited_scale"] = gpu_shading.band_limited_texture(
+            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
     block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
                              albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None,
                              strength=source.strength, **kwargs)
-    textures = {}
-    if data.uses_band_limited_texture:
-        textures[BAND_LIMITED_TEXTURE_SAMPLER[1]] = gpu_shading.band_limited_texture(
-            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
     if data.variant.prefiltered_lookup:
         textures[PREFILTERED_SAMPLER[1]] = prefiltered
     if not wait:

@@ -54,7 +54,7 @@ BACKGROUND_SAMPLER = "sd_environment"
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
 _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
-_band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> GPUTexture
+_band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> (GPUTexture, scale)
 _BASIS_BLOCK = 16384          # directions per SH basis evaluated at once for that texture
 _prefiltered_textures = {}    # source key -> GPUTexture
 _brdf_table = []              # the GPUTexture of environment_brdf_table, once made
@@ -170,23 +170,24 @@ def float_texture(texels):
 
 def band_limited_texture(source, light):
     """The band-limited environment L~ of the unrotated coefficients `light` ([(s+1)^2, 3]: the
-    source's, strength and ringing window applied, drawing.shading_light) as the RGBA32F cell
-    texture of live/band_limited_map.py (cached per source and coefficients)."""
+    source's, strength and ringing window applied, drawing.shading_light) as (the RGBA32F cell
+    texture of live/band_limited_map.py, its scale: the block's band_limited_scale), cached per
+    source and coefficients."""
     light = np.ascontiguousarray(light, dtype=np.float64)
     order = int(round(np.sqrt(light.shape[0]))) - 1
     width, height = band_limited_map.texture_size(order)
     key = (source.key, light.tobytes(), width, height)
-    texture = _band_limited_textures.get(key)
-    if texture is None:
+    cached = _band_limited_textures.get(key)
+    if cached is None:
         n = band_limited_map.side(order)
         directions = band_limited_map.texel_directions(n).reshape(-1, 3)
         # in blocks: the basis of every texel at once would be (n + 2)^2 6 (s + 1)^2 floats (1.9 GB
         # at s = 16), on the thread that draws
         faces = np.concatenate([native.get().sh_basis(order, directions[start:start + _BASIS_BLOCK]) @ light
                                 for start in range(0, len(directions), _BASIS_BLOCK)])
-        texture = _texture(width, height, band_limited_map.cell_texels(faces.reshape(6, n + 2, n + 2, 3)))
-        _band_limited_textures[key] = texture
-    return texture
+        texels, scale = band_limited_map.cell_texels(faces.reshape(6, n + 2, n + 2, 3))
+        cached = _band_limited_textures[key] = (_texture(width, height, texels), scale)
+    return cached
 
 
 def prefiltered_layout():
@@ -466,7 +467,8 @@ class ObjectData:
         return dict(albedo=rows, **({"lobe_weights": weights} if weighted else {}))
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
-                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0):
+                    exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0,
+                    band_limited_scale=1.0):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
@@ -477,7 +479,7 @@ class ObjectData:
         the object's materials.object_albedos (a slot without one: the 0.8 default surface);
         prefiltered: whether the prefiltered atlas is there to draw with (the truncated lobe
         meanwhile), for data made with the prefiltered lookup; strength: the environment's, which
-        the atlas is without. The
+        the atlas is without; band_limited_scale: that of the band-limited texture's codes. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
@@ -492,6 +494,8 @@ class ObjectData:
                   "light": light, "lobe": self.lobe_factors()}
         if self.variant.band_limited_texture or self.variant.prefiltered_lookup:
             values["local_to_environment"] = local_to_environment
+        if self.variant.band_limited_texture:
+            values["band_limited_scale"] = (band_limited_scale,)
         if self.variant.prefiltered_lookup:
             values["prefiltered_scale"] = (strength,)
         if self.designs:

@@ -199,7 +199,7 @@ class Variant:
             d["SD_VERTEX_TARGET"] = "1"
         if self.band_limited_texture:
             d["SD_BAND_LIMITED_TEXTURE"] = "1"
-            d["SD_BAND_LIMITED_CELLS"] = str(self.band_limited_texture[0] // 3)
+            d["SD_BAND_LIMITED_CELLS"] = str(self.band_limited_texture[0] // 2)
         if self.material_count:
             d["SD_ALBEDO"] = "1"
             if self.material_slots:
@@ -293,6 +293,8 @@ class Variant:
                   BlockField("lobe", "vec4", self.lobe_vec4s * self.lobe_count)]
         if self.band_limited_texture or self.prefiltered_lookup:
             fields.append(BlockField("local_to_environment", "mat4"))  # g R: the textures are unrotated
+        if self.band_limited_texture:
+            fields.append(BlockField("band_limited_scale", "vec4"))    # L~ per code of its texture
         if self.prefiltered_lookup:
             fields.append(BlockField("prefiltered_scale", "vec4"))     # the environment's strength
         if self.method.lobe_design:

@@ -378,15 +378,12 @@ def strip_vertices(package, sdnative, data, bakes, designs, hdri_path, config, s
 
 def stored_floats(package, method, arrays):
     """The floats per vertex a bake of the method stores, counted as its floats_per_vertex
-    (attributes.write: the ambient occlusion and the method's vec4 groups, or its designs at their
-    own length with a node count; sd_normal not), from the arrays it would store (shade_inputs'
-    keywords)."""
+    (the ambient occlusion and the method's array: bake_data.VertexArray.stored_floats; sd_normal
+    not), from the arrays it would store (shade_inputs' keywords)."""
+    bake_data = package.store.bake_data
     data = package.methods.get(method).data
-    if data is not None and data.packing == "design":
-        offsets = np.asarray(arrays["design_offsets"])
-        return 2 + 3 * offsets[-1] / (len(offsets) - 1)
-    groups = data.groups(arrays).shape[1] if data is not None and data.grouped else 0
-    return 1 + 4 * groups
+    stored = [bake_data.AMBIENT_OCCLUSION] + ([data] if data not in (None, bake_data.AMBIENT_OCCLUSION) else [])
+    return sum(array.stored_floats(arrays) for array in stored)
 
 
 # ----------------------------------------------------------------------------------------------

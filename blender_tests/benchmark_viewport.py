@@ -13,7 +13,9 @@ depends on the node counts, not on the values.
 Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/benchmark_viewport.py -- --zip Z
      (or blender -b ...: the GPU then comes from a Workbench render)
 A second table compares every method per vertex at --methods-size vertices (100k), with
-synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs); the MSD
+synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs), each the
+median of ROUNDS interleaved rounds (a load elsewhere on this shared machine moved single runs'
+ratios by tens of percent); the MSD
 methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the band-limited
 texture (the band-limited texture option). It ends with MSD (13) and (12), SH and texture,
 as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) with the lobes a
@@ -22,7 +24,12 @@ from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth 
 Principled pair with the glossy lobe truncated per vertex against the prefiltered glossy light,
 per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4.
 
+A last table (--model PATH) bakes a real model for real, twice, with MSD (13) and PRT (8) at s = 4,
+s' = 2, 256 rays, and times both in interleaved rounds, L~ of MSD (13) as an SH sum and from the
+texture: its designs' node counts where the model puts them, neighbours alike or not.
+
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
+                  --model PATH (e.g. assimp's 2CylinderEngine.glb)
 """
 
 import os
@@ -36,11 +43,12 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 WIDTH, HEIGHT = 1280, 720
+ROUNDS = 3   # interleaved rounds of the every-method table, whose medians it quotes
 
 
 def options():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    out = {"sizes": [10000, 100000, 1000000], "frames": 5, "methods_size": 100000}
+    out = {"sizes": [10000, 100000, 1000000], "frames": 5, "methods_size": 100000, "model": None}
     for i, arg in enumerate(argv):
         if arg == "--sizes":
             out["sizes"] = [int(s) for s in argv[i + 1].split(",")]
@@ -48,6 +56,8 @@ def options():
             out["frames"] = int(argv[i + 1])
         elif arg == "--methods-size":
             out["methods_size"] = int(argv[i + 1])
+        elif arg == "--model":
+            out["model"] = argv[i + 1]
     return out
 
 
@@ -215,6 +225,44 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
               "".join("%20s" % ("%.2f (%.2fx)" % (1e3 * t, t / cells[0])) for t in cells), flush=True)
 
 
+def real_model_table(package, scene, view, path, frames):
+    """MSD (13) against PRT (8) on a real bake of the model at `path` (3 units across, at the
+    origin): each of two copies baked with one method, then both drawn in interleaved rounds."""
+    model = sdtest.sized_model(path, 3.0, (0.0, 0.0, 0.0))
+    copy = model.copy()
+    copy.data = model.data.copy()
+    scene.collection.objects.link(copy)
+    baked = {}
+    for method, obj in (("msd_visibility", model), ("prt_matrix", copy)):
+        sdtest.bake_settings(scene, method, 'LAMBERT', 4, 2, rays=256, select=[obj])
+        start = time.perf_counter()
+        assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}
+        baked[method] = (obj, time.perf_counter() - start)
+    counts = np.diff(package.store.attributes.read(package.store.baked.baked_mesh(model))["design_offsets"])
+    cases = (("msd_visibility", False), ("msd_visibility", True), ("prt_matrix", False))
+    settings = scene.sd_lighting
+    samples = {case: [] for case in cases}
+    for _ in range(ROUNDS):
+        for method, texture in cases:
+            settings.band_limited_texture = texture
+            obj = baked[method][0]
+            samples[method, texture].append(time_frames(
+                lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False), frames))
+    settings.band_limited_texture = False
+    times = {case: float(np.median(t)) for case, t in samples.items()}
+    print("\nMSD (13) against PRT (8) baked, %s, %d vertices, s = 4, s' = 2, 256 rays, Lambert, per vertex "
+          "(design nodes: mean %.1f, max %d; medians of %d interleaved rounds):" % (
+              os.path.basename(path), len(model.data.vertices), counts.mean(), counts.max(), ROUNDS))
+    print("%-44s %10s %10s %12s %10s" % ("", "bake (s)", "bytes/v", "frame (ms)", "/ PRT (8)"))
+    for method, texture in cases:
+        obj, seconds = baked[method]
+        label = package.methods.get(method).label + (
+            (", band-limited texture" if texture else ", L~ SH sum") if package.methods.get(method).band_limited_texture else "")
+        print("%-44s %10.1f %10.1f %12.2f %10.2f" % (label, seconds, obj["sd_bake"]["bytes_per_vertex"],
+                                                    1e3 * times[method, texture],
+                                                    times[method, texture] / times["prt_matrix", False]), flush=True)
+
+
 def main():
     import gpu
     args = sdtest.arguments()
@@ -262,24 +310,33 @@ def main():
     if opts["methods_size"]:
         positions, normals, triangles = heightfield(opts["methods_size"])
         draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)
-        t_uniform = time_frames(draw_uniform, opts["frames"])
-        print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms):"
-              % (len(positions), 1e3 * t_uniform))
-        print("%-44s %10s %12s %8s" % ("method", "bytes/v", "frame (ms)", "ratio"))
         settings = scene.sd_lighting
-        times = {}
-        for method in package.methods.METHODS:
-            obj = baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
-            stored = obj["sd_bake"]["bytes_per_vertex"]
-            textures = (False, True) if method.band_limited_texture else (False,)
-            for texture in textures:
+        objects = {method.id: baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
+                   for method in package.methods.METHODS}
+        cases = [(method.id, texture) for method in package.methods.METHODS
+                 for texture in ((False, True) if method.band_limited_texture else (False,))]
+        # in interleaved rounds, each case's median: a load elsewhere on the machine then falls on
+        # every case alike, not on the one it happened to meet
+        samples = {case: [] for case in cases + ["uniform"]}
+        for _ in range(ROUNDS):
+            samples["uniform"].append(time_frames(draw_uniform, opts["frames"]))
+            for method, texture in cases:
                 settings.band_limited_texture = texture
-                t = time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False),
-                                opts["frames"])
-                times[method.id, texture] = t
-                label = method.label + (", band-limited texture" if texture else "")
-                print("%-44s %10.1f %12.2f %8.1f" % (label, stored, 1e3 * t, t / t_uniform), flush=True)
-            settings.band_limited_texture = False
+                obj = objects[method]
+                samples[method, texture].append(time_frames(
+                    lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False), opts["frames"]))
+        settings.band_limited_texture = False
+        times = {case: float(np.median(t)) for case, t in samples.items()}
+        t_uniform = times["uniform"]
+        print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms; "
+              "medians of %d interleaved rounds):" % (len(positions), 1e3 * t_uniform, ROUNDS))
+        print("%-44s %10s %12s %8s" % ("method", "bytes/v", "frame (ms)", "ratio"))
+        for method, texture in cases:
+            label = package.methods.get(method).label + (", band-limited texture" if texture else "")
+            t = times[method, texture]
+            print("%-44s %10.1f %12.2f %8.1f" % (label, objects[method]["sd_bake"]["bytes_per_vertex"], 1e3 * t,
+                                                 t / t_uniform), flush=True)
+        for obj in objects.values():
             remove_object(package, obj)
         del batch
         width, height = package.live.band_limited_map.texture_size(4)
@@ -318,6 +375,8 @@ def main():
             print("%-28s" % method.label + "".join("%14.2f (%4.2fx)" % (1e3 * t, t / cells[0]) for t in cells),
                   flush=True)
         glossy_table(package, scene, view, (positions, normals, triangles), real_counts, opts["frames"])
+    if opts["model"]:
+        real_model_table(package, scene, view, opts["model"], opts["frames"])
     return 0
 
 

@@ -90,7 +90,7 @@ def main():
         settings.method = method
         settings.material_source = material
         settings.phong_exponent = sigma
-        result = bpy.ops.sd_lighting.bake()
+        result = bpy.ops.sd_lighting.bake(go_ahead=True)   # GPU = CPU here, not the confirmation
         name = "%s %s%s s=%d s'=%d" % (method, material.lower(),
                                        " %g" % sigma if material == "PHONG" else "", s, sv)
         if not checks.check(result == {'FINISHED'}, "bake " + name):

@@ -52,7 +52,9 @@ def main():
     files = mapped_files()
     module = [f for f in files if os.path.basename(f).startswith("sdnative")]
     embree = [f for f in files if os.path.basename(f).startswith("libembree3")]   # Blender 4.2+ maps its own 4
-    checks.check(len(module) == 1 and os.path.dirname(os.path.realpath(module[0])) == folder and
+    # both builds where the CPU runs x86-64-v3: native.py opens the portable one to ask cpuid
+    checks.check(module and all(os.path.dirname(os.path.realpath(f)) == folder for f in module) and
+                 os.path.realpath(package.native.get().__file__) in {os.path.realpath(f) for f in module} and
                  embree and all(os.path.dirname(os.path.realpath(f)) == folder for f in embree),
                  "the add-on's module runs on the Embree it carries",
                  "%s; %s" % (module, embree))

@@ -2,6 +2,7 @@
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_register.py -- --zip Z
 """
 
+import importlib.machinery
 import os
 import sys
 
@@ -33,7 +34,8 @@ def main():
     checks.check(os.path.dirname(sd.__file__) == os.path.dirname(package.__file__),
                  "sdnative is the zip's copy", sd.__file__)
     native = package.native
-    build = native.builds(native.cpu_features(), os.environ.get("SDNATIVE_BUILD"))[0]
+    portable = os.path.join(os.path.dirname(sd.__file__), native.PORTABLE + importlib.machinery.EXTENSION_SUFFIXES[0])
+    build = native.builds(native.supports_x86_64_v3(portable), os.environ.get("SDNATIVE_BUILD"))[0]
     checks.check(os.path.basename(sd.__file__).startswith(build + "."),
                  "sdnative is the build for this CPU (%s)" % build, sd.__file__)
     checks.check(os.path.isdir(package.live.gpu_shading.shader_directory()) and

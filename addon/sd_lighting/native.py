@@ -3,12 +3,14 @@
 The add-on zip carries `sdnative.cpython-3XX-*.so` next to this file, one per CPython it was built
 for (3.11; 3.13 for Blender 5.1+); the loader picks the one of the running Python by its ABI tag.
 Next to each may be `sdnative_x86_64_v3.cpython-3XX-*.so`, the same module compiled for x86-64-v3
-(AVX2, FMA: native/CMakeLists.txt), loaded instead where /proc/cpuinfo lists every feature of that
-level; SDNATIVE_BUILD=sdnative keeps the portable one. For development without a zip, the
+(AVX2, FMA: native/CMakeLists.txt), loaded instead where the CPU and OS run that level - as the
+portable build's `sd_cpu_supports_x86_64_v3` reads it with cpuid, called through ctypes before
+either is imported; SDNATIVE_BUILD=sdnative keeps the portable one. For development without a zip, the
 directory in the environment variable `SDNATIVE_PATH`, or the repository's `build/native/`, is
 searched instead.
 """
 
+import ctypes
 import importlib.machinery
 import importlib.util
 import os
@@ -27,38 +29,37 @@ def _candidate_directories():
     yield os.path.normpath(os.path.join(here, "..", "..", "build", "native"))
 
 
-# The x86-64-v3 level's features, with the v2 ones it includes, as /proc/cpuinfo names them (lzcnt
-# is "abm", sse3 "pni"): virtual machines may hide any of them.
-X86_64_V3_FEATURES = frozenset({"cx16", "lahf_lm", "popcnt", "pni", "ssse3", "sse4_1", "sse4_2",
-                                "avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
 PORTABLE, X86_64_V3 = "sdnative", "sdnative_x86_64_v3"
 
 
-def cpu_features(path="/proc/cpuinfo"):
-    """The first processor's feature flags (an empty set where the file cannot be read)."""
+def supports_x86_64_v3(portable_path):
+    """Whether this CPU and OS run x86-64-v3 code, by cpuid in the portable build at `portable_path`
+    (opened as a shared library, not imported: native/python/cpu_level.cpp); False where it cannot
+    tell."""
+    _add_dll_directory(portable_path)
     try:
-        with open(path, encoding="ascii", errors="replace") as f:
-            for line in f:
-                if line.startswith("flags"):
-                    return frozenset(line.partition(":")[2].split())
-    except OSError:
-        pass
-    return frozenset()
+        return bool(ctypes.CDLL(os.path.abspath(portable_path)).sd_cpu_supports_x86_64_v3())
+    except (OSError, AttributeError):
+        return False
 
 
-def builds(features, override=None):
-    """The module builds to try, best first: the x86-64-v3 one where `features` has that level
-    (and `override`, $SDNATIVE_BUILD, does not name the portable one), then the portable one."""
-    if override == PORTABLE or not X86_64_V3_FEATURES <= features:
+def builds(supports_v3, override=None):
+    """The module builds to try, best first: the x86-64-v3 one where the CPU runs it (and
+    `override`, $SDNATIVE_BUILD, does not name the portable one), then the portable one."""
+    if override == PORTABLE or not supports_v3:
         return [PORTABLE]
     return [X86_64_V3, PORTABLE]
+
+
+def _add_dll_directory(path):
+    if hasattr(os, "add_dll_directory"):   # Windows (untested): the Embree it carries lies beside it
+        os.add_dll_directory(os.path.dirname(os.path.abspath(path)))
 
 
 def load_file(path):
     """Imports the module file `path`, of either build: both define PyInit_sdnative, so the
     module is "sdnative" either way."""
-    if hasattr(os, "add_dll_directory"):   # Windows (untested): the Embree it carries lies beside it
-        os.add_dll_directory(os.path.dirname(os.path.abspath(path)))
+    _add_dll_directory(path)
     spec = importlib.util.spec_from_file_location("sdnative", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -73,7 +74,11 @@ def _load():
         if not os.path.isdir(directory):
             continue
         names = set(os.listdir(directory))
-        for build in builds(cpu_features(), os.environ.get("SDNATIVE_BUILD")):
+        if PORTABLE + suffix not in names:
+            continue
+        portable = os.path.join(directory, PORTABLE + suffix)
+        v3 = X86_64_V3 + suffix in names and supports_x86_64_v3(portable)
+        for build in builds(v3, os.environ.get("SDNATIVE_BUILD")):
             if build + suffix in names:
                 return load_file(os.path.join(directory, build + suffix))
     raise ImportError(

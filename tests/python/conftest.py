@@ -18,9 +18,10 @@ sys.path.insert(0, HERE)
 def _load_file(path):
     """Imports the module file `path` as "sdnative", where this CPU can run its build."""
     sys.path.insert(0, os.path.join(HERE, "..", "..", "addon"))
-    from sd_lighting import native   # which builds this CPU runs, by /proc/cpuinfo
-    build = os.path.basename(path).split(".", 1)[0]
-    if build not in native.builds(native.cpu_features()):
+    from sd_lighting import native   # which builds this CPU runs: cpuid in the portable build beside it
+    build, _, suffix = os.path.basename(path).partition(".")
+    portable = os.path.join(os.path.dirname(path), native.PORTABLE + "." + suffix)
+    if build not in native.builds(native.supports_x86_64_v3(portable)):
         pytest.exit("this CPU cannot run %s" % os.path.basename(path), returncode=77)
     sys.modules["sdnative"] = native.load_file(path)
 

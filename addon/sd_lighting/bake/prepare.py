@@ -119,15 +119,17 @@ def unwrap_lightmap(context, task):
         task.geometry.unwrap_seconds = time.perf_counter() - start
 
 
-def prepare(context, objects, settings_of=bake_settings, unwrap=True):
+def prepare(context, objects, rebake=False, unwrap=True):
     """What to bake (main thread): (BakeTasks, warnings). Objects that cannot be baked (not
     meshes, without faces, linked from a library) are left out, each with a warning; raises
     BakeError when none is left or the bake cannot start (no sdnative, no environment).
-    settings_of(scene, obj, env_source): the settings of an object's bake (bake_settings: the
-    panel's; recorded_settings: those of its last bake). unwrap: False leaves texture-space
+    rebake: each object is baked as its last bake was (recorded_settings, its share of the
+    selection's budget included), not with the panel's settings shared out over `objects`
+    (bake_settings, budget.shares). unwrap: False leaves texture-space
     bakes without their UVs (unwrap_lightmap: the bake-time prediction estimates the texels
     instead; a live re-bake unwraps only what it bakes)."""
     scene = context.scene
+    settings_of = recorded_settings if rebake else bake_settings
     depsgraph = context.evaluated_depsgraph_get()
     view_layer = context.view_layer
     if not native.available():
@@ -194,7 +196,7 @@ def prepare(context, objects, settings_of=bake_settings, unwrap=True):
     if not tasks:
         raise BakeError("nothing to bake: " + "; ".join(skipped) if skipped else
                         "select one or more mesh objects to bake")
-    if settings_of is bake_settings:   # a re-bake keeps the share its bake had (recorded_settings)
+    if not rebake:
         selection_vertices = int(scene.sd_lighting.refine_max_vertices)
         for task, share in zip(tasks, budget.shares(areas)):
             task.settings.update(refine_max_vertices=max(int(share * selection_vertices), 1),

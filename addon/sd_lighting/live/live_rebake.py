@@ -139,7 +139,7 @@ def _start(name):
     started = time.perf_counter()
     try:
         # the lightmap's unwrap only for a bake that changed (not, e.g., after every undo)
-        tasks, warnings = prepare.prepare(bpy.context, [obj], prepare.recorded_settings, unwrap=False)
+        tasks, warnings = prepare.prepare(bpy.context, [obj], rebake=True, unwrap=False)
         if tasks[0].inputs_hash() == baked.record(obj).inputs:
             return None
         prepare.unwrap_lightmap(bpy.context, tasks[0])

@@ -51,7 +51,7 @@ def _new(mesh, name, data_type, prop, values, dtype=np.float32):
 
 
 def _write_design(mesh, offsets, nodes, weights):
-    """Stores designs at their own length (bake_data.py); returns their bytes."""
+    """Stores designs at their own length (bake_data.py)."""
     import bpy
     counts = np.diff(np.asarray(offsets, dtype=np.int64))
     _new(mesh, bake_data.DESIGN_COUNT, 'INT', 'value', counts, np.int32)
@@ -61,7 +61,6 @@ def _write_design(mesh, offsets, nodes, weights):
     holder.vertices.add(len(weights))
     holder.vertices.foreach_set("co", bake_data.weighted_nodes(nodes, weights).ravel())
     holder[bake_data.DESIGN_TOTAL] = len(weights)
-    return 4 * len(counts) + 12 * len(weights)
 
 
 def write(mesh, normals, result):
@@ -70,21 +69,17 @@ def write(mesh, normals, result):
     reads (and the ambient occlusion, which every bake returns)."""
     remove_all(mesh)
     _new(mesh, NORMAL, 'FLOAT_VECTOR', 'vector', normals)
-    stored = 0
-    for array in bake_data.ARRAYS:
-        if not array.in_result(result):
-            continue
+    stored = [array for array in bake_data.ARRAYS if array.in_result(result)]
+    for array in stored:
         if array.packing == "design":
-            stored += _write_design(mesh, *(result[key] for key in array.keys))
+            _write_design(mesh, *(result[key] for key in array.keys))
         elif array.grouped:
             groups = array.groups(result)
             for index in range(groups.shape[1]):
                 _new(mesh, array.group_name(index), 'FLOAT_COLOR', 'color', groups[:, index])
-            stored += 4 * groups.size
         else:
             _new(mesh, array.attribute, 'FLOAT', 'value', result[array.keys[0]])
-            stored += 4 * len(mesh.vertices)
-    return stored / max(len(mesh.vertices), 1)
+    return 4 * sum(array.stored_floats(result) for array in stored)
 
 
 def _read(mesh, name, prop, components, dtype=np.float32):

@@ -119,6 +119,15 @@ class VertexArray:
             return (int(np.prod(self.shape(light_order, visibility_order))) + 3) // 4
         return 1
 
+    def stored_floats(self, arrays):
+        """Floats per vertex the array takes stored (store/attributes.write; a design's node count,
+        an int, as one float): one for a scalar, its vec4 groups, or a design at its own length -
+        three floats a node and the count."""
+        if self.packing == "design":
+            offsets = np.asarray(arrays[self.keys[0]])
+            return 1 + 3 * int(offsets[-1]) / max(len(offsets) - 1, 1)
+        return 4 * self.groups(arrays).shape[1] if self.grouped else 1
+
     def groups(self, arrays):
         """A scalar or coefficient array (its key in `arrays`, e.g. a bake result) as float32
         [N, G, 4] vec4 groups; a scalar is one group (value, 0, 0, 0)."""

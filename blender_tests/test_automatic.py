@@ -172,6 +172,14 @@ def main():
                      "a bake after the prediction takes over its choice (not measured again)")
     finally:
         package.plan.analysis.choose = measure
+    # another HDRI in the world's own Environment Texture is another prediction, not the old one's
+    # choice taken over
+    key = package.ui.prediction.settings_key(bpy.context)
+    texture = next(n for n in scene.world.node_tree.nodes if n.type == 'TEX_ENVIRONMENT')
+    forest, texture.image = texture.image, bpy.data.images.load(sdtest.hdri("sunrise.exr"))
+    checks.check(package.ui.prediction.settings_key(bpy.context) != key,
+                 "the prediction follows the world's image")
+    texture.image = forest
 
     # An override is kept per object; the rest is still chosen.
     resting.sd_lighting.use_method = True

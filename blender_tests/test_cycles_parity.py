@@ -32,6 +32,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/te
 import math
 import os
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
@@ -114,10 +115,11 @@ def cycles(scene, stem):
         samples *= 4
 
 
-def preview(scene, obj, refine, path, least_squares=True, lightmap=0):
+def preview(scene, obj, refine, path, least_squares=True, lightmap=0, before_bake=None):
     """Bakes the object at the panel's settings with Refine and Least Squares on or off, and
     with texture-space data of a lightmap of that side (0: none), and renders the preview: (the
-    image, the bake's `sd_bake`)."""
+    image, the bake's `sd_bake` with the operator's wall-clock seconds as "wall_seconds").
+    before_bake: None, or called once the settings are made and the object selected."""
     settings = scene.sd_lighting
     settings.refine = refine
     settings.least_squares = least_squares
@@ -125,12 +127,16 @@ def preview(scene, obj, refine, path, least_squares=True, lightmap=0):
     if lightmap:
         settings.lightmap_size = str(lightmap)
     sdtest.select_only([obj])
+    if before_bake is not None:
+        before_bake()
+    start = time.perf_counter()
     if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
         raise RuntimeError("the bake of %s failed" % obj.name)
+    seconds = time.perf_counter() - start
     settings.live_shading = True
     if bpy.ops.sd_lighting.render_preview(filepath=path, width=SIZE, height=SIZE) != {'FINISHED'}:
         raise RuntimeError("render_preview failed for " + path)
-    return sdtest.load_exr(path), dict(obj["sd_bake"])
+    return sdtest.load_exr(path), dict(obj["sd_bake"], wall_seconds=seconds)
 
 
 def compare(ours, theirs):
@@ -163,7 +169,7 @@ def error_image(path, theirs, images):
 
 def main():
     args = sdtest.arguments()
-    sdtest.install_addon(args.zip)
+    package = sdtest.install_addon(args.zip)
     os.makedirs(args.out, exist_ok=True)
     checks = sdtest.Checks("test_cycles_parity")
     names = os.environ.get("SD_PARITY_ASSETS", ",".join(ASSETS)).split(",")   # a part, by hand
@@ -194,11 +200,18 @@ def main():
             configurations = [(True, True)]
             if hdri == LADDER_HDRI:
                 configurations[:0] = ([(False, False)] if name in CAD else []) + [(False, True)]
+            predicted = []
+
+            def predict():   # the panel's bake time at the defaults, as the user is told it
+                predicted.append(package.ui.prediction.for_confirmation(bpy.context, wait=None).seconds)
+
             for refine, fit in configurations:
                 image, info = preview(scene, obj, refine, "%s_%s%s.exr" % (
-                    stem, "refined" if refine else "unrefined", "_fit" if fit else ""), fit)
+                    stem, "refined" if refine else "unrefined", "_fit" if fit else ""), fit,
+                    before_bake=predict if (refine, fit) == (True, True) else None)
                 rms, bias, black = compare(image, theirs)
                 results[refine, fit] = (image, rms, bias, black)
+                defaults_seconds = info["wall_seconds"]   # the defaults come last
                 print("%s: refine %s, least squares %s: %.1f %% RMS, bias %s %%, black %.2f %%; %s s = %d, "
                       "%d rays; %d vertices (%s unrefined, %s levels), bake %.2f s, %d bytes per vertex"
                       % (tag, "on " if refine else "off", "on " if fit else "off", 100 * rms,
@@ -212,6 +225,9 @@ def main():
             told = "%d -> %d" % (info["unrefined_vertices"], info["vertices"])
             checks.check(told in texts,
                          "%s: the panel tells what the refinement did" % tag, told)
+            ratio = defaults_seconds / predicted[0]
+            checks.check(ratio <= 2.0, "%s: the bake at the defaults takes at most twice its predicted time" % tag,
+                         "%.1f s against %.1f s predicted: %.2f x" % (defaults_seconds, predicted[0], ratio))
             rms, bias, black = results[True, True][1:]
             checks.check(rms <= ASSETS[name][2], "%s: within %.0f %% of Cycles at the defaults"
                          % (tag, 100 * ASSETS[name][2]), "%.1f %%" % (100 * rms))

@@ -14,6 +14,7 @@ from ..bake import geometry as geometry_module, job as job_module, least_squares
 from ..bake import task as task_module
 from ..errors import BakeError
 from ..plan import analysis, bake_time, cost
+from ..scene import environment
 from ..store.record import BakeRecord
 
 CHECKED_VERTICES = 20_000   # a script's bake of more mesh vertices waits for its predicted time
@@ -37,7 +38,11 @@ def settings_key(context):
              "environment_path", "least_squares", "texture_space", "lightmap_size", "refine",
              "refine_max_vertices")
     world = scene.world.name if scene.world is not None else ""
-    return tuple(getattr(settings, name) for name in names) + (world, meshes)
+    try:   # the world's own image: another HDRI in its Environment Texture is another choice and refinement
+        light = environment.source(scene).key
+    except environment.Unavailable:
+        light = None
+    return tuple(getattr(settings, name) for name in names) + (world, light, meshes)
 
 
 def sample_jobs(tasks):

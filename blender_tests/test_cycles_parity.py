@@ -202,8 +202,10 @@ def main():
                 configurations[:0] = ([(False, False)] if name in CAD else []) + [(False, True)]
             predicted = []
 
-            def predict():   # the panel's bake time at the defaults, as the user is told it
-                predicted.append(package.ui.prediction.for_confirmation(bpy.context, wait=None).seconds)
+            def predict():   # the panel's bake time at the defaults, once its sampling is done
+                predictor = package.ui.prediction.start(bpy.context)
+                predictor.join()
+                predicted.append(predictor.prediction().seconds)
 
             for refine, fit in configurations:
                 image, info = preview(scene, obj, refine, "%s_%s%s.exr" % (

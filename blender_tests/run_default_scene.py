@@ -14,8 +14,9 @@ paths.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/run_default_scene.py -- \
          --zip build/sd_lighting.zip --out out/
      (set BLENDER_USER_SCRIPTS to a scratch folder to keep the install out of ~/.config/blender)
-Options after --: --rays 1024 --hdri forest.exr --width 960 --height 540 --exposure -1
+Options after --: --hdri forest.exr --width 960 --height 540 --exposure -1
                   --cuts 72 (the ground's grid) --subdivisions 1 (Suzanne's Subdivision levels)
+                  --max-vertices N (the panel's Max Verts; 0, the default: the panel's own)
 """
 
 import math
@@ -32,10 +33,10 @@ import numpy as np  # noqa: E402
 
 def options():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    out = {"rays": 1024, "hdri": "forest.exr", "width": 960, "height": 540, "exposure": -1.0,
-           "cuts": 72, "subdivisions": 1}
+    out = {"hdri": "forest.exr", "width": 960, "height": 540, "exposure": -1.0,
+           "cuts": 72, "subdivisions": 1, "max_vertices": 0}
     for i, arg in enumerate(argv[:-1]):
-        key = arg.lstrip("-")
+        key = arg.lstrip("-").replace("-", "_")
         if key in out:
             out[key] = type(out[key])(argv[i + 1])
     return out
@@ -84,7 +85,8 @@ def build_scene(opts):
     settings = scene.sd_lighting   # the add-on's defaults: the automatic mode, material from the material
     settings.method = 'automatic'
     settings.material_source = 'MATERIAL'
-    settings.rays = opts["rays"]
+    if opts["max_vertices"]:
+        settings.refine_max_vertices = opts["max_vertices"]
     settings.live_shading = True
     sdtest.select_only([monkey, ground])
     return scene, mapping, monkey, ground

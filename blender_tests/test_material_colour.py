@@ -37,6 +37,10 @@ import numpy as np  # noqa: E402
 
 SIZE = 120
 BLOCK = 6
+# Cycles' samples per reference (a glossy one: the two seeds of sdtest.cycles_pair together). Its
+# noise over BLOCK x BLOCK blocks is about 0.5 % at these counts, well under the limits below;
+# each render's set-up is seconds, so fewer samples would save little more.
+SAMPLES = 256
 RED = (0.8, 0.15, 0.05, 1.0)
 GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, largest |bias| per channel
     ("plastic", RED, 0.3, 0.0, 0.03, 0.04),
@@ -116,7 +120,7 @@ def main():
         return sdtest.load_exr(path)
 
     ours = preview("colour_preview.exr")
-    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "colour_cycles.exr"), SIZE, 1024)
+    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "colour_cycles.exr"), SIZE, SAMPLES)
     red.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
     grid_link = ball.data.materials[1].node_tree.links[0]
     ball.data.materials[1].node_tree.links.remove(grid_link)
@@ -149,7 +153,7 @@ def main():
     sdtest.bake_settings(scene, 'unshadowed', 'LAMBERT', 8, rays=16, select=[facets])
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the flat-shaded icosphere")
     flat = preview("facets_preview.exr")
-    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "facets_cycles.exr"), SIZE, 1024)
+    cycles = sdtest.cycles_render(scene, os.path.join(args.out, "facets_cycles.exr"), SIZE, SAMPLES)
     facets.data.polygons.foreach_set("use_smooth", [True] * len(facets.data.polygons))
     facets.data.update()
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it shaded smooth")
@@ -222,7 +226,7 @@ def glossy(checks, package, scene, preview, out):
         ball.data.materials.clear()
         ball.data.materials.append(sdtest.principled_material(name, colour, roughness, metallic))
         stem = os.path.join(out, name.replace(" ", "_"))
-        cycles, noise = sdtest.cycles_pair(scene, stem, SIZE, 512, BLOCK)
+        cycles, noise = sdtest.cycles_pair(scene, stem, SIZE, SAMPLES, BLOCK)
         sdtest.bake_settings(scene, 'unshadowed', 'MATERIAL', 12, select=[ball])
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the %s sphere" % name)
         ours = preview(name.replace(" ", "_") + "_preview.exr")
@@ -269,7 +273,7 @@ def glossy(checks, package, scene, preview, out):
             # the world turned and tilted: the prefiltered lookup turns with it, as Cycles' does
             mapping = scene.world.node_tree.nodes["Mapping"]
             mapping.inputs["Rotation"].default_value = (0.4, 0.0, 1.9)
-            turned_cycles, _ = sdtest.cycles_pair(scene, stem + "_turned", SIZE, 512, BLOCK)
+            turned_cycles, _ = sdtest.cycles_pair(scene, stem + "_turned", SIZE, SAMPLES, BLOCK)
             turned = sdtest.block_averages(preview(name + "_turned_world.exr"), mask, BLOCK)
             mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.0)
             # the world's strength: applied in the shader, the atlas made once without it

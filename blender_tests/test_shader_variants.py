@@ -1,5 +1,5 @@
-"""Every shader variant compiles: on this Blender's GPU backend, and under glslang's strict front
-ends.
+"""Every shader variant compiles: on this Blender's GPU backend, and under glslang's strictest
+front end.
 
 Variants: every method x lobes (Lambert, Phong, Lambert + Phong; PRT (2) Lambert only) x orders
 (s, s') in ORDERS (0, 0 included: the smallest tables) x per-vertex / per-pixel x drawn /
@@ -20,15 +20,10 @@ gpu_shading exactly as the live shading builds it (defines, frame block, sampler
    the check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
    assembled the way Blender declares the create-info (version line, defines, the frame block,
    samplers, vertex inputs, interface, fragment output) before the add-on's GLSL, compiled by
-   glslang twice:
-   - as GLSL ES 3.20: no implicit conversions at all (an int where a float is expected, a float
-     literal without a decimal point in float context, mixed int/float arithmetic are errors) -
-     the rules the Metal backend's translation and the strictest drivers hold code to;
-   - as Vulkan GLSL 4.50 to SPIR-V (-V): the front end of Blender's Vulkan backend (glslang, via
-     shaderc), with gl_VertexID mapped to gl_VertexIndex as that backend does. (GLSL 4.50 itself
-     allows implicit int -> float conversions; the ES pass is the one that forbids them.)
-   5.0's Vulkan backend cannot be chosen headless: bpy ignores the gpu_backend preference in
-   background mode and creates an OpenGL context (seen on 5.0.1; 5.3 picks Vulkan itself).
+   glslang as GLSL ES 3.20: no implicit conversions at all (an int where a float is expected, a
+   float literal without a decimal point in float context, mixed int/float arithmetic are errors) -
+   the rules the Metal backend's translation and the strictest drivers hold code to. (The Vulkan
+   front end, glslang via shaderc, is step 1 on 5.3, which compiles every variant with it.)
 --quick (the quick tier; the full tier on 4.2 and 4.5, whose Mesa GLSL compiler the 5.0 run
 compiles every variant with): only the first variant to use each #define, sampler and vertex input.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_shader_variants.py -- --zip Z --out DIR [--quick]
@@ -139,14 +134,13 @@ def name(variant):
 # ----------------------------------------------------------------------------------------------
 # The stage sources as Blender assembles them from the create-info (gpu_shading._compile).
 
-def stage_source(package, variant, stage, dialect):
+ES_HEADER = ["#version 320 es", "precision highp float;", "precision highp int;",
+             "precision highp sampler2D;"]
+
+
+def stage_source(package, variant, stage):
     gs = package.live.gpu_shading
-    lines = []
-    if dialect == "es":
-        lines += ["#version 320 es", "precision highp float;", "precision highp int;",
-                  "precision highp sampler2D;"]
-    else:
-        lines += ["#version 450", "#define gl_VertexID gl_VertexIndex"]
+    lines = list(ES_HEADER)
     for key, value in variant.defines(package.native.get().sh_recurrence_constants).items():
         lines.append("#define %s %s" % (key, value))
     lines.append(variant.frame_struct())
@@ -165,13 +159,11 @@ def stage_source(package, variant, stage, dialect):
     return "\n".join(lines) + "\n" + (vertex if stage == "vert" else fragment)
 
 
-def background_stage_source(package, stage, dialect):
+def background_stage_source(package, stage):
     """The world background's stage as gpu_shading._background_shader declares it (its push
     constants as a uniform block)."""
     gs = package.live.gpu_shading
-    lines = (["#version 320 es", "precision highp float;", "precision highp int;",
-              "precision highp sampler2D;"] if dialect == "es" else ["#version 450"])
-    lines += ["#define SD_EQUIRECT_MAP %s" % gs.BACKGROUND_SAMPLER,
+    lines = ES_HEADER + ["#define SD_EQUIRECT_MAP %s" % gs.BACKGROUND_SAMPLER,
               "layout(std140, binding = 1) uniform sd_push { mat4 sd_inverse_view_projection; "
               "mat4 sd_to_environment; float sd_scale; };",
               "layout(binding = 0) uniform highp sampler2D %s;" % gs.BACKGROUND_SAMPLER]
@@ -186,29 +178,21 @@ def background_stage_source(package, stage, dialect):
 GLSLANG_BATCH = 40   # GLSL ES stage files per glslang process
 
 
-def glslang_errors(validator, paths, dialect):
-    """glslang's errors for each stage file of `paths` ([] where it accepts the file), from one
-    process for all of them: glslang sets up its built-in symbol tables once per process, most of
-    a small compile's time. As GLSL ES each file is compiled on its own; to SPIR-V (-V) the files of
-    one stage are linked into one module, so there `paths` are one program's vertex and fragment
-    stages. When the process fails, each file once more on its own says which fail and why."""
+def glslang_errors(validator, paths):
+    """glslang's errors for each stage file of `paths` ([] where it accepts the file), each compiled
+    on its own as GLSL ES, from one process for all of them: glslang sets up its built-in symbol
+    tables once per process, most of a small compile's time. When the process fails, each file
+    once more on its own says which fail and why."""
     def run(files):
-        command = [validator]
-        if dialect == "vulkan":
-            command += ["-V", "--target-env", "vulkan1.2", "-o", os.path.splitext(files[0])[0] + ".spv"]
-        done = subprocess.run(command + list(files), capture_output=True, text=True, timeout=600)
+        done = subprocess.run([validator] + list(files), capture_output=True, text=True, timeout=600)
         if done.returncode == 0:
             return []
         return [l for l in (done.stdout + done.stderr).splitlines()
                 if "ERROR" in l and "compilation terminated" not in l] or [done.stdout + done.stderr]
 
-    together = run(paths)
-    if not together:
+    if not run(paths):
         return [[] for _ in paths]
-    alone = [run([path]) for path in paths]
-    if not any(alone):   # only together (the stages linked): the first file says so
-        alone[0] = together
-    return alone
+    return [run([path]) for path in paths]
 
 
 BACKGROUND = object()   # the world background's program, beside the variants in the glslang jobs
@@ -253,35 +237,26 @@ def main():
     if validator is None:
         print("glslangValidator not found (Debian's glslang-tools): strict GLSL checks not run")
         return checks.summary()
-    for dialect, label in (("es", "GLSL ES 3.20 (no implicit conversions)"),
-                           ("vulkan", "Vulkan GLSL 4.50 to SPIR-V")):
-        start = time.perf_counter()
-        jobs = [(variant, stage) for variant in all_variants + [BACKGROUND] for stage in ("vert", "frag")]
-
-        def source(variant, stage):
-            if variant is BACKGROUND:
-                return background_stage_source(package, stage, dialect)
-            return stage_source(package, variant, stage, dialect)
-
-        with tempfile.TemporaryDirectory() as directory, ThreadPoolExecutor(os.cpu_count() or 2) as pool:
-            paths = []
-            for index, (variant, stage) in enumerate(jobs):
-                paths.append(os.path.join(directory, "%d.%s" % (index // 2, stage)))
-                with open(paths[-1], "w", encoding="utf-8") as f:
-                    f.write(source(variant, stage))
-            # jobs alternate vert, frag of one program: to SPIR-V one program per process
-            size = 2 if dialect == "vulkan" else GLSLANG_BATCH
-            batches = [paths[i:i + size] for i in range(0, len(paths), size)]
-            results = [errors for batch in pool.map(lambda batch: glslang_errors(validator, batch, dialect), batches)
-                       for errors in batch]
-            failed = ["%s %s: %s" % ("background" if variant is BACKGROUND else name(variant), stage,
-                                     " | ".join(errors[:3]))
-                      for (variant, stage), errors in zip(jobs, results) if errors]
-        for line in failed[:10]:
-            print("  " + line)
-        checks.check(not failed, "glslang accepts every variant and the background as %s (%.1f s)"
-                     % (label, time.perf_counter() - start),
-                     "%d of %d stages fail; first: %s" % (len(failed), len(jobs), failed[0] if failed else ""))
+    start = time.perf_counter()
+    jobs = [(variant, stage) for variant in all_variants + [BACKGROUND] for stage in ("vert", "frag")]
+    with tempfile.TemporaryDirectory() as directory, ThreadPoolExecutor(os.cpu_count() or 2) as pool:
+        paths = []
+        for index, (variant, stage) in enumerate(jobs):
+            paths.append(os.path.join(directory, "%d.%s" % (index // 2, stage)))
+            with open(paths[-1], "w", encoding="utf-8") as f:
+                f.write(background_stage_source(package, stage) if variant is BACKGROUND
+                        else stage_source(package, variant, stage))
+        batches = [paths[i:i + GLSLANG_BATCH] for i in range(0, len(paths), GLSLANG_BATCH)]
+        results = [errors for batch in pool.map(lambda batch: glslang_errors(validator, batch), batches)
+                   for errors in batch]
+        failed = ["%s %s: %s" % ("background" if variant is BACKGROUND else name(variant), stage,
+                                 " | ".join(errors[:3]))
+                  for (variant, stage), errors in zip(jobs, results) if errors]
+    for line in failed[:10]:
+        print("  " + line)
+    checks.check(not failed, "glslang accepts every variant and the background as GLSL ES 3.20 (no implicit "
+                 "conversions) (%.1f s)" % (time.perf_counter() - start),
+                 "%d of %d stages fail; first: %s" % (len(failed), len(jobs), failed[0] if failed else ""))
     return checks.summary()
 
 

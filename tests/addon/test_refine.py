@@ -105,6 +105,24 @@ def _synthetic_bake(signal, calls=None):
 WEIGHTS = refine.band_weights(np.eye(4, 3))   # order 1, L_00 = (1, 0, 0)
 
 
+def test_patches_are_connected_even_in_a_triangle_soup():
+    grid = _grid(16)
+    corners = grid.triangles.ravel()
+    soup = refine.Surface(grid.vertices[corners], grid.normals[corners], grid.positions[corners], corners,
+                          np.arange(len(corners)).reshape(-1, 3).astype(np.int32))
+    rows = soup.patches(100, 40, seed=3)
+    assert len(rows) == len(set(rows.tolist())) == 100
+    for patch in (rows[:40], rows[40:80]):   # each grown from its seed through shared (welded) corners
+        reached, welds = {int(patch[0])}, set(soup.weld[soup.triangles[patch[0]]].tolist())
+        for _ in patch:
+            for row in patch:
+                if row not in reached and welds & set(soup.weld[soup.triangles[row]].tolist()):
+                    reached.add(int(row))
+                    welds |= set(soup.weld[soup.triangles[row]].tolist())
+        assert reached == set(patch.tolist())
+    assert np.array_equal(soup.patches(10_000, 40), np.arange(len(soup.triangles)))   # all of a small mesh
+
+
 def test_small_errors_here_and_there_split_nothing():
     """Edges off by a little more than the target, on a small share of the area: the object's
     interpolation error is within its share of the target, so nothing is split."""

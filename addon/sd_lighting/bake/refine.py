@@ -41,6 +41,7 @@ UV, and their material slot and side (a corner copy carries one of each).
 This module is bpy-free: `Surface` holds the arrays, `refine` takes the bake as a callback.
 """
 
+from collections import deque
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -83,6 +84,39 @@ class Surface:
         return Surface(self.vertices[used], self.normals[used], self.positions[used], self.weld[used],
                        local.reshape(-1, 3).astype(triangles.dtype), pick(self.slots), pick(self.uvs),
                        pick(self.sides))
+
+    def patches(self, count, size, seed=0):
+        """The rows of `count` triangles (all of them, in order, when that is all) in patches of
+        up to `size` connected ones - sharing a welded vertex, so a triangle soup's too - each
+        grown breadth-first from a seed triangle drawn at random (seeded) among those not taken.
+        A refinement of a sample predicts the copy's only when the sample's triangles have their
+        neighbours: the split spreads to them (conforming, closing), and a triangle soup's index
+        runs are not neighbours (Wuson: runs of 64 refined 2.7 times where the copy grew 5.8)."""
+        triangles = np.asarray(self.triangles)
+        if count >= len(triangles):
+            return np.arange(len(triangles))
+        welds = np.asarray(self.weld)[triangles]
+        corners = np.argsort(welds.ravel(), kind="stable")   # the triangles at each weld id
+        starts = np.searchsorted(welds.ravel()[corners], np.arange(int(welds.max()) + 2))
+        taken = np.zeros(len(triangles), dtype=bool)
+        rows = []
+        for start in np.random.default_rng(seed).permutation(len(triangles)):
+            if len(rows) >= count:
+                break
+            if taken[start]:
+                continue
+            taken[start] = True
+            queue, grown = deque([int(start)]), 0
+            while queue and grown < size and len(rows) < count:
+                row = queue.popleft()
+                rows.append(row)
+                grown += 1
+                for weld in welds[row]:
+                    for neighbour in corners[starts[weld]:starts[weld + 1]] // 3:
+                        if not taken[neighbour]:
+                            taken[neighbour] = True
+                            queue.append(int(neighbour))
+        return np.array(rows, dtype=np.int64)
 
     def with_midpoints(self, edges, welded_edges):
         """This surface with one vertex appended at the middle of each edge [E, 2]; midpoints of

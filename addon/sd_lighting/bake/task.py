@@ -324,19 +324,20 @@ class BakeTask:
             levels.extend(timed)
         return refinement
 
-    def refinement_estimate(self, sd, rows, stop):
-        """The refinement the bake will make, predicted from the refinement of the copy's
-        triangles `rows` alone, against the rest of the copy and the occluders (any thread): a
-        RefinementEstimate, or None when the bake does not refine. Its time counts each level's
-        setup once and the rest per triangle; the copy grows as the sample did, within the vertex
-        budget. stop() -> True cancels (sdnative's BakeCancelled)."""
+    def refinement_estimate(self, sd, stop, seed=0):
+        """The refinement the bake will make, predicted from the refinement of a sample of the
+        copy's triangles alone (bake_time.REFINE_SAMPLE in patches of bake_time.REFINE_PATCH:
+        refine.Surface.patches, drawn with `seed`), against the rest of the copy and the occluders
+        (any thread): a RefinementEstimate, or None when the bake does not refine. Its time counts
+        each level's setup once and the rest per triangle; the copy grows as the sample did,
+        within the vertex budget. stop() -> True cancels (sdnative's BakeCancelled)."""
         if not self.refines:
             return None
         surface = self.geometry.surface()
         vertices_allowed = self.refine_budget()
-        rows = np.asarray(rows)
-        if len(surface.vertices) >= vertices_allowed or len(rows) == 0:   # at its budget already: not refined
+        if len(surface.vertices) >= vertices_allowed or len(surface.triangles) == 0:   # not refined
             return RefinementEstimate(0.0, 1.0, 1.0)
+        rows = surface.patches(bake_time.REFINE_SAMPLE, bake_time.REFINE_PATCH, seed)
         total = len(surface.triangles)
         unsampled = np.ones(total, dtype=bool)
         unsampled[rows] = False

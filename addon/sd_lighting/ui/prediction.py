@@ -81,9 +81,7 @@ def sample_jobs(tasks):
     def refinement(task, index, sd, stop):
         known = refinements.get(task.share_key) if task.share_key is not None else None
         if known is None:
-            rows = bake_time.sample_rows(len(task.geometry.triangles), bake_time.REFINE_SAMPLE, seed=index,
-                                         run=bake_time.RUN)
-            known = task.refinement_estimate(sd, rows, stop)
+            known = task.refinement_estimate(sd, stop, seed=index)
             if task.share_key is not None:
                 refinements[task.share_key] = known
         task.predicted_refinement = known   # for its memory

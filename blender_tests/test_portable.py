@@ -22,7 +22,7 @@ import run_default_scene  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-OPTIONS = {"rays": 64, "hdri": "forest.exr", "width": 160, "height": 90, "exposure": -1.0,
+OPTIONS = {"max_vertices": 2000, "hdri": "forest.exr", "width": 160, "height": 90, "exposure": -1.0,
            "cuts": 8, "subdivisions": 0}
 
 

@@ -13,9 +13,12 @@ gpu_shading exactly as the live shading builds it (defines, frame block, sampler
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
-   compiler accepts implicit int -> float conversions, as GLSL 4.x allows); bpy 5.3 defaults to
-   Vulkan (Mesa's lavapipe): Blender's own GLSL -> SPIR-V front end. run.py gives every run fresh
-   shader caches, so nothing comes from an earlier run.
+   compiler accepts implicit int -> float conversions, as GLSL 4.x allows): every variant. bpy 5.3
+   defaults to Vulkan (Mesa's lavapipe): Blender's own GLSL -> SPIR-V front end, about 0.7 s a
+   program; there one_per_layout's variants: each create-info Blender's Vulkan backend lays out
+   once, each #define once - the GLSL under every combination of #defines is what the OpenGL runs
+   and step 2 compile. run.py gives every run fresh shader caches, so nothing comes from an
+   earlier run.
 2. Strict GLSL (on the Blender 5.0 run only - the sources do not depend on the Blender that runs
    the check -, when glslangValidator, Debian's glslang-tools, is installed): each stage's source,
    assembled the way Blender declares the create-info (version line, defines, the frame block,
@@ -122,6 +125,21 @@ def one_per_define(package, all_variants):
     return chosen
 
 
+def one_per_layout(package, all_variants):
+    """The Vulkan backend's variants: one_per_define's, and the first with each create-info - its
+    samplers, vertex inputs, interface and frame block, from which Blender's Vulkan backend lays
+    out descriptor sets, push constants and locations."""
+    first = set(map(id, one_per_define(package, all_variants)))
+    layouts = set()
+    for variant in all_variants:
+        layout = (tuple(variant.samplers()), tuple(variant.vertex_inputs()), tuple(variant.interface()),
+                  variant.frame_struct())
+        if layout not in layouts:
+            layouts.add(layout)
+            first.add(id(variant))
+    return [variant for variant in all_variants if id(variant) in first]
+
+
 def name(variant):
     return "%s%s%s s=%d s'=%d%s%s%s" % (
         variant.method.id, " phong" if variant.glossy else "",
@@ -204,13 +222,16 @@ def main():
     package = sdtest.install_addon(args.zip)
     package.live.gpu_context.ensure()
     import gpu
-    print("GPU: %s, %s, %s" % (gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get")
-                                else "OPENGL", gpu.platform.renderer_get(), gpu.platform.version_get()))
+    backend = gpu.platform.backend_type_get() if hasattr(gpu.platform, "backend_type_get") else "OPENGL"
+    print("GPU: %s, %s, %s" % (backend, gpu.platform.renderer_get(), gpu.platform.version_get()))
     all_variants = list(variants(package))
     checks.check(len(all_variants) == N_VARIANTS, "variants enumerated", "%d" % len(all_variants))
     if args.quick:
         all_variants = one_per_define(package, all_variants)
         print("quick: %d variants, one per #define, sampler and vertex input" % len(all_variants))
+    elif backend == "VULKAN":
+        all_variants = one_per_layout(package, all_variants)
+        print("Vulkan: %d variants, one per create-info and #define" % len(all_variants))
 
     # 1. This Blender's GPU backend.
     failed, start = [], time.perf_counter()

@@ -29,7 +29,8 @@ one line per test and a summary; exits non-zero if any test fails, and with SKIP
 every selected test was skipped (CTest's SKIP_RETURN_CODE).
 
 `--quick` passes --quick to each script: the quick tier's part of the test where it has one
-(test_shader_variants: one variant per #define). `--no-numeric` passes --no-numeric: the scripts
+(test_shader_variants: one variant per #define; test_gpu_matches_cpu, test_material_colour,
+test_world_render: fewer cases, each script's doc says which). `--no-numeric` passes --no-numeric: the scripts
 leave out their version-independent numeric checks (test_scale, test_ringing, test_automatic),
 which the CTest suite runs on Debian's Blender only.
 `--benchmark` runs blender_tests/benchmark_viewport.py instead (prints the frame-time table).
@@ -226,8 +227,8 @@ def main():
     parser.add_argument("--main-job", metavar="DIR")
     parser.add_argument("--verbose", action="store_true", help="print every test's output")
     parser.add_argument("--quick", action="store_true",
-                        help="the quick tier's part of each test (scripts that have one: "
-                             "test_shader_variants); give it its own --out")
+                        help="the quick tier's part of each test (the scripts that have one say "
+                             "what it is); give it its own --out")
     parser.add_argument("--no-numeric", action="store_true",
                         help="leave out the version-independent numeric checks (scripts that have "
                              "them: test_scale, test_ringing, test_automatic)")

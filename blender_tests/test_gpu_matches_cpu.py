@@ -16,7 +16,9 @@ at least 256 x 128), is 4.3e-4 at s = 4, 4.7e-4 at s = 6, 4.8e-4 at s = 8 (fores
 weighted average of L~ at the nodes; measured on B here: 1.3e-4 .. 2.3e-4 at s = 4, 6 and
 3.7e-4 at s = 8. 1e-3 (twice the pointwise error) leaves room for other scenes and float32, and
 still fails on a wrong orientation, row order, rotation, seam or pole (errors of O(1)).
-Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/test_gpu_matches_cpu.py -- --zip Z
+--quick (the quick tier): QUICK_CASES, each method once (at its higher orders where it has them) and
+the material's two lobes once.
+Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/test_gpu_matches_cpu.py -- --zip Z [--quick]
 """
 
 import os
@@ -29,7 +31,7 @@ import bpy  # noqa: E402
 
 TOLERANCE = 1e-3
 TEXTURE_TOLERANCE = 1e-3
-CASES = [  # (method, lobe, sigma, s, s')
+BASIC_CASES = [  # (method, lobe, sigma, s, s')
     ("unshadowed", "LAMBERT", 1.0, 4, 2),
     ("unshadowed", "PHONG", 8.0, 4, 2),
     ("ambient_occlusion", "LAMBERT", 1.0, 4, 2),
@@ -43,13 +45,15 @@ CASES = [  # (method, lobe, sigma, s, s')
     ("msd_visibility", "LAMBERT", 1.0, 4, 2),
     ("msd_visibility", "PHONG", 8.0, 4, 2),
     ("msd_visibility", "PHONG", 50.0, 4, 2),
-    # higher orders: bigger SH tables, Gaunt lists, lobe designs and per-vertex designs
+]
+HIGHER_ORDER_CASES = [  # bigger SH tables, Gaunt lists, lobe designs and per-vertex designs
     ("unshadowed", "PHONG", 30.0, 12, 0),
     ("prt_matrix", "PHONG", 20.0, 6, 3),
     ("prt_gaunt", "PHONG", 20.0, 6, 3),
     ("msd_lobe", "PHONG", 20.0, 8, 3),
     ("msd_visibility", "PHONG", 20.0, 6, 2),
-    # Lambert + Phong from the material (sigma from its roughness)
+]
+MATERIAL_CASES = [  # Lambert + Phong from the material (sigma from its roughness)
     ("unshadowed", "MATERIAL", 0.0, 4, 2),
     ("ambient_occlusion", "MATERIAL", 0.0, 4, 2),
     ("prt_matrix", "MATERIAL", 0.0, 4, 2),
@@ -57,6 +61,9 @@ CASES = [  # (method, lobe, sigma, s, s')
     ("msd_lobe", "MATERIAL", 0.0, 4, 2),
     ("msd_visibility", "MATERIAL", 0.0, 4, 2),
 ]
+CASES = BASIC_CASES + HIGHER_ORDER_CASES + MATERIAL_CASES
+QUICK_CASES = HIGHER_ORDER_CASES + [case for case in BASIC_CASES if case[1] == "LAMBERT" and case[0] not in
+                                    {higher[0] for higher in HIGHER_ORDER_CASES}] + MATERIAL_CASES[-1:]
 
 
 def main():
@@ -85,7 +92,7 @@ def main():
     view = package.scene.view.View.from_camera(scene.camera, depsgraph, 640, 480, scene)
 
     table = []
-    for method, material, sigma, s, sv in CASES:
+    for method, material, sigma, s, sv in QUICK_CASES if args.quick else CASES:
         settings.light_order, settings.visibility_order = s, sv
         settings.method = method
         settings.material_source = material

@@ -336,7 +336,9 @@ class Test:
         image = bpy.data.images.load(path)
         try:
             width, height = image.size
-            pixels = np.array(image.pixels[:], dtype=np.float32).reshape(height, width, 4)
+            pixels = np.empty(height * width * 4, dtype=np.float32)
+            image.pixels.foreach_get(pixels)   # pixels[:] is a list of millions of floats: seconds
+            pixels = pixels.reshape(height, width, 4)
         finally:
             bpy.data.images.remove(image)
             os.remove(path)

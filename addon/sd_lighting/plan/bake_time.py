@@ -13,9 +13,7 @@ the first predicts within SAMPLE_BUDGET (each round builds the scene again, 13 s
 millions of triangles); the line through the two separates the vertices' time from the fixed
 cost. A refinement before the bake (bake/refine.py) is predicted first, by refining REFINE_SAMPLE
 of the copy's triangles (all of a small one), in connected patches of REFINE_PATCH
-(refine.Surface.patches),
-against the rest: its time, and how many vertices the
-bake will trace (a low-poly model of 1,140 vertices is refined to 69,271, and its bake took 50
+(refine.Surface.patches), against the rest: its time, and how many vertices the bake will trace (a low-poly model of 1,140 vertices is refined to 69,271, and its bake took 50
 times what its unrefined vertices predicted). Each object adds TASK_SECONDS of work around its bake.
 While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
 so within a second of them.
@@ -39,8 +37,7 @@ RUN = 64                     # consecutive triangles sampled together
 TASK_SECONDS = 0.05
 ROUNDS = (2, 16, 128, 1024)  # triangles per sample round (about 3 vertices each): the first, then one more
 # Triangles whose refinement predicts the copy's, in connected patches: the refinement follows
-# shadow edges, which few patches may miss (Wuson under sunrise, four seeds: growth 1.1 - 2.3 with
-# 512 in patches of 64, 1.7 - 1.9 with 2048 in patches of 32, against 1.86).
+# shadow edges, which a few large patches may miss (README, Use: the predicted bake time).
 REFINE_SAMPLE = 2048
 REFINE_PATCH = 32
 SAMPLE_BUDGET = 5.0          # seconds a further round may take

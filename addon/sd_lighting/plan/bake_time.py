@@ -13,8 +13,9 @@ the first predicts within SAMPLE_BUDGET (each round builds the scene again, 13 s
 millions of triangles); the line through the two separates the vertices' time from the fixed
 cost. A refinement before the bake (bake/refine.py) is predicted first, by refining REFINE_SAMPLE
 of the copy's triangles (all of a small one), in connected patches of REFINE_PATCH
-(refine.Surface.patches), against the rest: its time, and how many vertices the bake will trace (a low-poly model of 1,140 vertices is refined to 69,271, and its bake took 50
-times what its unrefined vertices predicted). Each object adds TASK_SECONDS of work around its bake.
+(refine.Surface.patches), against the rest: its time, and how many vertices the bake will trace
+(a low-poly model of 1,140 vertices is refined to 69,271, and its bake took 50 times what its
+unrefined vertices predicted). Each object adds TASK_SECONDS of work around its bake.
 While a round's rays run, their progress gives a lower bound, so a bake that takes hours says
 so within a second of them.
 

@@ -2,5 +2,5 @@
 # (tests/fuzz/CMakeLists.txt) and for the CTest tests that run them (tests/CMakeLists.txt).
 set(SD_FUZZERS fuzz_environment_file fuzz_environment_pixels fuzz_visibility_bake fuzz_reference
     fuzz_weighted_design fuzz_shading)
-# Seconds each target runs in the test command.
-set(SD_FUZZ_SECONDS 20)
+# Seconds each target runs in the test command (longer by hand: README, Testing).
+set(SD_FUZZ_SECONDS 10)

@@ -36,8 +36,8 @@ def supports_x86_64_v3(portable_path):
     """Whether this CPU and OS run x86-64-v3 code, by cpuid in the portable build at `portable_path`
     (opened as a shared library, not imported: native/python/cpu_level.cpp); False where it cannot
     tell."""
-    _add_dll_directory(portable_path)
-    try:
+    try:   # on Windows a missing folder makes add_dll_directory raise, as a missing file CDLL
+        _add_dll_directory(portable_path)
         return bool(ctypes.CDLL(os.path.abspath(portable_path)).sd_cpu_supports_x86_64_v3())
     except (OSError, AttributeError):
         return False

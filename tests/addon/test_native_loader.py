@@ -44,6 +44,14 @@ def test_a_module_that_cannot_be_opened_answers_no(tmp_path):
     assert native.supports_x86_64_v3(str(not_a_library)) is False
 
 
+def test_a_folder_windows_cannot_add_answers_no(tmp_path, monkeypatch):
+    def add_dll_directory(path):   # Windows' answer for a folder that is not there
+        raise FileNotFoundError(path)
+
+    monkeypatch.setattr(native.os, "add_dll_directory", add_dll_directory, raising=False)
+    assert native.supports_x86_64_v3(str(tmp_path / "gone" / "sdnative.pyd")) is False
+
+
 def test_the_v3_build_comes_first_only_where_the_cpu_runs_it():
     assert native.builds(True) == [native.X86_64_V3, native.PORTABLE]
     assert native.builds(False) == [native.PORTABLE]

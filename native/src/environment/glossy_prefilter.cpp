@@ -5,7 +5,6 @@
 #include "sdlighting/limits.h"
 
 #include "environment/texel_layout.h"
-#include "util/orthonormal_basis.h"
 #include "util/parallel_for.h"
 
 #include <glm/geometric.hpp>
@@ -15,6 +14,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace sd {
 namespace {
@@ -94,19 +94,29 @@ std::vector<Environment> source_pyramid(const Environment& environment) {
   return pyramid;
 }
 
-/// The map at the unit direction d: bilinear between the four nearest texel centres of an equirect
-/// map (wrapped at the seam, clamped at the poles), the nearest texel of a cube map.
-glm::dvec3 filtered_radiance(const Environment& map, const glm::dvec3& d) {
-  if (map.layout() != EnvironmentLayout::Equirect) return map.radiance(d);
+/// A direction's place on an equirect map of any size: u = (π − φ) / 2π, the column as a fraction
+/// of the width (any real: it wraps), and v = θ / π, the row's.
+struct EquirectPoint {
+  double u, v;
+};
+
+EquirectPoint equirect_point(const glm::dvec3& d) {
+  return {(kPi - std::atan2(d.y, d.x)) / (2.0 * kPi), std::acos(std::clamp(d.z, -1.0, 1.0)) / kPi};
+}
+
+/// An equirect map at p: bilinear between the four nearest texel centres (wrapped at the seam,
+/// clamped at the poles).
+glm::dvec3 bilinear_radiance(const Environment& map, const EquirectPoint& p) {
   const int width = map.width(), height = map.height();
-  const double x = (kPi - std::atan2(d.y, d.x)) * width / (2.0 * kPi) - 0.5;
-  const double y = std::acos(std::clamp(d.z, -1.0, 1.0)) * height / kPi - 0.5;
+  const double x = p.u * width - 0.5, y = p.v * height - 0.5;
   const double x0 = std::floor(x), y0 = std::floor(y);
   const double fx = x - x0, fy = y - y0;
+  const float* pixels = map.pixels().data();
   const auto texel = [&](int i, int j) {
     i = ((i % width) + width) % width;
     j = std::clamp(j, 0, height - 1);
-    return map.texel_radiance(static_cast<int64_t>(j) * width + i);
+    const float* px = pixels + 3 * (static_cast<int64_t>(j) * width + i);
+    return glm::dvec3(px[0], px[1], px[2]);
   };
   const int i = static_cast<int>(x0), j = static_cast<int>(y0);
   const glm::dvec3 top = (1.0 - fx) * texel(i, j) + fx * texel(i + 1, j);
@@ -114,13 +124,34 @@ glm::dvec3 filtered_radiance(const Environment& map, const glm::dvec3& d) {
   return (1.0 - fy) * top + fy * bottom;
 }
 
-/// The pyramid's radiance at d on fractional level `level`: the two maps around it, blended.
-glm::dvec3 pyramid_radiance(const std::vector<Environment>& pyramid, const glm::dvec3& d, double level) {
+/// The map at the unit direction d: bilinear on an equirect map, the nearest texel of a cube map.
+glm::dvec3 filtered_radiance(const Environment& map, const glm::dvec3& d) {
+  return map.layout() == EnvironmentLayout::Equirect ? bilinear_radiance(map, equirect_point(d)) : map.radiance(d);
+}
+
+/// The pyramid's radiance at `at` (a direction, or an EquirectPoint on an equirect pyramid) on
+/// fractional level `level`: the two maps around it, blended.
+template <class Place>
+glm::dvec3 pyramid_radiance(const std::vector<Environment>& pyramid, const Place& at, double level) {
+  const auto read = [&at](const Environment& map) {
+    if constexpr (std::is_same_v<Place, EquirectPoint>)
+      return bilinear_radiance(map, at);
+    else
+      return filtered_radiance(map, at);
+  };
   const int below = static_cast<int>(level);
   const double t = level - below;
-  const glm::dvec3 a = filtered_radiance(pyramid[below], d);
-  return t > 0.0 && below + 1 < static_cast<int>(pyramid.size()) ? a + t * (filtered_radiance(pyramid[below + 1], d) - a)
-                                                                 : a;
+  const glm::dvec3 a = read(pyramid[below]);
+  return t > 0.0 && below + 1 < static_cast<int>(pyramid.size()) ? a + t * (read(pyramid[below + 1]) - a) : a;
+}
+
+/// The tangent frame of r (t1 = z × r / |z × r|, t2 = r × t1; r off the poles): it turns with r
+/// about the z axis, so along a row of an equirect level the lobe's samples are one pattern turned
+/// by the texels' φ, and on an equirect map each texel reads its row's first pattern shifted by
+/// whole columns (prefilter_ggx finds the pattern's places once per row).
+void azimuthal_frame(const glm::dvec3& r, glm::dvec3& t1, glm::dvec3& t2) {
+  t1 = glm::normalize(glm::dvec3(-r.y, r.x, 0.0));
+  t2 = glm::cross(r, t1);
 }
 
 /// A map's texels as the exact convolution reads them: direction, solid angle and radiance.
@@ -176,6 +207,7 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
     throw std::invalid_argument("prefilter_ggx: samples must be in [1, " + std::to_string(kMaxSamples) + "], got " +
                                 std::to_string(samples));
   const std::vector<Environment> pyramid = source_pyramid(environment);
+  const bool equirect = environment.layout() == EnvironmentLayout::Equirect;
   const double finest = 4.0 * kPi / static_cast<double>(environment.texel_count());
   const int coarsest = static_cast<int>(pyramid.size()) - 1;
   const int atlas_width = layout.atlas_width();
@@ -210,20 +242,34 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
       const int width = layout.level_width(k), height = layout.level_height(k);
       const auto origin = layout.level_origin(k);
       float* out = &atlas[(static_cast<size_t>(origin[1] + j) * atlas_width + origin[0]) * 3];
+      const bool sampled = k > 0 && layout.roughness(k) < kConvolutionRoughness;
+      const std::vector<LobeSample>& samples_k = level_samples[k];
+      // On an equirect map: the places of the row's first texel's samples (azimuthal_frame)
+      std::vector<EquirectPoint> first;
+      if (sampled && equirect) {
+        glm::dvec3 t1, t2;
+        const glm::dvec3 r = level_direction(0, j, width, height);
+        azimuthal_frame(r, t1, t2);
+        for (const LobeSample& s : samples_k)
+          first.push_back(equirect_point(s.direction.x * t1 + s.direction.y * t2 + s.direction.z * r));
+      }
       for (int i = 0; i < width; ++i) {
         const glm::dvec3 r = level_direction(i, j, width, height);
         glm::dvec3 sum(0.0);
         if (k == 0) {
           sum = pyramid_radiance(pyramid, r, level0_source);
-        } else if (layout.roughness(k) >= kConvolutionRoughness) {
+        } else if (!sampled) {
           sum = convolved(coarse_texels, r, std::max(std::pow(layout.roughness(k), 2), kMinAlpha));
         } else {
           glm::dvec3 t1, t2;
-          orthonormal_basis(r, t1, t2);
+          if (!equirect) azimuthal_frame(r, t1, t2);
+          const double shift = static_cast<double>(i) / width;   // φ_i − φ_0 = −2π i / width
           double weight = 0.0;
-          for (const LobeSample& s : level_samples[k]) {
-            const glm::dvec3 l = s.direction.x * t1 + s.direction.y * t2 + s.direction.z * r;
-            sum += s.weight * pyramid_radiance(pyramid, l, s.source_level);
+          for (size_t q = 0; q < samples_k.size(); ++q) {
+            const LobeSample& s = samples_k[q];
+            sum += s.weight * (equirect ? pyramid_radiance(pyramid, EquirectPoint{first[q].u + shift, first[q].v}, s.source_level)
+                                        : pyramid_radiance(pyramid, s.direction.x * t1 + s.direction.y * t2 + s.direction.z * r,
+                                                           s.source_level));
             weight += s.weight;
           }
           sum /= weight;

@@ -272,8 +272,9 @@ visibility_order: s' in [0, MAX_VISIBILITY_ORDER], or -1 (not requested).
 product_orders, design_orders: None or (s, s') with s in [0, MAX_TRANSFER_ORDER], s' in
     [0, MAX_VISIBILITY_ORDER].  transfer_order: s in [0, MAX_TRANSFER_ORDER], or -1.
 occluder_vertices (M, 3), occluder_triangles (K, 3): extra blocking geometry, both or neither.
-progress: None or a callable progress(done, total) (vertex counts), called about every 50 ms and
-    once at the end from the calling thread with the GIL held; returning False cancels the bake
+progress: None or a callable progress(done, total) (vertex counts; (0, 0) while the scene is built,
+    before any ray), called about every 50 ms and once at the end from the calling thread with the
+    GIL held; returning False cancels the bake
     (BakeCancelled); an exception it raises cancels the bake and propagates. Ctrl-C cancels too.
 threads: worker threads, 0 (default) = every hardware thread.
 return_rays: test hook, adds "ray_visibility" (bool (N, rays), V_r in vertex_ray_directions order).

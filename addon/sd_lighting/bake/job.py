@@ -73,7 +73,7 @@ class BakeJob(Worker):
                     raise sd.BakeCancelled("cancelled")
 
                 def task_progress(done, total, index=index):
-                    self.fraction = (index + (done / total if total else 1.0)) / count
+                    self.fraction = (index + (done / total if total else 0.0)) / count
                     return not self.cancel_requested
 
                 self.check_memory(task)

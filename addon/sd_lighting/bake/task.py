@@ -30,9 +30,10 @@ def above_horizon(arguments):
 
 
 def share(progress, start, end):
-    """progress(done, total) moving [start, end] of the caller's progress(done, total)."""
+    """progress(done, total) moving [start, end] of the caller's progress(done, total) (total 0:
+    nothing counted yet, as sdnative reports a bake's set-up)."""
     def shared(done, total):
-        return progress(start + (end - start) * (done / total if total else 1.0), 1.0)
+        return progress(start + (end - start) * (done / total if total else 0.0), 1.0)
     return shared
 
 
@@ -302,7 +303,7 @@ class BakeTask:
             level = len(timed)
 
             def level_progress(done, total):   # each level a share of one bar
-                return progress(level * total + done, refine.MAX_LEVELS * total)
+                return progress(level + (done / total if total else 0.0), refine.MAX_LEVELS)
 
             parts = [(rest_vertices, rest_triangles)] + list(others) + self.occluder_parts()
             others_vertices, other_triangles = geometry_module.join(parts)

@@ -243,12 +243,13 @@ class BakeTimePredictor(Worker):
                 self._running = (index, count, None, 0, len(vertices))
 
             def progress(done, total):
-                # the rays' start: the first vertex done (before it, the setup: no bound yet)
+                # the rays' start: the first report with the vertex count (before it, the set-up
+                # reports (0, 0): no bound yet)
                 with self._lock:
                     rays = self._running[2]
-                    if rays is None and done > 0:
+                    if rays is None and total > 0:
                         rays = time.perf_counter()
-                    self._running = (index, count, rays, done if rays is not None else 0, total)
+                    self._running = (index, count, rays, done, len(vertices))
                 return not self.cancel_requested
 
             result = self._sd.bake_transfer(vertices, normals, sample_triangles, progress=progress,

@@ -22,8 +22,8 @@ struct ReferenceOptions {
   int samples = 4096;       ///< sample pairs per vertex (each pair traces up to two rays)
   std::uint64_t seed = 0;   ///< the estimate depends on (seed, vertex) only, not on threads
   int threads = 0;          ///< 0: every hardware thread
-  /// As TransferOptions::progress, over the vertices (the calling thread then only reports);
-  /// returning false cancels (BakeCancelled).
+  /// As TransferOptions::progress, over the vertices ((0, 0) while the scene is built; the calling
+  /// thread then only reports); returning false cancels (BakeCancelled).
   std::function<bool(std::size_t done, std::size_t total)> progress;
   const std::atomic<bool>* cancel = nullptr;  ///< true cancels (BakeCancelled)
 };

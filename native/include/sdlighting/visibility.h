@@ -79,10 +79,12 @@ struct TransferOptions {
   /// occlusion, V~, M and the designs become those of a surface closed below, so a bake that
   /// stores only T (PRT eq. 2) is the one to use it.
   bool horizon = false;
-  /// Called from the calling thread only (which then bakes no vertex itself), once before the
-  /// first vertex, about every 50 ms and once more after the last vertex, with (vertices done,
-  /// vertex count); returning false cancels the bake (BakeCancelled). An exception it throws
-  /// cancels the bake and propagates once the workers have stopped.
+  /// Called from the calling thread only (which then bakes no vertex itself), about every 50 ms:
+  /// with (0, 0) while the scene and the ray origins are built, then once before the first vertex,
+  /// every 50 ms and once more after the last with (vertices done, vertex count) - the first call
+  /// with the count is where the rays' time starts (plan/bake_time.py bounds a bake's time from
+  /// it). Returning false cancels the bake (BakeCancelled). An exception it throws cancels the
+  /// bake and propagates once the workers have stopped.
   std::function<bool(std::size_t done, std::size_t total)> progress;
   /// Polled by the workers before every few vertices and by the calling thread; true cancels the
   /// bake (BakeCancelled).

@@ -318,10 +318,10 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   std::vector<SphericalDesign> designs(plan.design_degree >= 0 ? n : 0);
   const Outputs outputs{&bake, &designs};
 
-  // ---- the scene and the ray origins: a short first phase, shown as no vertex done yet ----
+  // ---- the scene and the ray origins: the first phase, reported as (0, 0) (TransferOptions::progress) ----
   ParallelOptions parallel(options.threads);
   parallel.cancel = options.cancel;
-  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, n); };
+  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, 0); };
   const TracedScene traced(vertices, units, triangles, occluders, parallel, options.offset_origins);
   bake.ray_origins = traced.object_space_origins();
   bake.setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

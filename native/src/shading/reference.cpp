@@ -46,7 +46,7 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
 
   ParallelOptions parallel(options.threads);
   parallel.cancel = options.cancel;
-  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, vertices.size()); };
+  if (options.progress) parallel.progress = [&](std::size_t, std::size_t) { return options.progress(0, 0); };
   const TracedScene traced(vertices, unit, triangles, occluders, parallel);  // the bake's origins
   parallel.progress = options.progress;
   const EnvironmentSampler sampler(environment);

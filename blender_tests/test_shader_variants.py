@@ -15,8 +15,8 @@ gpu_shading exactly as the live shading builds it (defines, frame block, sampler
    when headless). On bpy 4.2-5.0 and Debian's 3.4 headless this is OpenGL through Mesa (its GLSL
    compiler accepts implicit int -> float conversions, as GLSL 4.x allows): every variant. bpy 5.3
    defaults to Vulkan (Mesa's lavapipe): Blender's own GLSL -> SPIR-V front end, about 0.7 s a
-   program; there one_per_layout's variants: each create-info Blender's Vulkan backend lays out
-   once, each #define once - the GLSL under every combination of #defines is what the OpenGL runs
+   program; there one_per_layout's variants: each create-info's shape Blender's Vulkan backend
+   lays out once (with its largest frame block), each #define once - the GLSL under every combination of #defines is what the OpenGL runs
    and step 2 compile. run.py gives every run fresh shader caches, so nothing comes from an
    earlier run.
 2. Strict GLSL (on the Blender 5.0 run only - the sources do not depend on the Blender that runs
@@ -34,6 +34,7 @@ Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/te
 
 import importlib
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -126,18 +127,23 @@ def one_per_define(package, all_variants):
 
 
 def one_per_layout(package, all_variants):
-    """The Vulkan backend's variants: one_per_define's, and the first with each create-info - its
-    samplers, vertex inputs, interface and frame block, from which Blender's Vulkan backend lays
-    out descriptor sets, push constants and locations."""
-    first = set(map(id, one_per_define(package, all_variants)))
-    layouts = set()
+    """The Vulkan backend's variants: one_per_define's, and one with each create-info's shape - its
+    samplers, vertex inputs, interface and frame block's fields, from which Blender's Vulkan
+    backend lays out descriptor sets, push constants and locations -, the one whose frame block
+    holds the most array elements (the arrays' lengths change offsets, not the layout's code;
+    the largest block meets the backend's size limits; every length compiles under OpenGL and
+    glslang)."""
+    def elements(variant):
+        return sum(int(n) for n in re.findall(r"\[(\d+)\]", variant.frame_struct()))
+
+    largest = {}
     for variant in all_variants:
-        layout = (tuple(variant.samplers()), tuple(variant.vertex_inputs()), tuple(variant.interface()),
-                  variant.frame_struct())
-        if layout not in layouts:
-            layouts.add(layout)
-            first.add(id(variant))
-    return [variant for variant in all_variants if id(variant) in first]
+        shape = (tuple(variant.samplers()), tuple(variant.vertex_inputs()), tuple(variant.interface()),
+                 re.sub(r"\[\d+\]", "[]", variant.frame_struct()))
+        if shape not in largest or elements(variant) > elements(largest[shape]):
+            largest[shape] = variant
+    chosen = set(map(id, one_per_define(package, all_variants))) | set(map(id, largest.values()))
+    return [variant for variant in all_variants if id(variant) in chosen]
 
 
 def name(variant):

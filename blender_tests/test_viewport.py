@@ -1,13 +1,13 @@
 """The add-on in a running Blender UI (under Xvfb): the modal bake runs in a worker thread with
 progress while the UI keeps running, cancels on request leaving everything as it was, and the
 live shading's POST_VIEW handler draws the baked objects in the viewport with the values of the
-CPU evaluator for the viewport's own camera (read back from the viewport's framebuffer). Then the
-sidebar at Blender's default width, on the SD Lighting tab with a baked object active, is saved
-for review under --out: panel.png (the panels as they first open; panel_2.png... further down)
-and panel_open.png... (every sub-panel open). --quick (the quick tier): no screenshots, the sidebar's
-texts are still checked.
+CPU evaluator for the viewport's own camera (read back from the viewport's framebuffer), and the
+sidebar on the SD Lighting tab, at Blender's default width, fits every text of the panels.
+--screenshots (for review; not in the suite, where the pages took half the test's time): the
+sidebar with a baked object active is saved under --out: panel.png (the panels as they first
+open; panel_2.png... further down) and panel_open.png... (every sub-panel open).
 Run: xvfb-run -a blender --factory-startup --enable-event-simulate --python-exit-code 1 \
-         --python blender_tests/test_viewport.py -- --zip Z
+         --python blender_tests/test_viewport.py -- --zip Z [--out DIR --screenshots]
 (--enable-event-simulate lets the test press Esc; without it, it cancels with the Cancel button.)
 """
 
@@ -47,6 +47,7 @@ class Test:
     def __init__(self):
         self.checks = sdtest.Checks("test_viewport")
         self.args = sdtest.arguments()
+        self.screenshots = "--screenshots" in sys.argv
         self.package = sdtest.install_addon(self.args.zip)
         self.steps = self.run()
         self.ticks = 0
@@ -243,12 +244,12 @@ class Test:
                      "the world background leaves the shaded objects as they were",
                      "median %.2f / 255 over %d vertices" % (np.median(moved), len(moved)))
 
-    # -- the sidebar, for review
+    # -- the sidebar
     def sidebar(self):
-        """Screenshots of the sidebar at its default width on the SD Lighting tab, the baked ball
-        active and selected, the settings the bake's but for the method (Automatic, the default,
-        predicted in the background first): as the panels first open (panel.png), and with every
-        sub-panel open (panel_open.png), each page of it."""
+        """The sidebar at its default width on the SD Lighting tab, the baked ball active and
+        selected, the settings the bake's but for the method (Automatic, the default, predicted in
+        the background first): its texts fit; with --screenshots, its pages as the panels first
+        open (panel.png) and with every sub-panel open (panel_open.png)."""
         checks, package = self.checks, self.package
         if not getattr(bpy.app, "use_event_simulate", False):
             print("test_viewport: no sidebar screenshots (selecting its tab needs --enable-event-simulate)")
@@ -275,7 +276,7 @@ class Test:
             too_long = [text for text in sdtest.panel_texts() if width is not None and len(text) > width]
         checks.check(width is not None and not too_long, "every text of the panels fits a line of the "
                      "sidebar (%s characters)" % width, "; ".join(too_long[:3]))
-        if self.args.quick:
+        if not self.screenshots:
             return
         for _ in range(300):         # the automatic mode's prediction, measured in the background
             if package.ui.prediction.predicted_errors(bpy.context):

@@ -33,6 +33,9 @@ void bind_channel_design(pybind11::module_& m);
 /// Environment.prefiltered_ggx and environment_brdf: the split sum of glossy light (after bind_environment).
 void bind_glossy_prefilter(pybind11::module_& m);
 
+/// Environment.light_sources: the bright sources split off a map (after bind_environment).
+void bind_light_sources(pybind11::module_& m);
+
 /// Importance sampling of environment maps.
 void bind_environment_sampler(pybind11::module_& m);
 

@@ -49,6 +49,7 @@ Functions:
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
   Environment.prefiltered_ggx(...)     the map prefiltered by the GGX lobe per roughness (split sum)
+  Environment.light_sources(order)     its compact bright sources split off, and the remainder
   environment_brdf(n_dot_v, roughness)  the GGX lobe's directional albedo (A, B); environment_brdf_table
   environment_from_pixels(rgb), load_environment(path), load_cube_environment(faces)
                                         -> Environment (the last two not in the add-on's module): .sh(lmax), .band_limited(...), errors, designs
@@ -116,6 +117,7 @@ PYBIND11_MODULE(sdnative, m) {
   sdpy::bind_ringing(m);
   sdpy::bind_channel_design(m);
   sdpy::bind_glossy_prefilter(m);
+  sdpy::bind_light_sources(m);
   sdpy::bind_environment_sampler(m);
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);

@@ -376,3 +376,31 @@ def test_environment_brdf_and_its_table():
     assert (dielectric[:, 2:, 1] > table[:, 2:, 1]).all() and dielectric[0, 0, 1] < table[0, 0, 1]
     with pytest.raises(ValueError, match="ior must be 0"):
         sdnative.environment_brdf(0.5, 0.4, 512, ior=0.9)
+
+
+def test_light_sources_split_a_sun_off_and_give_back_the_remainder():
+    # a 2-degree sun at the zenith's side on a grey sky, through the binding
+    height, width = 128, 256
+    theta = (np.arange(height) + 0.5) * np.pi / height
+    phi = np.pi * (width - 2 * np.arange(width) - 1) / width
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    d = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    sun = np.array([0.6, 0.0, 0.8])
+    rgb = np.full((height, width, 3), 0.5)
+    rgb[d @ sun > np.cos(np.radians(3.0))] = (500.0, 400.0, 300.0)
+    env = sdnative.environment_from_pixels(rgb.astype(np.float32))
+    split = env.light_sources(8, 4)
+    assert len(split["sources"]) == 1 and split["threshold"] > 0.5
+    source = split["sources"][0]
+    assert np.degrees(np.arccos(np.dot(source["direction"], sun))) < 1.0
+    assert set(source) == {"direction", "major_axis", "major_radius", "minor_radius", "extent", "solid_angle",
+                           "power", "texels"}
+    remainder = split["remainder"]
+    for c in range(3):
+        assert remainder.mass[c] + source["power"][c] == pytest.approx(env.mass[c], rel=1e-9)
+    assert split["error_after"] < 0.1 * split["error_before"]
+    assert env.light_sources()["threshold"] == split["threshold"]   # the defaults: s = 8, four sources
+    with pytest.raises(ValueError, match="cube"):
+        sdnative.environment_from_cube_pixels(np.ones((6, 8, 8, 3), np.float32)).light_sources()
+    with pytest.raises(ValueError, match="max_sources"):
+        env.light_sources(8, 0)

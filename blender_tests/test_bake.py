@@ -1,5 +1,5 @@
 """Baking from the operator: the evaluated mesh, attributes, settings, all-or-nothing on cancel and
-failure, rebake, save and reload.
+failure, rebake, save and reload; the Environment panel naming the map's bright sources.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_bake.py -- --zip Z --out DIR
 """
 
@@ -280,7 +280,22 @@ def main():
     checks.check(result == {'FINISHED'} and "sd_bake" not in ball and "SD Ball" not in bpy.data.meshes and
                  "SD Ball Design" not in bpy.data.meshes,
                  "clear bake removes the baked mesh, its designs' nodes and the properties")
+    bright_sources(checks, package, scene)
     return checks.summary()
+
+
+def bright_sources(checks, package, scene):
+    """The Environment panel names the map's bright sources, found in a worker thread (issue 29):
+    sunrise.exr's sun, and says that SH blurs its shadows."""
+    sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))
+    environment = package.scene.environment
+    searching = "\n".join(sdtest.panel_texts())
+    found = environment.bright_sources(environment.source(scene), wait=True)
+    texts = "\n".join(sdtest.panel_texts())
+    checks.check("Finding the map's bright sources" in searching and len(found) == 1 and found[0][2] > 0.5
+                 and "1 bright source: " in texts and "SH blurs their shadows" in texts,
+                 "the Environment panel names sunrise.exr's sun", "; ".join(
+                     line for line in texts.split("\n") if "source" in line or "elevation" in line))
 
 
 sdtest.run(main)

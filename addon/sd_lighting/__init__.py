@@ -28,6 +28,7 @@ bl_info = {
 # predictions), bake, store (the baked meshes and their records), live (the shading), ui.
 _SUBMODULES = ("background", "compat", "errors", "native", "redraw",
                "scene.lobes", "scene.materials", "scene.ringing", "scene.transforms", "scene.world_render",
+               "scene.light_sources",
                "scene.environment",
                "scene.view",
                "plan.bake_time", "plan.cost", "plan.budget", "store.bake_data", "methods", "plan.accuracy",

@@ -29,13 +29,14 @@ import threading
 import numpy as np
 
 from .. import background, compat, native
-from . import ringing, transforms, world_render
+from . import light_sources, ringing, transforms, world_render
 
 _cache = {}          # source key -> sdnative.Environment
 _sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
 _workers = {}        # name -> the session's background.Background of that work, made on first use
 RINGING_WINDOWS = "sd_lighting ringing windows"
 PREFILTERED_ATLASES = "sd_lighting prefiltered environments"
+LIGHT_SOURCES = "sd_lighting light sources"
 
 
 def clear_cache():
@@ -314,6 +315,21 @@ def prefiltered_atlas(src, width0, levels, wait):
     key = (src.key, width0, levels)
     work = prefiltered_atlases()
     return work.result(key, compute) if wait else work.get(key, compute)
+
+
+def bright_sources(src, wait):
+    """The map's bright compact sources as scene/light_sources.found lists them, found in a worker
+    thread (Environment.light_sources, about 0.2 s for 1024 x 512) and cached: wait=False (the
+    panel) gives None until they are there or when the search failed. A uniform colour has none."""
+    if src.kind == "uniform":
+        return []
+    env = environment(src)
+
+    def compute():
+        return light_sources.found(env.light_sources(), float(env.mass[3]))
+
+    work = _worker(LIGHT_SOURCES)
+    return work.result(src.key, compute) if wait else work.get(src.key, compute)
 
 
 def light_coefficients(src, order):

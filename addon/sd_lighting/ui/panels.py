@@ -19,7 +19,7 @@ from .. import methods, native
 from ..bake import least_squares
 from ..live import drawing, gpu_shading, live_rebake, staleness
 from ..plan import analysis, cost
-from ..scene import environment, materials, ringing
+from ..scene import environment, light_sources, materials, ringing
 from ..store import baked
 from ..store.record import RecordError
 from . import operators, prediction
@@ -173,6 +173,8 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
             src = environment.source(scene)
             _text(layout, context, os.path.basename(src.path) if src.description == src.path
                   else src.description, icon='WORLD')
+            for i, line in enumerate(light_sources.lines(environment.bright_sources(src, wait=False))):
+                _text(layout, context, line, icon='LIGHT_SUN' if i == 0 else 'DOT')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')
         layout.prop(settings, "environment_rotation")

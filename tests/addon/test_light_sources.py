@@ -40,3 +40,30 @@ def test_a_soft_map_has_none_and_a_search_under_way_says_so(sdnative):
     assert light_sources.lines(None) == ["Finding the map's bright sources"]
     two = light_sources.lines([(1.0, 10.0, 0.3), (2.0, 50.0, 0.1)])
     assert two[0].startswith("2 bright sources: 40 % of the light") and len(two) == 3
+
+
+def test_the_panels_search_runs_in_the_background_and_a_failure_is_said(sdnative):
+    from sd_lighting import background
+    from sd_lighting.scene import environment
+    try:
+        src = environment.Source("pixels", ("test sun",), "a sun")
+        environment._cache[src.key] = sdnative.environment_from_pixels(sun_map(30.0, 3.0, 400.0))
+        first = environment.bright_sources(src, wait=False)   # queued: the panel says it is searching
+        assert first is None or len(first) == 1
+        assert len(environment.bright_sources(src, wait=True)) == 1
+        assert environment.bright_sources(environment.Source("uniform", ("grey",), "grey", colour=(0.5,) * 3),
+                                          wait=False) == []
+
+        class Broken:
+            def light_sources(self):
+                raise MemoryError("no room")
+        broken = environment.Source("pixels", ("broken",), "broken")
+        environment._cache[broken.key] = Broken()
+        with pytest.raises(background.Failed, match="no room"):
+            environment.bright_sources(broken, wait=True)
+        with pytest.raises(background.Failed, match="finding the map's bright sources failed: .*no room"):
+            environment.bright_sources(broken, wait=False)
+    finally:   # (clear_cache also clears the rendered worlds, which need bpy)
+        environment._cache.pop(("test sun",), None)
+        environment._cache.pop(("broken",), None)
+        environment._workers.pop(environment.LIGHT_SOURCES).close()

@@ -320,7 +320,8 @@ def prefiltered_atlas(src, width0, levels, wait):
 def bright_sources(src, wait):
     """The map's bright compact sources as scene/light_sources.found lists them, found in a worker
     thread (Environment.light_sources, about 0.2 s for 1024 x 512) and cached: wait=False (the
-    panel) gives None until they are there or when the search failed. A uniform colour has none."""
+    panel) gives None until they are there; a failed search raises background.Failed (wait=True
+    too). A uniform colour has none."""
     if src.kind == "uniform":
         return []
     env = environment(src)
@@ -329,7 +330,13 @@ def bright_sources(src, wait):
         return light_sources.found(env.light_sources(), float(env.mass[3]))
 
     work = _worker(LIGHT_SOURCES)
-    return work.result(src.key, compute) if wait else work.get(src.key, compute)
+    if wait:
+        return work.result(src.key, compute)
+    found = work.get(src.key, compute)
+    failed = work.failures().get(src.key)
+    if failed is not None:
+        raise background.Failed("finding the map's bright sources failed: %s" % failed)
+    return found
 
 
 def light_coefficients(src, order):

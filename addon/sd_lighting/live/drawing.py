@@ -180,7 +180,7 @@ def use_prefiltered_glossy(scene):
 def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, **kwargs):
     """(uniform block, {sampler: texture} of the environment textures it reads) of one draw of the
     object's data with `matrix` (default: its world matrix; an instance's). wait: as
-    shading_light; without waiting, what is still pending is watched (_watch_background)."""
+    shading_light; without waiting, what is still pending is watched (watch_background)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
@@ -195,7 +195,7 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     if data.variant.prefiltered_lookup:
         textures[PREFILTERED_SAMPLER[1]] = prefiltered
     if not wait:
-        _watch_background()
+        watch_background()
     return block, textures
 
 
@@ -229,9 +229,10 @@ def draw_background(scene, view, scale):
 
 
 def _background_work():
-    """What the draw asks worker threads for: the lobe designs, the ringing window choices and
-    the prefiltered environments."""
-    return (gpu_shading.lobe_designs(), environment.window_choices(), environment.prefiltered_atlases())
+    """What the draw and the panel ask worker threads for: the lobe designs, the ringing window
+    choices, the prefiltered environments and the maps' bright sources."""
+    return (gpu_shading.lobe_designs(), environment.window_choices(), environment.prefiltered_atlases(),
+            environment.bright_source_searches())
 
 
 def _poll_background():
@@ -246,7 +247,8 @@ def _poll_background():
     return 0.25 if any(w.pending() for w in work) else None
 
 
-def _watch_background():
+def watch_background():
+    """Redraws the viewports and the panel once what is asked of the worker threads is done."""
     import bpy
     if any(w.pending() for w in _background_work()) and not bpy.app.timers.is_registered(_poll_background):
         bpy.app.timers.register(_poll_background, first_interval=0.25)

@@ -317,6 +317,11 @@ def prefiltered_atlas(src, width0, levels, wait):
     return work.result(key, compute) if wait else work.get(key, compute)
 
 
+def bright_source_searches():
+    """The session's bright-source searches (bright_sources: made in a worker thread)."""
+    return _worker(LIGHT_SOURCES)
+
+
 def bright_sources(src, wait):
     """The map's bright compact sources as scene/light_sources.found lists them, found in a worker
     thread (Environment.light_sources, about 0.2 s for 1024 x 512) and cached: wait=False (the
@@ -329,7 +334,7 @@ def bright_sources(src, wait):
     def compute():
         return light_sources.found(env.light_sources(), float(env.mass[3]))
 
-    work = _worker(LIGHT_SOURCES)
+    work = bright_source_searches()
     if wait:
         return work.result(src.key, compute)
     found = work.get(src.key, compute)

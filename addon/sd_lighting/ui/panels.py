@@ -173,7 +173,10 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
             src = environment.source(scene)
             _text(layout, context, os.path.basename(src.path) if src.description == src.path
                   else src.description, icon='WORLD')
-            for i, line in enumerate(light_sources.lines(environment.bright_sources(src, wait=False))):
+            sources = environment.bright_sources(src, wait=False)
+            if sources is None:
+                drawing.watch_background()   # the panel is drawn again when they are found
+            for i, line in enumerate(light_sources.lines(sources)):
                 _text(layout, context, line, icon='LIGHT_SUN' if i == 0 else 'DOT')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')

@@ -33,7 +33,7 @@ constexpr double kSourceErrorSlack = 1.25;
 
 /// One source: the light the map holds above the threshold over a connected set of texels.
 struct LightSource {
-  glm::dvec3 direction{0.0, 0.0, 1.0};   ///< unit: the mean direction, weighted by its luminance
+  glm::dvec3 direction{0.0, 0.0, 1.0};   ///< unit: the mean direction, weighted by the luminance taken out
   glm::dvec3 major_axis{1.0, 0.0, 0.0};  ///< unit, ⊥ direction: the axis it extends along most
   /// Semi-axes (radians) of the uniform ellipse with its second moments about `direction`
   /// (each texel counted with its own size): a disc of radius ρ gives ρ and ρ.
@@ -56,7 +56,7 @@ struct SourceSplit {
 /// Finds up to `max_sources` compact bright sources of an equirect map for shading at SH order
 /// `order` (see the file comment) and splits them off: sources + remainder = the map, texel by
 /// texel (masses to rounding). Texels are connected to their eight neighbours, across the seam and
-/// across each pole. Both cores (the SH projections). Throws std::invalid_argument for a cube map,
+/// across each pole. The SH projections run on every hardware thread. Throws std::invalid_argument for a cube map,
 /// order outside [0, 32] or max_sources outside [1, 16].
 SourceSplit extract_light_sources(const Environment& environment, int order = 8, int max_sources = 4);
 

@@ -64,9 +64,15 @@ std::vector<Region> regions_above(const Environment& map, const std::vector<doub
       region.power += w;
       region.direction += w * map.texel_direction(q);
     }
-    region.direction = glm::normalize(region.direction);
-    for (const int64_t q : region.texels)
-      region.extent = std::max(region.extent, std::acos(std::clamp(glm::dot(region.direction, map.texel_direction(q)), -1.0, 1.0)));
+    // a region whose directions cancel (a ring round the sphere) has no direction: no source
+    const double length = glm::length(region.direction);
+    if (!(length > 1e-12 * region.power)) {
+      region.extent = kPi;
+    } else {
+      region.direction /= length;
+      for (const int64_t q : region.texels)
+        region.extent = std::max(region.extent, std::acos(std::clamp(glm::dot(region.direction, map.texel_direction(q)), -1.0, 1.0)));
+    }
     regions.push_back(std::move(region));
   }
   std::sort(regions.begin(), regions.end(), [](const Region& a, const Region& b) { return a.power > b.power; });

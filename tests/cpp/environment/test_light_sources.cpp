@@ -102,7 +102,7 @@ TEST(LightSources, AStripWindowIsLongAlongItsLongSide) {
   EXPECT_GT(std::abs(glm::dot(s.major_axis, horizontal)), 0.99);
 }
 
-TEST(LightSources, ASmoothSkyOrAWideGlowHasNone) {
+TEST(LightSources, ASmoothSkyAWideGlowOrARingHasNone) {
   const Environment smooth = Environment::from_equirect_pixels(kWidth, kHeight, equirect_pixels(kWidth, kHeight, sky));
   const SourceSplit none = extract_light_sources(smooth);
   EXPECT_TRUE(none.sources.empty());
@@ -114,6 +114,13 @@ TEST(LightSources, ASmoothSkyOrAWideGlowHasNone) {
     return sky(d) + (angle(d, centre) < 20.0 * kDegree ? glm::dvec3(50.0) : glm::dvec3(0.0));
   }));
   EXPECT_TRUE(extract_light_sources(glow).sources.empty());
+  // a bright ring round the horizon: its directions cancel, it has none
+  const Environment ring = Environment::from_equirect_pixels(kWidth, kHeight, equirect_pixels(kWidth, kHeight, [&](const glm::dvec3& d) {
+    return sky(d) + (std::abs(d.z) < 0.01 ? glm::dvec3(500.0) : glm::dvec3(0.0));
+  }));
+  const SourceSplit none_in_ring = extract_light_sources(ring);
+  EXPECT_TRUE(none_in_ring.sources.empty());
+  EXPECT_EQ(none_in_ring.remainder.pixels(), ring.pixels());
 }
 
 TEST(LightSources, KeepsTheBrightestUpToTheCountAsked) {

@@ -8,7 +8,7 @@ Nothing here needs Blender.
 
 import math
 
-LUMINANCE = (0.2126, 0.7152, 0.0722)
+from .lobes import LUMINANCE
 
 
 def found(split, mass):

@@ -8,7 +8,8 @@ pixel), and the band-limited-texture variants of MSD (12), (13), and at ALBEDO_O
 drawn variant with material albedos (slots and an image texture; Lambert + Phong with the slots'
 Principled weights, and Phong alone with them as a metal has; each of those also with the
 prefiltered glossy light; Lambert with the weights and prefiltered light of rough dielectrics'
-specular layers): N_VARIANTS programs, each built by
+specular layers), and each drawn Lambert variant at ALBEDO_ORDERS also lit by SOURCES bright
+sources with their shadow maps: N_VARIANTS programs, each built by
 gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
@@ -49,9 +50,10 @@ import bpy  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 477        # the programs variants() enumerates
+N_VARIANTS = 546        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 PHONG_EXPONENT = 8.0
+SOURCES = 4                # bright sources in the source variants (the most the map gives)
 
 
 def _module(package, name):
@@ -59,7 +61,17 @@ def _module(package, name):
 
 
 def variants(package):
-    """Every variant the live shading can build at ORDERS."""
+    """Every variant the live shading can build at ORDERS, and at ALBEDO_ORDERS each drawn one of
+    a Lambert lobe 0 also lit by SOURCES bright sources on their own."""
+    import dataclasses
+    for variant in _variants(package):
+        yield variant
+        if (not variant.glossy and not variant.vertex_target
+                and (variant.light_order, variant.visibility_order) == ALBEDO_ORDERS):
+            yield dataclasses.replace(variant, sources=SOURCES)
+
+
+def _variants(package):
     shader_variant = _module(package, "live.shader_variant")
     sd = package.native.get()
     prefiltered_atlas = (sd.PREFILTER_WIDTH, sd.PREFILTER_LEVELS)
@@ -152,7 +164,8 @@ def name(variant):
         " +lambert" if variant.diffuse_lobe else "", variant.light_order,
         variant.visibility_order, " per-pixel" if variant.per_pixel else "",
         " vertex-target" if variant.vertex_target else "",
-        " texture" if variant.band_limited_texture else "") + (" lightmap" if variant.lightmap else "")
+        " texture" if variant.band_limited_texture else "") + (" lightmap" if variant.lightmap else "") + (
+        " %d sources" % variant.sources if variant.sources else "")
 
 
 # ----------------------------------------------------------------------------------------------

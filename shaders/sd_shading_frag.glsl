@@ -111,6 +111,20 @@ vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
 }
 #endif
 
+#if defined(SD_SOURCES) && defined(SD_LAMBERT_LAYER)
+/* The sources' light on the Lambert lobe (sd_source_light), and the specular layers' visibility
+ * ratio made to see their shadows too: the prefiltered light holds the sources, while the ratio
+ * is of the remainder's lobe alone. Mixed by the sources' share of the unshadowed light, as the
+ * rough layers (roughness >= 0.5) spread it over nearly the Lambert lobe's directions. */
+vec3 sd_sources_on_layer(vec3 normal, inout float visibility)
+{
+  float visible, weight;
+  vec3 lit = sd_source_light(normal, visible, weight);
+  visibility = mix(visibility, visible, weight);
+  return lit;
+}
+#endif
+
 #ifdef SD_PER_PIXEL
 /* Adds the B of data entry `entry` (a triangle corner's vertex, or a lightmap texel) with its
  * interpolation weight. */
@@ -176,9 +190,16 @@ void main()
 #    endif
 #    ifdef SD_LAMBERT_LAYER
   diffuse = rgb;
+#      ifdef SD_SOURCES
+  diffuse += sd_sources_on_layer(normal, visibility);
+#      endif
 #    endif
   rgb = sd_glossy_light(visibility, normal, view);
 #  else
+#    ifdef SD_SOURCES
+  float visible, weight;
+  rgb += sd_source_light(normal, visible, weight);
+#    endif
   rgb *= sd.params.x;
 #  endif
   fragColor = vec4(sd_surface(rgb, sd.params.x * diffuse, dot(normal, view)), 1.0);
@@ -189,13 +210,22 @@ void main()
 #  ifdef SD_PREFILTERED
   vec3 normal = normalize(sd_normal);
   vec3 view = sd_view_direction(sd_origin_offset);
-  fragColor = vec4(sd_surface(sd_glossy_light(sd_visibility, normal, view), diffuse, dot(normal, view)), 1.0);
+  float visibility = sd_visibility;
+#    ifdef SD_SOURCES
+  diffuse += sd.params.x * sd_sources_on_layer(normal, visibility);
+#    endif
+  fragColor = vec4(sd_surface(sd_glossy_light(visibility, normal, view), diffuse, dot(normal, view)), 1.0);
 #  else
   float n_dot_v = 1.0;
 #    ifdef SD_LOBE_WEIGHTS
   n_dot_v = sd_n_dot_v;
 #    endif
-  fragColor = vec4(sd_surface(sd_color, diffuse, n_dot_v), 1.0);
+  vec3 color = sd_color;
+#    ifdef SD_SOURCES
+  float visible, weight;
+  color += sd.params.x * sd_source_light(normalize(sd_normal), visible, weight);
+#    endif
+  fragColor = vec4(sd_surface(color, diffuse, n_dot_v), 1.0);
 #  endif
 #endif
 }

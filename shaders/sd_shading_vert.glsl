@@ -69,6 +69,11 @@ void main()
   sd_normal = nrm;
 #  else
   sd_color = sd.params.x * b0;
+#    ifdef SD_SOURCES
+  /* the sources are shaded per pixel (sd_source_light) */
+  sd_origin_offset = mat3(sd.model) * pos;
+  sd_normal = nrm;
+#    endif
 #  endif
 #  if defined(SD_DIFFUSE_LOBE)
   sd_diffuse_color = sd.params.x * b1;

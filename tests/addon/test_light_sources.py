@@ -55,7 +55,7 @@ def test_the_panels_search_runs_in_the_background_and_a_failure_is_said(sdnative
                                           wait=False) == []
 
         class Broken:
-            def light_sources(self):
+            def light_sources(self, *args):
                 raise MemoryError("no room")
         broken = environment.Source("pixels", ("broken",), "broken")
         environment._cache[broken.key] = Broken()
@@ -67,3 +67,70 @@ def test_the_panels_search_runs_in_the_background_and_a_failure_is_said(sdnative
         environment._cache.pop(("test sun",), None)
         environment._cache.pop(("broken",), None)
         environment._workers.pop(environment.LIGHT_SOURCES).close()
+
+
+def test_sources_and_the_remainder_light_a_surface_as_the_whole_map_does(sdnative):
+    """Source.irradiance (the Lambert lobe's B of a source facing the surface) plus the
+    remainder's B through SH gives the whole map's B, unshadowed, at every normal: the split
+    conserves the light the shading adds back."""
+    env = sdnative.environment_from_pixels(sun_map(30.0, 2.0, 2000.0))
+    split = env.light_sources(light_sources.SPLIT_ORDER)
+    sources = [light_sources.Source.from_split(s) for s in split["sources"]]
+    assert len(sources) == 1
+    order = 16   # Lambert's truncation error there is far below the sun's share
+    factors = np.asarray(sdnative.zonal_coefficients("lambert", 1.0, order))
+    per_coefficient = np.concatenate([[factors[l]] * (2 * l + 1) for l in range(order + 1)])
+    rng = np.random.default_rng(3)
+    normals = rng.normal(size=(200, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    basis = np.asarray(sdnative.sh_basis(order, normals))
+
+    def lambert(e):
+        return basis @ (per_coefficient[:, None] * np.asarray(e.sh(order)).reshape(-1, 3))
+
+    strength = 2.5
+    directions, irradiance = light_sources.shading_rows(sources, np.eye(3), strength)
+    added = np.maximum(normals @ directions[0, :3], 0.0)[:, None] * irradiance[0, :3]
+    whole = strength * lambert(env)
+    assert np.abs(strength * lambert(split["remainder"]) + added - whole).max() < 0.02 * np.abs(whole).max()
+    assert added.max() > 0.5 * whole.max()   # the sun is most of it
+
+
+def test_shadow_rows_place_the_casters_sphere_on_the_map_seen_from_the_turned_source():
+    g = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])   # the world turned 90 degrees about z
+    source = light_sources.Source((0.6, 0.0, 0.8), (0.0, 1.0, 0.0), 0.02, 0.01, (1.0, 1.0, 1.0))
+    centre, radius, size = np.array([1.0, 2.0, 0.5]), 3.0, 1024
+    rows, (projection,) = light_sources.shadow_rows([source], g, centre, radius, size)
+    d = g.T @ np.array(source.direction)          # towards the source, in the world
+    u, v, t, extent, sizes = rows
+
+    def at(p):
+        q = np.append(p, 1.0)
+        return q @ u, q @ v, q @ t
+
+    assert at(centre) == pytest.approx((0.5, 0.5, 0.0))
+    assert at(centre + radius * d) == pytest.approx((0.5, 0.5, radius))      # nearest the source
+    side = np.cross(d, [0.0, 0.0, 1.0])
+    side /= np.linalg.norm(side)
+    uu, vv, tt = at(centre + radius * side)       # the sphere's rim, across the map
+    assert math.hypot(uu - 0.5, vv - 0.5) == pytest.approx(0.5) and tt == pytest.approx(0.0)
+    # the caster pass's clip space agrees: x, y = 2 (u, v) - 1; z falls towards the source, inside [-1, 1]
+    for p in (centre, centre + radius * d, centre - radius * d, centre + radius * side):
+        clip = projection @ np.append(p, 1.0)
+        uu, vv, tt = at(p)
+        assert clip[:2] == pytest.approx([2 * uu - 1, 2 * vv - 1]) and clip[3] == 1.0
+        assert clip[2] == pytest.approx(-tt / (radius * 1.001)) and abs(clip[2]) < 1.0
+    # the major axis (turned with the world) on the map, unit, and the semi-axes' tangents per span
+    major = g.T @ np.array(source.major_axis)
+    assert extent[:2] == pytest.approx([major @ (u[:3] * 2 * radius), major @ (v[:3] * 2 * radius)])
+    assert np.hypot(*extent[:2]) == pytest.approx(1.0)
+    assert extent[2:] == pytest.approx([math.tan(0.02) / (2 * radius), math.tan(0.01) / (2 * radius)])
+    assert sizes[:3] == pytest.approx([2 * radius / size, radius, 2 * radius])
+
+
+def test_shading_rows_turn_each_source_into_the_objects_bake_space():
+    source = light_sources.Source((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), 0.01, 0.01, (0.1, 0.2, 0.3))
+    gr = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])   # 90 degrees about x
+    directions, irradiance = light_sources.shading_rows([source, source], gr, 2.0)
+    assert directions[:, :3] == pytest.approx(np.tile(gr.T @ [0.0, 0.0, 1.0], (2, 1)))
+    assert irradiance[0] == pytest.approx([0.8, 1.6, 2.4, 0.0])   # 4 x strength x power

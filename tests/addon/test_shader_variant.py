@@ -24,9 +24,10 @@ def all_variants():
             if lobes not in ("lambert", "layer") and method.lambert_only:
                 continue
             weights = lobes in ("layer", "metal", "both")
-            for texels, prefiltered in itertools.product(
+            for texels, prefiltered, sources in itertools.product(
                     (False, True) if per_pixel and lightmap.applies(method) else (False,),
-                    (True,) if lobes == "layer" else (False, True) if weights else (False,)):
+                    (True,) if lobes == "layer" else (False, True) if weights else (False,),
+                    (0, 2) if lobes in ("lambert", "layer") and not target else (0,)):
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
@@ -35,7 +36,8 @@ def all_variants():
                               albedo_texture=albedo, lobe_weights=weights,
                               diffuse_lobe=both,
                               diffuse_design_size=12 if both and method.lobe_design else 0,
-                              lightmap=(64, 32) if texels else (), prefiltered=(1024, 7) if prefiltered else ())
+                              lightmap=(64, 32) if texels else (), prefiltered=(1024, 7) if prefiltered else (),
+                              sources=sources)
 
 
 def test_defines_of_a_known_variant(sdnative):

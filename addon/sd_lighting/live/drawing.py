@@ -23,13 +23,13 @@ import logging
 
 import numpy as np
 
-from .. import methods, native, redraw
+from .. import background, methods, native, redraw
 from ..scene import environment, materials, transforms
 from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
-from . import gpu_shading, staleness
-from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER
+from . import gpu_shading, source_shadows, staleness
+from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER, SHADOW_MAP_SAMPLER
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +46,7 @@ def clear_cache():
     global _instances
     _objects.clear()
     _instances = (None, [])
+    source_shadows.clear_cache()
 
 
 def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False, prefiltered=False):
@@ -137,11 +138,12 @@ def ringing_setting(scene):
     return settings.ringing_window.lower() if settings is not None else "automatic"
 
 
-def shading_light(scene, source, lobe, exponent, order, wait):
+def shading_light(scene, source, lobe, exponent, order, wait, remainder=False):
     """The unrotated L of order s the live shading uses for a bake's lobe: windowed against
     ringing with the scene's setting (environment.windowed_light; wait=False: without a window
-    until it is chosen). [(s+1)^2, 3] float64."""
-    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene), wait)
+    until it is chosen); remainder: of the map without the bright sources that light the object on
+    their own (source_lighting). [(s+1)^2, 3] float64."""
+    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene), wait, remainder)
 
 
 def ringing_choice(scene, obj, wait=False):
@@ -155,13 +157,14 @@ def ringing_choice(scene, obj, wait=False):
                                       record.light_order, ringing_setting(scene), wait)
 
 
-def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None):
+def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None, remainder=False):
     """Coefficients of x -> L(g R x) for the object's data (ObjectData) drawn with `matrix` (default:
-    its own world matrix), windowed (shading_light): [(s+1)^2, 3] float64; and g R."""
+    its own world matrix), windowed (shading_light; remainder: as there): [(s+1)^2, 3] float64;
+    and g R."""
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
     gr = g @ transforms.rotation_part(np.array(obj.matrix_world if matrix is None else matrix))
-    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait)
+    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait, remainder)
     return native.get().rotated_environment_sh(light, gr), gr
 
 
@@ -177,18 +180,24 @@ def use_prefiltered_glossy(scene):
     return bool(settings is None or settings.prefiltered_glossy)
 
 
-def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, **kwargs):
+def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, sources=None, **kwargs):
     """(uniform block, {sampler: texture} of the environment textures it reads) of one draw of the
     object's data with `matrix` (default: its world matrix; an instance's). wait: as
-    shading_light; without waiting, what is still pending is watched (watch_background)."""
+    shading_light; without waiting, what is still pending is watched (watch_background).
+    sources: source_lighting's, for data that takes them (ObjectData.takes_sources), or None."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
-    light, gr = local_light(scene, obj, data, wait, source, rotation, matrix)
+    sources = sources if data.takes_sources else None
+    remainder = sources is not None
+    light, gr = local_light(scene, obj, data, wait, source, rotation, matrix, remainder)
     prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
     textures = {}
     if data.uses_band_limited_texture:
         textures[BAND_LIMITED_TEXTURE_SAMPLER[1]], kwargs["band_limited_scale"] = gpu_shading.band_limited_texture(
-            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait))
+            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait, remainder))
+    if sources is not None:
+        kwargs["sources"] = (sources[0], sources[2])
+        textures[SHADOW_MAP_SAMPLER[1]] = sources[1]
     block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
                              albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None,
                              strength=source.strength, **kwargs)
@@ -203,22 +212,50 @@ def exposure_scale(scene):
     return 2.0 ** float(scene.view_settings.exposure)
 
 
-def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False, instances=()):
+def source_lighting(scene, source, g, wait, view_layer=None):
+    """(scene/light_sources.Source list, their shadow maps' texture, the maps' shader rows) of the
+    map's bright sources that light diffuse objects on their own (the scene's Sharp Source
+    Shadows), or None: the option is off, the map has none, or (wait=False) they are still being
+    found (the whole map through SH meanwhile) or their search failed (the panel says why). The
+    maps are rendered now when the sources or the casters changed (source_shadows.py)."""
+    import bpy
+    settings = getattr(scene, "sd_lighting", None)
+    if settings is None or not settings.source_shadows:
+        return None
+    try:
+        split = environment.source_split(source, wait)
+    except background.Failed:
+        if wait:
+            raise
+        return None
+    if not split or not split["sources"]:
+        return None
+    view_layer = view_layer or bpy.context.view_layer
+    texture, rows = source_shadows.shadow_maps(split["sources"], g, view_layer.depsgraph, view_layer,
+                                               scene.name_full)
+    return split["sources"], texture, rows
+
+
+def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False, instances=(),
+                 view_layer=None):
     """Draws the baked objects, and the instances (baked_instances: (object, matrix)) of them, into
     the bound framebuffer with the current GPU state. per_pixel: every object per pixel (the
     panel's Per Pixel), else those whose automatic choice says so. wait=False (the interactive
-    draw) shades with no ringing window until it is chosen; True waits for it."""
+    draw) shades with no ringing window until it is chosen; True waits for it. view_layer: an
+    evaluated one whose visible geometry casts the sources' shadows (default: the context's)."""
     source = environment.source(scene)
     g = environment.rotation_matrix(scene)
     band_limited_texture = use_band_limited_texture(scene)
     prefiltered = use_prefiltered_glossy(scene)
+    sources = source_lighting(scene, source, g, wait, view_layer) if objects or instances else None
     for obj, matrix in [(obj, None) for obj in objects] + list(instances):
         record = baked.record(obj)
         data = object_data(obj, per_pixel=per_pixel or bool(record and record.per_pixel),
                            band_limited_texture=band_limited_texture, prefiltered=prefiltered)
         if data is None:
             continue
-        block, textures = _frame(scene, obj, data, view, scale, wait, source, g, matrix, depth_bias=depth_bias)
+        block, textures = _frame(scene, obj, data, view, scale, wait, source, g, matrix, sources,
+                                 depth_bias=depth_bias)
         data.draw(block, textures)
 
 
@@ -273,7 +310,7 @@ def _draw_handler():
             gpu.state.depth_mask_set(True)
             gpu.state.blend_set('NONE')
             draw_objects(scene, objects, view, exposure_scale(scene), settings.per_pixel, DEPTH_BIAS,
-                         instances=baked_instances(scene, objects, context.view_layer))
+                         instances=baked_instances(scene, objects, context.view_layer), view_layer=context.view_layer)
             if settings.world_background:
                 draw_background(scene, view, exposure_scale(scene))
         gpu.state.depth_mask_set(False)

@@ -36,19 +36,22 @@ import numpy as np
 
 from .. import compat, methods, native
 from ..bake import lightmap
-from ..scene import environment, lobes, materials, transforms
+from ..scene import environment, light_sources, lobes, materials, transforms
 from ..store import attributes, baked
 from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
 from . import band_limited_map
 from . import lobe_designs as lobe_design_cache
 from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BRDF_TABLE_SAMPLER, BRDF_TABLE_SIZE, DATA_SAMPLER, GAUNT_SAMPLER,
-                             LIGHTMAP_INDEX_SAMPLER, Variant)
+                             LIGHTMAP_INDEX_SAMPLER, SHADOW_MAP_SAMPLER, Variant)
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
-SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_shading_frag.glsl")
+# (library, vertex, fragment): the fragment stage alone shades the bright sources
+SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", ("sd_source_shadows.glsl", "sd_shading_frag.glsl"))
 BACKGROUND_FILES = ("sd_background_vert.glsl", "sd_background_frag.glsl")
-ALL_FILES = (EQUIRECT_FILE,) + SHADER_FILES + BACKGROUND_FILES
+CASTER_FILES = ("sd_caster_vert.glsl", "sd_caster_frag.glsl")
+ALL_FILES = (EQUIRECT_FILE, "sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_source_shadows.glsl",
+             "sd_shading_frag.glsl") + BACKGROUND_FILES + CASTER_FILES
 BACKGROUND_SAMPLER = "sd_environment"
 
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)
@@ -76,8 +79,10 @@ def _read_shader(name):
 
 def stage_sources(files):
     """(vertex, fragment) source of a program of `files` (library, vertex, fragment; or vertex,
-    fragment), each after sd_equirect.glsl, as create-infos take them (after their declarations)."""
-    *library, vert, frag = (_read_shader(name) for name in (EQUIRECT_FILE,) + tuple(files))
+    fragment; a stage may be a tuple of files, read in order), each after sd_equirect.glsl, as
+    create-infos take them (after their declarations)."""
+    *library, vert, frag = ("\n".join(_read_shader(name) for name in ((f,) if isinstance(f, str) else f))
+                            for f in (EQUIRECT_FILE,) + tuple(files))
     prefix = "\n".join(library) + "\n"
     return prefix + vert, prefix + frag
 
@@ -117,12 +122,12 @@ def _compile(variant):
     interface = gpu.types.GPUStageInterfaceInfo("sd_interface")
     for qualifier, glsl_type, name in variant.interface():
         getattr(interface, qualifier)(glsl_type.upper(), name)
-    program = _create(info, interface, SHADER_FILES)
+    program = create(info, interface, SHADER_FILES)
     _shaders[variant] = (program, interface, info)  # keep the create-infos alive with the shader
     return _shaders[variant]
 
 
-def _create(info, interface, files):
+def create(info, interface, files):
     """Compiles a create-info given its declarations, with the stage interface, one fragment
     output fragColor and the sources of `files` (stage_sources)."""
     import gpu
@@ -242,7 +247,7 @@ def _background_shader():
         info.vertex_in(0, 'VEC2', "pos")
         interface = gpu.types.GPUStageInterfaceInfo("sd_background_interface")
         interface.smooth('VEC2', "sd_ndc")
-        shader = _create(info, interface, BACKGROUND_FILES)
+        shader = create(info, interface, BACKGROUND_FILES)
         batch = compat.make_batch('TRIS', {"pos": np.array([[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]])})
         compiled = _background["shader"] = (shader, interface, info, batch)   # infos kept alive
     return compiled[0], compiled[3]
@@ -428,6 +433,20 @@ class ObjectData:
             self._lobe_factors = (key, out)
         return self._lobe_factors[1]
 
+    @property
+    def takes_sources(self):
+        """Whether the map's bright sources can light this data on their own (a Lambert lobe 0,
+        drawn): a Phong lobe 0 keeps the whole map in its SH light."""
+        return not self.variant.glossy and not self.variant.vertex_target
+
+    def _use_sources(self, count):
+        """Switches to the variant lit by `count` sources on their own (0: none)."""
+        variant = dataclasses.replace(self.variant, sources=count)
+        if variant != self.variant:
+            self.variant = variant
+            self.shader = shader_program(variant)
+            self.ubo = None
+
     def _weighted(self, prefiltered):
         """Whether the slots' lobe weights are drawn, with the prefiltered atlas's layout or ():
         a Lambert lobe's specular layers need the prefiltered light (folded into it without)."""
@@ -468,7 +487,7 @@ class ObjectData:
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0,
-                    band_limited_scale=1.0):
+                    band_limited_scale=1.0, sources=None):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
@@ -479,11 +498,14 @@ class ObjectData:
         the object's materials.object_albedos (a slot without one: the 0.8 default surface);
         prefiltered: whether the prefiltered atlas is there to draw with (the truncated lobe
         meanwhile), for data made with the prefiltered lookup; strength: the environment's, which
-        the atlas is without; band_limited_scale: that of the band-limited texture's codes. The
+        the atlas is without; band_limited_scale: that of the band-limited texture's codes;
+        sources: (scene/light_sources.Source list, their shadow rows) lighting the data on their
+        own (takes_sources; `light` is then the rest of the map), or None. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
         surface_rows = self._use_albedos(list(albedos), prefiltered)
+        self._use_sources(len(sources[0]) if sources else 0)
         self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:
@@ -500,12 +522,17 @@ class ObjectData:
             values["prefiltered_scale"] = (strength,)
         if self.designs:
             values["design"] = np.concatenate([d.texels() for d in self.designs])
+        if self.variant.sources:
+            values["source_direction"], values["source_irradiance"] = light_sources.shading_rows(
+                sources[0], local_to_environment, strength)
+            values["source_shadow"] = sources[1]
         values.update(surface_rows)
         return self.variant.frame_block(values)
 
     def draw(self, block, environment_textures=None):
         """Draws with the block (frame_block) and the environment textures the variant reads
-        ({sampler name: GPUTexture}: the band-limited texture, the prefiltered atlas)."""
+        ({sampler name: GPUTexture}: the band-limited texture, the prefiltered atlas, the sources'
+        shadow maps)."""
         import gpu
         buffer = gpu.types.Buffer('FLOAT', block.size, block)
         if self.ubo is None:

@@ -56,7 +56,7 @@ def render(scene, depsgraph, view_layer, width, height, camera=None):
 
     def draw():
         drawing.draw_objects(scene, objects, view, 1.0, scene.sd_lighting.per_pixel, wait=True,
-                             instances=instances)
+                             instances=instances, view_layer=view_layer)
         if scene.sd_lighting.world_background:
             drawing.draw_background(scene, view, 1.0)
         if others:

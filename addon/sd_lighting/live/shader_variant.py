@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import methods
+from ..scene.light_sources import SHADOW_MAP_SIZE, SOURCE_ROWS
 from ..store.bake_data import TEXTURE_WIDTH_LOG2
 
 
@@ -24,6 +25,7 @@ LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texe
 PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment prefiltered per roughness
 BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's (A, B) over n.v, roughness
 BRDF_TABLE_SIZE = 32   # its side (sdnative.environment_brdf_table)
+SHADOW_MAP_SAMPLER = (7, "sd_shadow_map")                   # the sources' shadow maps, side by side
 
 
 
@@ -94,6 +96,8 @@ class Variant:
     lightmap: tuple = ()          # (width, height) of texture-space data (per pixel), or ()
     prefiltered: tuple = ()       # (width0, levels) of the prefiltered atlas lobe 0's light is
                                   # looked up in (drawn with weights), or () for its SH result
+    sources: int = 0              # the map's bright sources lighting the Lambert lobe 0 on their
+                                  # own, shadowed per pixel (scene/light_sources.py); L is the rest
 
     def __post_init__(self):
         if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \
@@ -104,6 +108,8 @@ class Variant:
             raise ValueError("the prefiltered glossy light needs the slots' lobe weights (roughness)")
         if self.lightmap and not self.per_pixel:
             raise ValueError("texture-space data are read per pixel")
+        if self.sources and (self.glossy or self.vertex_target):
+            raise ValueError("the bright sources light a Lambert lobe 0 in a drawn image")
 
     @property
     def weighted(self):
@@ -219,6 +225,10 @@ class Variant:
             d["SD_HORIZON_ORDER"] = str(self.horizon_order)
             if self.lambert_layer:
                 d["SD_LAMBERT_LAYER"] = "1"
+        if self.sources:
+            d["SD_SOURCES"] = str(self.sources)
+            d["SD_SOURCE_ROWS"] = str(SOURCE_ROWS)
+            d["SD_SHADOW_MAP_SIZE"] = str(SHADOW_MAP_SIZE)
         return d
 
     def vertex_inputs(self):
@@ -253,6 +263,8 @@ class Variant:
                 out.append(("smooth", "vec3", "sd_diffuse_color"))
             if self.weighted:
                 out.append(("smooth", "float", "sd_n_dot_v"))
+            if self.sources:   # the sources are shaded per pixel: where the pixel is, its normal
+                out += [("smooth", "vec3", "sd_origin_offset"), ("smooth", "vec3", "sd_normal")]
         if self.material_count:
             # a triangle's corners share their slot (bake/corners.py splits vertices between slots)
             out.append(("flat", "vec4", "sd_albedo"))
@@ -279,6 +291,8 @@ class Variant:
             out.append(BRDF_TABLE_SAMPLER)
         if self.prefiltered_lookup:
             out.append(PREFILTERED_SAMPLER)
+        if self.sources:
+            out.append(SHADOW_MAP_SAMPLER)
         return out
 
     def frame_fields(self):
@@ -305,6 +319,10 @@ class Variant:
             fields.append(BlockField("albedo", "vec4", self.material_count))
             if self.weighted:   # per slot: scene/lobes.principled_weights
                 fields.append(BlockField("lobe_weights", "vec4", self.material_count))
+        if self.sources:   # scene/light_sources.shading_rows, shadow_rows
+            fields += [BlockField("source_direction", "vec4", self.sources),
+                       BlockField("source_irradiance", "vec4", self.sources),
+                       BlockField("source_shadow", "vec4", SOURCE_ROWS * self.sources)]
         return fields
 
     def frame_struct(self):

@@ -24,6 +24,7 @@ from ..store.record import RecordError
 _verdicts = {}   # object name -> (the bake_id checked, whether it is stale)
 _shown = False   # whether the status bar names stale bakes
 generation = 0   # counts the depsgraph updates, frame changes, undos and loads seen (drawing's caches)
+shape_generation = 0   # counts those that moved or changed some object's geometry (the shadow casters)
 
 
 def _record(obj):
@@ -99,17 +100,20 @@ def forget(names=None):
 @persistent
 def _on_update(_scene, depsgraph):
     """depsgraph_update_post, frame_change_post: the objects whose geometry was evaluated again."""
-    global generation
+    global generation, shape_generation
     generation += 1
-    forget({update.id.original.name for update in depsgraph.updates
-            if update.is_updated_geometry and isinstance(update.id, bpy.types.Object)})
+    objects = [update for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)]
+    if any(update.is_updated_geometry or update.is_updated_transform for update in objects):
+        shape_generation += 1
+    forget({update.id.original.name for update in objects if update.is_updated_geometry})
 
 
 @persistent
 def _on_reset(*_args):
     """undo_post, redo_post, load_post: anything may have changed."""
-    global generation
+    global generation, shape_generation
     generation += 1
+    shape_generation += 1
     forget()
 
 

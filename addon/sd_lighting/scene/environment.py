@@ -32,7 +32,7 @@ from .. import background, compat, native
 from . import light_sources, ringing, transforms, world_render
 
 _cache = {}          # source key -> sdnative.Environment
-_sh_cache = {}       # (source key, order) -> float64 [(order+1)^2, 3]
+_sh_cache = {}       # (source key or (key, "remainder"), order) -> float64 [(order+1)^2, 3]
 _workers = {}        # name -> the session's background.Background of that work, made on first use
 RINGING_WINDOWS = "sd_lighting ringing windows"
 PREFILTERED_ATLASES = "sd_lighting prefiltered environments"
@@ -322,39 +322,60 @@ def bright_source_searches():
     return _worker(LIGHT_SOURCES)
 
 
-def bright_sources(src, wait):
-    """The map's bright compact sources as scene/light_sources.found lists them, found in a worker
-    thread (Environment.light_sources, about 0.2 s for 1024 x 512) and cached: wait=False (the
-    panel) gives None until they are there; a failed search raises background.Failed (wait=True
-    too). A uniform colour has none."""
+def source_split(src, wait):
+    """The map's bright compact sources split off (Environment.light_sources at
+    light_sources.SPLIT_ORDER), found in a worker thread (about 0.2 s for 1024 x 512) and cached:
+    {"sources": [light_sources.Source], "remainder": the Environment without them, "found":
+    light_sources.found's list}. wait=False (the panel, the interactive draw) gives None until it is
+    there; a failed search raises background.Failed (wait=True too). A uniform colour has no
+    sources (and no remainder: None)."""
     if src.kind == "uniform":
-        return []
+        return {"sources": [], "remainder": None, "found": []}
     env = environment(src)
 
     def compute():
-        return light_sources.found(env.light_sources(), float(env.mass[3]))
+        split = env.light_sources(light_sources.SPLIT_ORDER)
+        return {"sources": [light_sources.Source.from_split(s) for s in split["sources"]],
+                "remainder": split["remainder"],
+                "found": light_sources.found(split, float(env.mass[3]))}
 
     work = bright_source_searches()
     if wait:
         return work.result(src.key, compute)
-    found = work.get(src.key, compute)
+    split = work.get(src.key, compute)
     failed = work.failures().get(src.key)
     if failed is not None:
         raise background.Failed("finding the map's bright sources failed: %s" % failed)
-    return found
+    return split
 
 
-def light_coefficients(src, order):
-    """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied."""
+def bright_sources(src, wait):
+    """The map's bright compact sources as scene/light_sources.found lists them (source_split;
+    None while they are found)."""
+    split = source_split(src, wait)
+    return None if split is None else split["found"]
+
+
+def _shaded_environment(src, remainder):
+    """(key, Environment) of the map, or with remainder=True of what source_split leaves of it
+    (the split must be there)."""
+    if remainder:
+        return (src.key, "remainder"), source_split(src, wait=True)["remainder"]
+    return src.key, environment(src)
+
+
+def light_coefficients(src, order, remainder=False):
+    """Unrotated SH coefficients of L of order s, float64 [(s+1)^2, 3], strength applied;
+    remainder: of the map without its bright sources (source_split, which must be there)."""
     if src.kind == "uniform":
         light = np.zeros(((order + 1) ** 2, 3))
         light[0] = np.asarray(src.colour, dtype=np.float64)
     else:
-        key = (src.key, order)
-        light = _sh_cache.get(key)
+        key, env = _shaded_environment(src, remainder)
+        light = _sh_cache.get((key, order))
         if light is None:
-            light = np.asarray(environment(src).sh(order), dtype=np.float64).reshape(-1, 3)
-            _sh_cache[key] = light
+            light = np.asarray(env.sh(order), dtype=np.float64).reshape(-1, 3)
+            _sh_cache[(key, order)] = light
     return light * src.strength
 
 
@@ -377,22 +398,23 @@ def ringing_window_status():
     return ringing.status(_workers[RINGING_WINDOWS]) if RINGING_WINDOWS in _workers else []
 
 
-def ringing_window(src, lobe, exponent, order, setting, wait):
+def ringing_window(src, lobe, exponent, order, setting, wait, remainder=False):
     """The window against ringing of L for the lobe and order s: sdnative's
     Environment.ringing_window dict (setting: one of scene/ringing.WINDOWS), chosen in a worker
     thread and cached. wait=False (the interactive draw, the panel): None until it is there or when
     its choice failed; wait=True: waits for it (raises background.Failed when it failed). The choice
     does not depend on the strength. A uniform environment (L_00 alone, which no window changes):
-    none."""
+    none. remainder: the window of the map without its bright sources (light_coefficients)."""
     if src.kind == "uniform":
         return ringing.unwindowed(order)
-    return ringing.choice(window_choices(), src.key, environment(src), lobe, exponent, order, setting, wait)
+    key, env = _shaded_environment(src, remainder)
+    return ringing.choice(window_choices(), key, env, lobe, exponent, order, setting, wait)
 
 
-def windowed_light(src, lobe, exponent, order, setting, wait):
+def windowed_light(src, lobe, exponent, order, setting, wait, remainder=False):
     """light_coefficients with the ringing window's sigma_l on band l: the L every method shades
     with and the band-limited texture holds; without a window while its choice is not there
-    (wait=False, ringing_window)."""
-    light = light_coefficients(src, order)
-    choice = ringing_window(src, lobe, exponent, order, setting, wait)
+    (wait=False, ringing_window). remainder: as light_coefficients."""
+    light = light_coefficients(src, order, remainder)
+    choice = ringing_window(src, lobe, exponent, order, setting, wait, remainder)
     return light if choice is None else ringing.windowed(light, choice["factors"])

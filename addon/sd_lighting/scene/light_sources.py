@@ -1,14 +1,25 @@
-"""The environment's bright compact sources as the panel names them (issue 29): a sun, lamps,
-softboxes that sdnative's Environment.light_sources splits off the map (native light_sources.h
-says how they are found). The live shading still lights them through SH with the rest of the
-map, which blurs their shadows: the panel says so, with how much of the light they carry.
+"""The environment's bright compact sources (issue 29): a sun, lamps, softboxes that sdnative's
+Environment.light_sources splits off the map (native light_sources.h says how they are found), as
+the panel names them and as the live shading lights them.
+
+With Sharp Source Shadows on, a diffuse surface is lit by the remainder of the map through SH and
+by each source on its own, shadowed per pixel through a shadow map rendered from the source's
+direction (live/source_shadows.py). The maps are orthographic over the bounding sphere of what
+casts shadows; this module computes their frames and the shader's rows of each source.
 
 Nothing here needs Blender.
 """
 
 import math
+from dataclasses import dataclass
+
+import numpy as np
 
 from .lobes import LUMINANCE
+
+SPLIT_ORDER = 8          # the SH order the sources are split off for (the panel's default order)
+SHADOW_MAP_SIZE = 2048   # texels along each side of a source's shadow map
+SOURCE_ROWS = 5          # vec4 rows per source in the shader's block (shadow_rows)
 
 
 def found(split, mass):
@@ -22,14 +33,100 @@ def found(split, mass):
     return out
 
 
-def lines(sources):
-    """The panel's lines for found()'s list (None: still being found)."""
+def lines(sources, sharp=False):
+    """The panel's lines for found()'s list (None: still being found); sharp: whether the live
+    shading shadows them on their own (Sharp Source Shadows)."""
     if sources is None:
         return ["Finding the map's bright sources"]
     if not sources:
         return ["No sun or lamp in the map: its light is soft"]
     share = sum(s for _, _, s in sources)
-    head = "%s: %.0f %% of the light; SH blurs their shadows" % (
-        "1 bright source" if len(sources) == 1 else "%d bright sources" % len(sources), 100.0 * share)
+    head = "%s: %.0f %% of the light; %s" % (
+        "1 bright source" if len(sources) == 1 else "%d bright sources" % len(sources), 100.0 * share,
+        "shadowed per pixel on diffuse surfaces" if sharp else "SH blurs their shadows")
     return [head] + ["%.1f\u00b0 wide at %.0f\u00b0 elevation, %.0f %%" % (width, elevation, 100.0 * s)
                      for width, elevation, s in sources]
+
+
+@dataclass(frozen=True)
+class Source:
+    """One source as the shading uses it, in the environment's frame (before its rotation g)."""
+    direction: tuple      # unit, towards the source
+    major_axis: tuple     # unit, perpendicular to it: the axis it extends along most
+    major_radius: float   # radians: the semi-axes of the uniform ellipse of its second moments
+    minor_radius: float
+    power: tuple          # RGB: integral of its radiance over the sphere's measure (the sphere: 1)
+
+    @classmethod
+    def from_split(cls, source):
+        """From one of Environment.light_sources' "sources" dicts."""
+        return cls(tuple(source["direction"]), tuple(source["major_axis"]), float(source["major_radius"]),
+                   float(source["minor_radius"]), tuple(source["power"]))
+
+    def irradiance(self, strength):
+        """RGB: the Lambert lobe's B (w(t) = 4 max(0, t) over the sphere's measure) that the
+        source gives a surface facing it, times the environment's strength."""
+        return 4.0 * strength * np.asarray(self.power, dtype=np.float64)
+
+
+def _perpendicular_frame(direction):
+    """Two unit vectors (u, w) with (u, w, direction) right-handed and orthonormal."""
+    d = np.asarray(direction, dtype=np.float64)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(helper, d)
+    u /= np.linalg.norm(u)
+    return u, np.cross(d, u)
+
+
+def shadow_rows(sources, to_environment, center, radius, size=SHADOW_MAP_SIZE):
+    """The shader's rows of each source's shadow map, float64 [SOURCE_ROWS N, 4], and the caster
+    pass's projection of each, [N] 4x4 (world to the map's clip space).
+
+    Map i covers the sphere of `center` and `radius` (world; what casts shadows) seen from the
+    source's world direction d = g^T (its direction), g = `to_environment`. Rows per source:
+    0, 1: a world point's (u, v) in the map, [0, 1] across it; 2: its distance t towards the
+    source from the sphere's centre (t = d . (p - c), what the map stores; larger is nearer the
+    source); 3: its major axis in (u, v) (unit; the minor axis is it turned a quarter towards v), and
+    its semi-axes as (u, v) per unit of blocker distance (their tangents over the map's span): how
+    far a penumbra reaches; 4: (world size of a texel, the largest t anything casting can have: the
+    radius, the span 2 radius, 0)."""
+    g = np.asarray(to_environment, dtype=np.float64)
+    center = np.asarray(center, dtype=np.float64)
+    radius = max(float(radius), 1e-6)
+    span = 2.0 * radius
+    rows = np.zeros((SOURCE_ROWS * len(sources), 4))
+    projections = []
+    for i, source in enumerate(sources):
+        d = g.T @ np.asarray(source.direction, dtype=np.float64)
+        d /= np.linalg.norm(d)
+        u, w = _perpendicular_frame(d)
+        major = g.T @ np.asarray(source.major_axis, dtype=np.float64)
+        major -= d * (major @ d)
+        major = major / np.linalg.norm(major) if np.linalg.norm(major) > 1e-9 else u
+        r = rows[SOURCE_ROWS * i:SOURCE_ROWS * (i + 1)]
+        r[0] = np.append(u / span, 0.5 - (u @ center) / span)
+        r[1] = np.append(w / span, 0.5 - (w @ center) / span)
+        r[2] = np.append(d, -(d @ center))
+        r[3] = (major @ u, major @ w, math.tan(source.major_radius) / span, math.tan(source.minor_radius) / span)
+        r[4] = (span / size, radius, span, 0.0)
+        # clip x, y = 2 (u, v) - 1; z = -t / radius, so that the depth test keeps what is nearest the source
+        projection = np.zeros((4, 4))
+        projection[0] = 2.0 * r[0] - np.array([0.0, 0.0, 0.0, 1.0])
+        projection[1] = 2.0 * r[1] - np.array([0.0, 0.0, 0.0, 1.0])
+        projection[2] = -r[2] / (radius * 1.001)
+        projection[3, 3] = 1.0
+        projections.append(projection)
+    return rows, projections
+
+
+def shading_rows(sources, local_to_environment, strength):
+    """The shader's per-source rows for one object: the direction towards each source in the
+    object's bake space, (g R)^T times its direction, and its irradiance (Source.irradiance);
+    float64 [N, 4] each."""
+    gr = np.asarray(local_to_environment, dtype=np.float64)
+    directions = np.zeros((len(sources), 4))
+    irradiance = np.zeros((len(sources), 4))
+    for i, source in enumerate(sources):
+        directions[i, :3] = gr.T @ np.asarray(source.direction, dtype=np.float64)
+        irradiance[i, :3] = source.irradiance(strength)
+    return directions, irradiance

@@ -176,7 +176,7 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
             sources = environment.bright_sources(src, wait=False)
             if sources is None:
                 drawing.watch_background()   # the panel is drawn again when they are found
-            for i, line in enumerate(light_sources.lines(sources)):
+            for i, line in enumerate(light_sources.lines(sources, settings.source_shadows)):
                 _text(layout, context, line, icon='LIGHT_SUN' if i == 0 else 'DOT')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')
@@ -344,6 +344,7 @@ class SD_PT_lighting_live(_SubPanel, bpy.types.Panel):
         col.row(heading="World").prop(settings, "world_background", text="Background")
         col.row(heading="Texture").prop(settings, "band_limited_texture", text="Band-Limited")
         col.row(heading="Glossy").prop(settings, "prefiltered_glossy", text="Prefiltered")
+        col.row(heading="Sources").prop(settings, "source_shadows", text="Sharp Shadows")
         for line in gpu_shading.lobe_design_status() + environment.ringing_window_status() + environment.prefilter_status():
             _text(layout, context, line, icon='TIME')
         layout.operator("sd_lighting.render_preview", icon='IMAGE_DATA')

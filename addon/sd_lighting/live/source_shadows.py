@@ -1,0 +1,110 @@
+"""The bright sources' shadow maps (issue 29): per source, an orthographic view from its direction
+of everything visible that casts shadows (the geometry the bake's rays see: bake/geometry.py's
+scene_parts), storing the distance towards the source of the nearest caster per texel (float, not
+depth: the shader compares distances). The shading reads them per pixel
+(shaders/sd_source_shadows.glsl).
+
+The maps are rendered again only when the sources' world directions change (the environment
+turns) or what casts does (staleness.shape_generation: a move, an edit, an undo); otherwise a draw
+costs their lookups alone. The caster geometry is read again only on the second kind of change.
+"""
+
+import numpy as np
+
+from .. import compat
+from ..bake import geometry
+from ..scene import light_sources
+from . import gpu_shading, staleness
+
+_casters = [None, None]   # [key, (GPUBatch or None, centre, radius)]
+_maps = [None, None]      # [key, (texture, shader rows)]
+_targets = {}             # source count -> (colour GPUTexture, depth GPUTexture, GPUFrameBuffer)
+_shader = []              # (GPUShader, interface, create-info), compiled once
+
+EMPTY = -1.0e30           # what a texel holds where nothing casts
+
+
+def clear_cache():
+    _casters[:] = [None, None]
+    _maps[:] = [None, None]
+    _targets.clear()
+    _shader.clear()
+
+
+def _caster_shader():
+    if not _shader:
+        import gpu
+        info = gpu.types.GPUShaderCreateInfo()
+        info.push_constant('MAT4', "sd_light_clip")
+        info.push_constant('VEC4', "sd_light_t")
+        info.vertex_in(0, 'VEC3', "pos")
+        interface = gpu.types.GPUStageInterfaceInfo("sd_caster_interface")
+        interface.smooth('FLOAT', "sd_t")
+        _shader.append((gpu_shading.create(info, interface, gpu_shading.CASTER_FILES), interface, info))
+    return _shader[0][0]
+
+
+def casters(depsgraph, view_layer, scene_name):
+    """(batch of every visible triangle in world space or None, centre, radius of their bounding
+    sphere), read again when something moved or changed since the last call."""
+    key = (staleness.shape_generation, scene_name)
+    if _casters[0] != key:
+        vertices, triangles = geometry.join([(part.vertices, part.triangles)
+                                             for part in geometry.scene_parts(depsgraph, view_layer)])
+        if vertices is None:
+            _casters[1] = (None, np.zeros(3), 1.0)
+        else:
+            low, high = vertices.min(axis=0), vertices.max(axis=0)
+            batch = compat.make_batch('TRIS', {"pos": vertices.astype(np.float32)}, indices=triangles)
+            _casters[1] = (batch, (low + high) / 2.0, max(float(np.linalg.norm(high - low)) / 2.0, 1e-6))
+        _casters[0] = key
+    return _casters[1]
+
+
+def _target(count):
+    """(colour, depth, framebuffer) holding `count` maps side by side."""
+    if count not in _targets:
+        import gpu
+        size = light_sources.SHADOW_MAP_SIZE
+        colour = gpu.types.GPUTexture((count * size, size), format='R32F')
+        depth = gpu.types.GPUTexture((count * size, size), format='DEPTH_COMPONENT32F')
+        _targets.clear()   # one set at a time: the scene's sources
+        _targets[count] = (colour, depth, gpu.types.GPUFrameBuffer(depth_slot=depth, color_slots=colour))
+    return _targets[count]
+
+
+def shadow_maps(sources, to_environment, depsgraph, view_layer, scene_name):
+    """(the maps' R32F texture, the shader's rows: light_sources.shadow_rows) of `sources`
+    (light_sources.Source, not empty) with the environment rotation g = `to_environment`, rendered
+    when the sources' directions or the casters changed. Draws into its own framebuffer and puts
+    the viewport back as it was; needs a GPU context."""
+    import gpu
+    from mathutils import Matrix
+    batch, centre, radius = casters(depsgraph, view_layer, scene_name)
+    g = np.asarray(to_environment, dtype=np.float64)
+    key = (_casters[0], tuple(sources), g.tobytes())
+    if _maps[0] == key:
+        return _maps[1]
+    rows, projections = light_sources.shadow_rows(sources, g, centre, radius)
+    colour, _, framebuffer = _target(len(sources))
+    size = light_sources.SHADOW_MAP_SIZE
+    viewport = gpu.state.viewport_get()
+    try:
+        with framebuffer.bind():
+            framebuffer.clear(color=(EMPTY, 0.0, 0.0, 0.0), depth=1.0)
+            if batch is not None:
+                gpu.state.depth_test_set('LESS_EQUAL')
+                gpu.state.depth_mask_set(True)
+                gpu.state.blend_set('NONE')
+                gpu.state.face_culling_set('NONE')
+                shader = _caster_shader()
+                for i, projection in enumerate(projections):
+                    gpu.state.viewport_set(i * size, 0, size, size)
+                    gpu_shading.bind(shader)
+                    shader.uniform_float("sd_light_clip", Matrix(projection.tolist()))
+                    shader.uniform_float("sd_light_t", rows[light_sources.SOURCE_ROWS * i + 2].tolist())
+                    batch.draw(shader)
+    finally:
+        gpu.state.viewport_set(*viewport)
+    _maps[:] = [key, (colour, rows)]
+    return _maps[1]

@@ -68,6 +68,7 @@ TESTS = [
     ("test_gpu_hard_cases", GPU, 300, [], [], (3, 4, 0)),
     ("test_background_builds", GPU, 600, [], [], (3, 4, 0)),
     ("test_preview", BACKGROUND, 300, [], [], (3, 4, 0)),
+    ("test_source_shadows", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_shader_rebind", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_world_orientation", BACKGROUND, 300, [], [], (3, 4, 0)),
     ("test_material_colour", BACKGROUND, 300, [], [], (3, 4, 0)),

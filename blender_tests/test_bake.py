@@ -286,14 +286,19 @@ def main():
 
 def bright_sources(checks, package, scene):
     """The Environment panel names the map's bright sources, found in a worker thread (issue 29):
-    sunrise.exr's sun, and says that SH blurs its shadows."""
+    sunrise.exr's sun, and says how the live shading treats it: shadowed per pixel (Sharp Source
+    Shadows, the default), or blurred by SH with the option off."""
     sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))
     environment = package.scene.environment
     searching = "\n".join(sdtest.panel_texts())
     found = environment.bright_sources(environment.source(scene), wait=True)
     texts = "\n".join(sdtest.panel_texts())
+    scene.sd_lighting.source_shadows = False
+    blurred = "\n".join(sdtest.panel_texts())
+    scene.sd_lighting.source_shadows = True
     checks.check("Finding the map's bright sources" in searching and len(found) == 1 and found[0][2] > 0.5
-                 and "1 bright source: " in texts and "SH blurs their shadows" in texts,
+                 and "1 bright source: " in texts and "shadowed per pixel on diffuse surfaces" in texts
+                 and "SH blurs their shadows" in blurred,
                  "the Environment panel names sunrise.exr's sun", "; ".join(
                      line for line in texts.split("\n") if "source" in line or "elevation" in line))
 

@@ -10,14 +10,23 @@
  * The penumbra is that of percentage-closer soft shadows (Fernando 2005, "Percentage-closer soft
  * shadows"): the mean blocker distance found over the area that could block the source sets the
  * width of the filter; both are ellipses with the source's own axes, so a window's shadow is
- * sharp along its long side's edges and soft across them. The receiver's plane (from the pixel's
- * normal) sets what each sample compares with, so a surface tilted to the source does not shadow
- * itself (no acne) without a bias large enough to lift shadows off their contacts.
+ * sharp along its long side's edges and soft across them. The receiver's plane (the triangle's,
+ * from the screen-space derivatives of its position) sets what each sample compares with, so a
+ * surface tilted to the source - even at grazing light - does not shadow itself (no acne) without
+ * a bias large enough to lift shadows off their contacts.
  */
 #ifdef SD_SOURCES
 
-#define SD_BLOCKER_SAMPLES 16
-#define SD_FILTER_SAMPLES 32
+/* per source; with three or four, fewer (their shadows overlap, each carries less of the light) */
+#if SD_SOURCES > 2
+#  define SD_BLOCKER_SAMPLES 12
+#  define SD_FILTER_SAMPLES 16
+#else
+#  define SD_BLOCKER_SAMPLES 16
+#  define SD_FILTER_SAMPLES 32       /* over a penumbra SD_WIDE_PENUMBRA texels wide or more */
+#endif
+#define SD_NARROW_FILTER_SAMPLES 8   /* over a narrower one (a sun's shadow near its caster) */
+#define SD_WIDE_PENUMBRA 3.0
 
 /* Point k of `count` spread evenly over the unit disc (Vogel's spiral): a fixed pattern, so the
  * shadows do not shimmer as the view or the world turns. */
@@ -43,7 +52,7 @@ vec2 sd_ellipse_offset(vec4 extent, vec2 radii, float least, vec2 disc)
   return disc.x * radii.x * extent.xy + disc.y * radii.y * vec2(-extent.y, extent.x);
 }
 
-/* The share of source i that reaches world point p, of world normal n (unit). */
+/* The share of source i that reaches world point p on a surface of geometric normal n (world, unit). */
 float sd_source_visibility(int i, vec3 p, vec3 n)
 {
   int row = SD_SOURCE_ROWS * i;
@@ -60,9 +69,10 @@ float sd_source_visibility(int i, vec3 p, vec3 n)
     return 1.0;   /* outside everything that casts */
   }
   float t = dot(row_t, q);
-  /* the receiver's plane: t changes by dot(slope, offset) across (u, v) (tilt capped at 4:1) */
-  vec2 slope = -(sizes.z * sizes.z) * vec2(dot(n, row_u.xyz), dot(n, row_v.xyz)) / max(dot(n, row_t.xyz), 0.25);
-  float bias = 1.5 * texel;
+  /* the receiver's plane: t changes by dot(slope, offset) across (u, v) (tilt capped at 50:1); the
+   * map holds a caster's t at its texel's centre, up to half a texel from where it is read */
+  vec2 slope = -(sizes.z * sizes.z) * vec2(dot(n, row_u.xyz), dot(n, row_v.xyz)) / max(dot(n, row_t.xyz), 0.02);
+  float bias = 1.5 * texel + 0.5 * (abs(slope.x) + abs(slope.y)) / float(SD_SHADOW_MAP_SIZE);
   float least = 1.0 / float(SD_SHADOW_MAP_SIZE);
   /* blocker search over what could hide any of the source: blockers at most sizes.y - t above */
   vec2 reach = extent.zw * max(sizes.y - t, 0.0);
@@ -76,33 +86,63 @@ float sd_source_visibility(int i, vec3 p, vec3 n)
       blockers += 1.0;
     }
   }
+  /* nothing or everything over the search area, which holds the filter's: lit, or in the umbra */
   if (blockers == 0.0) {
     return 1.0;
   }
+  if (blockers == float(SD_BLOCKER_SAMPLES)) {
+    return 0.0;
+  }
   /* the penumbra of the mean blocker distance: the source's semi-axes seen from there */
   vec2 radii = extent.zw * (distance / blockers);
+  int count = (max(radii.x, radii.y) * float(SD_SHADOW_MAP_SIZE) < SD_WIDE_PENUMBRA) ? SD_NARROW_FILTER_SAMPLES :
+                                                                                          SD_FILTER_SAMPLES;
   float lit = 0.0;
-  for (int k = 0; k < SD_FILTER_SAMPLES; k++) {
-    vec2 offset = sd_ellipse_offset(extent, radii, least, sd_disc_point(k, SD_FILTER_SAMPLES));
+  for (int k = 0; k < count; k++) {
+    vec2 offset = sd_ellipse_offset(extent, radii, least, sd_disc_point(k, count));
     lit += (sd_shadow_depth(i, uv + offset) > t + dot(slope, offset) + bias) ? 0.0 : 1.0;
   }
-  return lit / float(SD_FILTER_SAMPLES);
+  return lit / float(count);
+}
+
+/* The share of a source's light a surface receives, as n . l is for a point source: a uniform disc
+ * of angular radius sigma (sin^2 sigma given) at cos theta = n . l from the normal, clipped by the
+ * surface's horizon. Above it: cos theta. Straddling it, the closed form of a sphere light's
+ * irradiance (Snyder 1996, "Area light sources for real-time graphics"; as in Lagarde and de
+ * Rousiers 2014, "Moving Frostbite to PBR", section 4.7.2) over pi sin^2 sigma: a softbox at the
+ * horizon lights a floor with the half of it above, where cos theta at its centre would give ~0. */
+float sd_source_cosine(float cos_theta, float sin2_sigma)
+{
+  if (cos_theta * cos_theta >= sin2_sigma) {
+    return max(cos_theta, 0.0);
+  }
+  float sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 1e-12));
+  float cot_sigma = sqrt(max(1.0 / sin2_sigma - 1.0, 0.0));
+  float y = clamp(-cot_sigma * cos_theta / sin_theta, -1.0, 1.0);
+  float s = sin_theta * sqrt(1.0 - y * y);
+  float e = (cos_theta * acos(y) - cot_sigma * s) * sin2_sigma + atan(s, cot_sigma);
+  return max(e, 0.0) / (3.14159265 * sin2_sigma);
 }
 
 /* The sources' light on the Lambert lobe at the pixel (position sd_origin_offset from the
  * object's origin, bake-space normal `normal`, unit): the sum of each source's irradiance times
- * n . l and its visibility. `visible`: the luminance share of that light the shadows let through
+ * its cosine (sd_source_cosine) and its visibility. `visible`: the luminance share of that light the shadows let through
  * (1 where no source faces the normal); `weight`: the sources' share of the unshadowed light,
  * against the remainder's mean radiance L_00 (what the Lambert lobe gives in a uniform world). */
 vec3 sd_source_light(vec3 normal, out float visible, out float weight)
 {
   const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
   vec3 world = sd_origin_offset + sd.model[3].xyz;
-  vec3 world_normal = normalize(transpose(mat3(sd.world_to_local)) * normal);
+  /* the triangle's own plane (the shading normal of a smooth mesh tilts away from it), on the
+   * side the shading normal faces */
+  vec3 shading_normal = transpose(mat3(sd.world_to_local)) * normal;
+  vec3 face = cross(dFdx(world), dFdy(world));
+  vec3 world_normal = dot(face, face) > 0.0 ? normalize(face) : normalize(shading_normal);
+  world_normal *= (dot(world_normal, shading_normal) < 0.0) ? -1.0 : 1.0;
   vec3 lit = vec3(0.0);
   vec3 open = vec3(0.0);
   for (int i = 0; i < SD_SOURCES; i++) {
-    float c = dot(normal, sd.source_direction[i].xyz);
+    float c = sd_source_cosine(dot(normal, sd.source_direction[i].xyz), sd.source_direction[i].w);
     if (c > 0.0) {
       vec3 e = c * sd.source_irradiance[i].rgb;
       open += e;

@@ -90,7 +90,7 @@ def test_sources_and_the_remainder_light_a_surface_as_the_whole_map_does(sdnativ
 
     strength = 2.5
     directions, irradiance = light_sources.shading_rows(sources, np.eye(3), strength)
-    added = np.maximum(normals @ directions[0, :3], 0.0)[:, None] * irradiance[0, :3]
+    added = np.maximum(normals @ directions[0, :3], 0.0)[:, None] * irradiance[0, :3]   # a 2-degree sun: n . l
     whole = strength * lambert(env)
     assert np.abs(strength * lambert(split["remainder"]) + added - whole).max() < 0.02 * np.abs(whole).max()
     assert added.max() > 0.5 * whole.max()   # the sun is most of it
@@ -133,4 +133,5 @@ def test_shading_rows_turn_each_source_into_the_objects_bake_space():
     gr = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])   # 90 degrees about x
     directions, irradiance = light_sources.shading_rows([source, source], gr, 2.0)
     assert directions[:, :3] == pytest.approx(np.tile(gr.T @ [0.0, 0.0, 1.0], (2, 1)))
+    assert directions[:, 3] == pytest.approx(math.sin(0.01) ** 2)   # sin^2 of the disc's radius
     assert irradiance[0] == pytest.approx([0.8, 1.6, 2.4, 0.0])   # 4 x strength x power

@@ -121,12 +121,14 @@ def shadow_rows(sources, to_environment, center, radius, size=SHADOW_MAP_SIZE):
 
 def shading_rows(sources, local_to_environment, strength):
     """The shader's per-source rows for one object: the direction towards each source in the
-    object's bake space, (g R)^T times its direction, and its irradiance (Source.irradiance);
-    float64 [N, 4] each."""
+    object's bake space, (g R)^T times its direction, with sin^2 of the radius of the disc of its
+    ellipse's area (sqrt(major minor): what the horizon clips, shaders/sd_source_shadows.glsl's
+    sd_source_cosine); and its irradiance (Source.irradiance). float64 [N, 4] each."""
     gr = np.asarray(local_to_environment, dtype=np.float64)
     directions = np.zeros((len(sources), 4))
     irradiance = np.zeros((len(sources), 4))
     for i, source in enumerate(sources):
         directions[i, :3] = gr.T @ np.asarray(source.direction, dtype=np.float64)
+        directions[i, 3] = math.sin(math.sqrt(source.major_radius * source.minor_radius)) ** 2
         irradiance[i, :3] = source.irradiance(strength)
     return directions, irradiance

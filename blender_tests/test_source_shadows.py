@@ -8,7 +8,8 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
 4 x 4 blocks both cover:
 1. sunrise.exr (a low sun, 59 % of the light): with the sources under MAX_ERROR and under half the
    error without them; the cube's umbra where Cycles has it (the pixels darker than halfway
-   between shadow and sunlight agree on all but MAX_SHADOW_MISMATCH of the ground).
+   between shadow and sunlight agree on all but MAX_SHADOW_MISMATCH of the ground); the cube
+   hidden, its shadow is gone.
 2. The world turned 90 degrees: the sun's shadow moves with it (the umbra changes) and still
    agrees with Cycles' of the turned world, with nothing baked again.
 3. A map with two opposite suns (written here: two 3-degree discs at 35 degrees elevation on a
@@ -132,6 +133,20 @@ def main():
     mismatch = float(np.mean(umbra(first, mask)[mask] != umbra(cycles, mask)[mask]))
     checks.check(umbra(cycles, mask).any() and mismatch < MAX_SHADOW_MISMATCH,
                  "the umbrae lie where Cycles has them", "%.2f %% of the pixels differ" % (100 * mismatch))
+    # hiding the cube (H: only the scene is updated in the depsgraph, no move nor edit) takes its
+    # shadow away: the viewport's next draw reads the casters again, and so does the preview
+    shadows = package.live.source_shadows
+    view_layer = bpy.context.view_layer
+    before = shadows.casters(scene, view_layer.depsgraph, view_layer)
+    cube.hide_set(True)
+    after = shadows.casters(scene, view_layer.depsgraph, view_layer)
+    checks.check(after[0] is not before[0], "hiding a caster, with nothing moved, makes the draw read the casters again")
+    hidden = sdtest.preview(os.path.join(args.out, "sunrise_cube_hidden.exr"), width=SIZE, height=SIZE)
+    cube.hide_set(False)
+    shade = umbra(first, mask) & (hidden[..., 3] > 0.99)   # the shadow on the ground (the cube was above it)
+    lit = [float(np.mean(image[shade][:, :3])) for image in (first, hidden)]
+    checks.check(shade.any() and lit[1] > 1.5 * lit[0], "a hidden object casts no shadow",
+                 "where its shadow was: %.3g with the cube, %.3g hidden" % tuple(lit))
     if args.quick:
         return checks.summary()
 

@@ -231,8 +231,7 @@ def source_lighting(scene, source, g, wait, view_layer=None):
     if not split or not split["sources"]:
         return None
     view_layer = view_layer or bpy.context.view_layer
-    texture, rows = source_shadows.shadow_maps(split["sources"], g, view_layer.depsgraph, view_layer,
-                                               scene.name_full)
+    texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, view_layer.depsgraph, view_layer)
     return split["sources"], texture, rows
 
 

@@ -5,8 +5,9 @@ depth: the shader compares distances). The shading reads them per pixel
 (shaders/sd_source_shadows.glsl).
 
 The maps are rendered again only when the sources' world directions change (the environment
-turns) or what casts does (staleness.shape_generation: a move, an edit, an undo); otherwise a draw
-costs their lookups alone. The caster geometry is read again only on the second kind of change.
+turns) or what casts does (staleness.shape_generation: a move, an edit, an undo; or which objects
+are visible - hiding one updates only the scene in the depsgraph); otherwise a draw costs their
+lookups alone. The caster geometry is read again only on the second kind of change.
 """
 
 import numpy as np
@@ -44,10 +45,23 @@ def _caster_shader():
     return _shader[0][0]
 
 
-def casters(depsgraph, view_layer, scene_name):
+def _visible(scene, view_layer):
+    """The names of the scene's visible objects that can cast (bake/geometry.GEOMETRY_TYPES)."""
+    out = []
+    for obj in scene.objects:
+        if obj.type in geometry.GEOMETRY_TYPES:
+            try:
+                if obj.visible_get(view_layer=view_layer):
+                    out.append(obj.name_full)
+            except (RuntimeError, TypeError):
+                pass
+    return tuple(out)
+
+
+def casters(scene, depsgraph, view_layer):
     """(batch of every visible triangle in world space or None, centre, radius of their bounding
-    sphere), read again when something moved or changed since the last call."""
-    key = (staleness.shape_generation, scene_name)
+    sphere), read again when something moved, changed, appeared or was hidden since the last call."""
+    key = (staleness.shape_generation, scene.name_full, _visible(scene, view_layer))
     if _casters[0] != key:
         vertices, triangles = geometry.join([(part.vertices, part.triangles)
                                              for part in geometry.scene_parts(depsgraph, view_layer)])
@@ -73,14 +87,14 @@ def _target(count):
     return _targets[count]
 
 
-def shadow_maps(sources, to_environment, depsgraph, view_layer, scene_name):
+def shadow_maps(sources, to_environment, scene, depsgraph, view_layer):
     """(the maps' R32F texture, the shader's rows: light_sources.shadow_rows) of `sources`
     (light_sources.Source, not empty) with the environment rotation g = `to_environment`, rendered
     when the sources' directions or the casters changed. Draws into its own framebuffer and puts
     the viewport back as it was; needs a GPU context."""
     import gpu
     from mathutils import Matrix
-    batch, centre, radius = casters(depsgraph, view_layer, scene_name)
+    batch, centre, radius = casters(scene, depsgraph, view_layer)
     g = np.asarray(to_environment, dtype=np.float64)
     key = (_casters[0], tuple(sources), g.tobytes())
     if _maps[0] == key:

@@ -9,7 +9,7 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
 1. sunrise.exr (a low sun, 59 % of the light): with the sources under MAX_ERROR and under half the
    error without them; the cube's umbra where Cycles has it (the pixels darker than halfway
    between shadow and sunlight agree on all but MAX_SHADOW_MISMATCH of the ground); the cube
-   hidden, its shadow is gone.
+   hidden, its shadow is gone. Per pixel too.
 2. The world turned 90 degrees: the sun's shadow moves with it (the umbra changes) and still
    agrees with Cycles' of the turned world, with nothing baked again.
 3. A map with two opposite suns (written here: two 3-degree discs at 35 degrees elevation on a
@@ -18,6 +18,9 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
    ground sees their upper halves, at grazing light): within MAX_ERROR, its mean within MAX_BIAS
    of Cycles' (with the centre's n . l, or the shading normal's plane against acne, the ground was
    6 % too dark).
+5. sunrise.exr with a Principled BSDF of roughness 0.5 on the ground and the cube (a Lambert lobe
+   under a specular layer lit by the prefiltered map): under MAX_LAYER_ERROR and half the error
+   of SH alone.
 The panel says the sources are shadowed per pixel. Error images (Cycles, preview, |difference| x 4)
 go to --out. --quick (the quick tier): step 1 alone.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_source_shadows.py -- --zip Z --out DIR
@@ -40,6 +43,10 @@ MAX_NOISE = 0.015
 MAX_ERROR = 0.03
 MAX_SHADOW_MISMATCH = 0.03
 MAX_BIAS = 0.015
+# A Principled BSDF's specular layer reads the prefiltered whole map, its visibility mixed with the
+# sources' (msd-notes, Bright sources): the sun's highlight is not its own lobe yet (issue 29, item
+# 3). Measured: 2.7 % on 3.4.1 (Principled v1), 4.7 % on 5.0 / 5.3 (v2), against 7.1 / 11.9 % SH alone.
+MAX_LAYER_ERROR = 0.06
 
 
 def two_suns(package, path):
@@ -117,7 +124,7 @@ def main():
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
     checks = sdtest.Checks("test_source_shadows")
-    scene, ground, cube = scene_setup()
+    scene, ground, cube = scene_setup()   # the ball keeps the white material (it is not baked)
     world, mapping = sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))
     sdtest.select_only([ground, cube])
     result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
@@ -143,12 +150,21 @@ def main():
     checks.check(after[0] is not before[0], "hiding a caster, with nothing moved, makes the draw read the casters again")
     hidden = sdtest.preview(os.path.join(args.out, "sunrise_cube_hidden.exr"), width=SIZE, height=SIZE)
     cube.hide_set(False)
+    sdtest.select_only([ground, cube])   # hiding deselected it
     shade = umbra(first, mask) & (hidden[..., 3] > 0.99)   # the shadow on the ground (the cube was above it)
     lit = [float(np.mean(image[shade][:, :3])) for image in (first, hidden)]
     checks.check(shade.any() and lit[1] > 1.5 * lit[0], "a hidden object casts no shadow",
                  "where its shadow was: %.3g with the cube, %.3g hidden" % tuple(lit))
     if args.quick:
         return checks.summary()
+
+    # per pixel (the panel's Per Pixel): the same sources, the same shadows
+    scene.sd_lighting.per_pixel = True
+    per_pixel = sdtest.preview(os.path.join(args.out, "sunrise_per_pixel.exr"), width=SIZE, height=SIZE)
+    scene.sd_lighting.per_pixel = False
+    error = relative_rms(per_pixel, cycles, mask)
+    checks.check(error < MAX_ERROR, "per pixel: within %.0f %% of Cycles" % (100 * MAX_ERROR), "%.2f %%" % (100 * error))
+
 
     mapping.inputs["Rotation"].default_value[2] = math.radians(90.0)
     (turned, turned_sh), mask_turned, second, cycles_turned = compare(package, checks, scene, args.out, "sunrise_turned",
@@ -178,6 +194,17 @@ def main():
     checks.check(result == {'FINISHED'} and studio < MAX_ERROR and abs(bias) < MAX_BIAS,
                  "four softboxes, two at the horizon: their shadows and their grazing light as Cycles has them",
                  "%.2f %% against %.2f %% through SH alone; bias %+.2f %%" % (100 * studio, 100 * studio_sh, 100 * bias))
+
+    # a Principled BSDF of roughness 0.5 (the default material): a Lambert lobe under a specular layer
+    plastic = sdtest.principled_material("Plastic", roughness=0.5)
+    for obj in (ground, cube):
+        obj.data.materials[0] = plastic
+    result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
+    (layered, layered_sh), _, _, _ = compare(package, checks, scene, args.out, "sunrise_principled",
+                                             "sunrise.exr, Principled roughness 0.5")
+    checks.check(result == {'FINISHED'} and layered < MAX_LAYER_ERROR and layered < 0.5 * layered_sh,
+                 "a Principled BSDF's diffuse and specular layer see the sun's shadow",
+                 "%.2f %% against %.2f %% through SH alone" % (100 * layered, 100 * layered_sh))
     return checks.summary()
 
 

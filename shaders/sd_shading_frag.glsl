@@ -115,13 +115,15 @@ vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
 /* The sources' light on the Lambert lobe (sd_source_light), and the specular layers' visibility
  * ratio made to see their shadows too: the prefiltered light holds the sources, while the ratio
  * is of the remainder's lobe alone. Mixed by the sources' share of the unshadowed light, as the
- * rough layers (roughness >= 0.5) spread it over nearly the Lambert lobe's directions. */
-vec3 sd_sources_on_layer(vec3 normal, inout float visibility)
+ * rough layers (roughness >= 0.5) spread it over nearly the Lambert lobe's directions. `stored`:
+ * 1, or 0 where no data is (a lightmap pixel without a texel: no light at all). Called where
+ * every pixel does (sd_source_light takes screen-space derivatives). */
+vec3 sd_sources_on_layer(vec3 normal, float stored, inout float visibility)
 {
   float visible, weight;
   vec3 lit = sd_source_light(normal, visible, weight);
-  visibility = mix(visibility, visible, weight);
-  return lit;
+  visibility = mix(visibility, visible, stored * weight);
+  return stored * lit;
 }
 #endif
 
@@ -178,27 +180,26 @@ void main()
     rgb /= total;
     diffuse /= total;
   }
+  float stored = (total > 0.0) ? 1.0 : 0.0;   /* no texel stored here: no light, as before */
 #  else
   sd_add_entry(sd_bary.x, int(sd_corners.x + 0.5), normal, view, rgb, diffuse);
   sd_add_entry(sd_bary.y, int(sd_corners.y + 0.5), normal, view, rgb, diffuse);
   sd_add_entry(sd_bary.z, int(sd_corners.z + 0.5), normal, view, rgb, diffuse);
+  float stored = 1.0;
 #  endif
 #  ifdef SD_PREFILTERED
-  float visibility = sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal);
-#    ifdef SD_LIGHTMAP
-  visibility = (total > 0.0) ? visibility : 0.0;   /* no texel stored here: nothing, as before */
-#    endif
+  float visibility = stored * sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal);
 #    ifdef SD_LAMBERT_LAYER
   diffuse = rgb;
 #      ifdef SD_SOURCES
-  diffuse += sd_sources_on_layer(normal, visibility);
+  diffuse += sd_sources_on_layer(normal, stored, visibility);
 #      endif
 #    endif
   rgb = sd_glossy_light(visibility, normal, view);
 #  else
 #    ifdef SD_SOURCES
   float visible, weight;
-  rgb += sd_source_light(normal, visible, weight);
+  rgb += stored * sd_source_light(normal, visible, weight);
 #    endif
   rgb *= sd.params.x;
 #  endif
@@ -212,7 +213,7 @@ void main()
   vec3 view = sd_view_direction(sd_origin_offset);
   float visibility = sd_visibility;
 #    ifdef SD_SOURCES
-  diffuse += sd.params.x * sd_sources_on_layer(normal, visibility);
+  diffuse += sd.params.x * sd_sources_on_layer(normal, 1.0, visibility);
 #    endif
   fragColor = vec4(sd_surface(sd_glossy_light(visibility, normal, view), diffuse, dot(normal, view)), 1.0);
 #  else

@@ -52,7 +52,8 @@ vec2 sd_ellipse_offset(vec4 extent, vec2 radii, float least, vec2 disc)
   return disc.x * radii.x * extent.xy + disc.y * radii.y * vec2(-extent.y, extent.x);
 }
 
-/* The share of source i that reaches world point p on a surface of geometric normal n (world, unit). */
+/* The share of source i that reaches point p (world, relative to the object's origin: the block's
+ * rows are, light_sources.rows_from) on a surface of geometric normal n (world, unit). */
 float sd_source_visibility(int i, vec3 p, vec3 n)
 {
   int row = SD_SOURCE_ROWS * i;
@@ -76,13 +77,13 @@ float sd_source_visibility(int i, vec3 p, vec3 n)
   float least = 1.0 / float(SD_SHADOW_MAP_SIZE);
   /* blocker search over what could hide any of the source: blockers at most sizes.y - t above */
   vec2 reach = extent.zw * max(sizes.y - t, 0.0);
-  float blockers = 0.0, distance = 0.0;
+  float blockers = 0.0, blocker_distance = 0.0;
   for (int k = 0; k < SD_BLOCKER_SAMPLES; k++) {
     vec2 offset = sd_ellipse_offset(extent, reach, 1.5 * least, sd_disc_point(k, SD_BLOCKER_SAMPLES));
     float plane = t + dot(slope, offset);
     float depth = sd_shadow_depth(i, uv + offset);
     if (depth > plane + bias) {
-      distance += depth - plane;
+      blocker_distance += depth - plane;
       blockers += 1.0;
     }
   }
@@ -94,7 +95,7 @@ float sd_source_visibility(int i, vec3 p, vec3 n)
     return 0.0;
   }
   /* the penumbra of the mean blocker distance: the source's semi-axes seen from there */
-  vec2 radii = extent.zw * (distance / blockers);
+  vec2 radii = extent.zw * (blocker_distance / blockers);
   int count = (max(radii.x, radii.y) * float(SD_SHADOW_MAP_SIZE) < SD_WIDE_PENUMBRA) ? SD_NARROW_FILTER_SAMPLES :
                                                                                           SD_FILTER_SAMPLES;
   float lit = 0.0;
@@ -132,7 +133,7 @@ float sd_source_cosine(float cos_theta, float sin2_sigma)
 vec3 sd_source_light(vec3 normal, out float visible, out float weight)
 {
   const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
-  vec3 world = sd_origin_offset + sd.model[3].xyz;
+  vec3 world = sd_origin_offset;   /* world, relative to the object's origin */
   /* the triangle's own plane (the shading normal of a smooth mesh tilts away from it), on the
    * side the shading normal faces */
   vec3 shading_normal = transpose(mat3(sd.world_to_local)) * normal;

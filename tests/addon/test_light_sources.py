@@ -135,3 +135,15 @@ def test_shading_rows_turn_each_source_into_the_objects_bake_space():
     assert directions[:, :3] == pytest.approx(np.tile(gr.T @ [0.0, 0.0, 1.0], (2, 1)))
     assert directions[:, 3] == pytest.approx(math.sin(0.01) ** 2)   # sin^2 of the disc's radius
     assert irradiance[0] == pytest.approx([0.8, 1.6, 2.4, 0.0])   # 4 x strength x power
+
+
+def test_rows_from_an_origin_place_points_given_relative_to_it_as_the_world_rows_place_them():
+    source = light_sources.Source((0.0, 0.6, 0.8), (1.0, 0.0, 0.0), 0.01, 0.01, (1.0, 1.0, 1.0))
+    origin = np.array([1.0e6, -2.0e5, 30.0])   # far from the world's origin, where float32 would round
+    rows, _ = light_sources.shadow_rows([source, source], np.eye(3), origin + [0.0, 0.0, 1.0], 4.0)
+    relative = light_sources.rows_from(rows, origin)
+    p = np.array([0.5, -1.25, 2.0])
+    for k in (0, 1, 2, 5, 6, 7):
+        assert relative[k] @ np.append(p, 1.0) == pytest.approx(rows[k] @ np.append(origin + p, 1.0), abs=1e-9)
+    assert np.array_equal(relative[[3, 4, 8, 9]], rows[[3, 4, 8, 9]])   # the extent and sizes stay
+    assert np.abs(relative[:3, 3]).max() < 10.0   # small constants: float32 keeps the pixel's place

@@ -20,6 +20,12 @@ from . import corners, refine, sides as sides_module
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'META', 'FONT'}
 
 
+def casts(obj):
+    """Whether moving or hiding the object can change the occluders (scene_parts): geometry, or an
+    instancer of some."""
+    return obj.type in GEOMETRY_TYPES or obj.is_instancer
+
+
 def _unit_or_zero(vectors):
     """Unit rows; zero (and non-finite) rows become zero, for the native bake's fallback."""
     length = np.linalg.norm(vectors, axis=1)

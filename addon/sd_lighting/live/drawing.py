@@ -24,7 +24,7 @@ import logging
 import numpy as np
 
 from .. import background, methods, native, redraw
-from ..scene import environment, materials, transforms
+from ..scene import environment, light_sources, materials, transforms
 from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
@@ -40,6 +40,7 @@ _objects = {}         # object name -> (key, ObjectData)
 _generations = ()     # the background work's generations the viewports last showed
 _instances = (None, [])   # (key, baked_instances' result) of the last depsgraph looked through
 last_error = ""
+source_error = ""     # why the last interactive draw shaded the bright sources through SH (the panel)
 
 
 def clear_cache():
@@ -153,8 +154,23 @@ def ringing_choice(scene, obj, wait=False):
     record = baked.record(obj)
     if record is None:
         return None
-    return environment.ringing_window(environment.source(scene), record.lobe, record.exponent,
-                                      record.light_order, ringing_setting(scene), wait)
+    source = environment.source(scene)
+    return environment.ringing_window(source, record.lobe, record.exponent, record.light_order,
+                                      ringing_setting(scene), wait,
+                                      remainder=record.lobe == "lambert" and _has_sources(scene, source))
+
+
+def _has_sources(scene, source):
+    """Whether the scene's bright sources light Lambert lobes on their own (source_lighting),
+    without waiting for them to be found (not yet: False)."""
+    settings = getattr(scene, "sd_lighting", None)
+    if settings is None or not settings.source_shadows:
+        return False
+    try:
+        split = environment.source_split(source, wait=False)
+    except background.Failed:
+        return False
+    return bool(split and split["sources"])
 
 
 def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None, remainder=False):
@@ -184,7 +200,9 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     """(uniform block, {sampler: texture} of the environment textures it reads) of one draw of the
     object's data with `matrix` (default: its world matrix; an instance's). wait: as
     shading_light; without waiting, what is still pending is watched (watch_background).
-    sources: source_lighting's, for data that takes them (ObjectData.takes_sources), or None."""
+    sources: source_lighting's, for data that takes them (ObjectData.takes_sources), or None.
+    The sources' shadow rows are made relative to the object's origin here, in float64 (the
+    shader has the pixel's position relative to it)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
     sources = sources if data.takes_sources else None
@@ -196,7 +214,7 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
         textures[BAND_LIMITED_TEXTURE_SAMPLER[1]], kwargs["band_limited_scale"] = gpu_shading.band_limited_texture(
             source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait, remainder))
     if sources is not None:
-        kwargs["sources"] = (sources[0], sources[2])
+        kwargs["sources"] = (sources[0], light_sources.rows_from(sources[2], matrix[:3, 3]))
         textures[SHADOW_MAP_SAMPLER[1]] = sources[1]
     block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
                              albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None,
@@ -216,22 +234,29 @@ def source_lighting(scene, source, g, wait, view_layer=None):
     """(scene/light_sources.Source list, their shadow maps' texture, the maps' shader rows) of the
     map's bright sources that light diffuse objects on their own (the scene's Sharp Source
     Shadows), or None: the option is off, the map has none, or (wait=False) they are still being
-    found (the whole map through SH meanwhile) or their search failed (the panel says why). The
-    maps are rendered now when the sources or the casters changed (source_shadows.py)."""
+    found (the whole map through SH meanwhile), or their search or their shadow maps failed (the
+    whole map through SH; source_error says why, the panel shows it; wait=True raises). The maps
+    are rendered now when the sources or the casters changed (source_shadows.py)."""
     import bpy
+    global source_error
     settings = getattr(scene, "sd_lighting", None)
     if settings is None or not settings.source_shadows:
         return None
     try:
         split = environment.source_split(source, wait)
-    except background.Failed:
+        if not split or not split["sources"]:
+            return None
+        view_layer = view_layer or bpy.context.view_layer
+        texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, view_layer.depsgraph, view_layer)
+    except Exception as exc:
         if wait:
             raise
+        message = "%s: %s" % (type(exc).__name__, exc)
+        if message != source_error:
+            log.error("the bright sources are shaded through SH: %s", message)
+        source_error = message
         return None
-    if not split or not split["sources"]:
-        return None
-    view_layer = view_layer or bpy.context.view_layer
-    texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, view_layer.depsgraph, view_layer)
+    source_error = ""
     return split["sources"], texture, rows
 
 

@@ -19,7 +19,7 @@ from . import gpu_shading, staleness
 
 _casters = [None, None]   # [key, (GPUBatch or None, centre, radius)]
 _maps = [None, None]      # [key, (texture, shader rows)]
-_targets = {}             # source count -> (colour GPUTexture, depth GPUTexture, GPUFrameBuffer)
+_targets = {}             # source count -> (colour GPUTexture, depth GPUTexture)
 _shader = []              # (GPUShader, interface, create-info), compiled once
 
 EMPTY = -1.0e30           # what a texel holds where nothing casts
@@ -46,10 +46,10 @@ def _caster_shader():
 
 
 def _visible(scene, view_layer):
-    """The names of the scene's visible objects that can cast (bake/geometry.GEOMETRY_TYPES)."""
+    """The names of the scene's visible objects that can cast (bake/geometry.casts)."""
     out = []
     for obj in scene.objects:
-        if obj.type in geometry.GEOMETRY_TYPES:
+        if geometry.casts(obj):
             try:
                 if obj.visible_get(view_layer=view_layer):
                     out.append(obj.name_full)
@@ -76,22 +76,29 @@ def casters(scene, depsgraph, view_layer):
 
 
 def _target(count):
-    """(colour, depth, framebuffer) holding `count` maps side by side."""
+    """(colour, depth) textures holding `count` maps side by side. Textures are shared between
+    Blender's windows (GPU contexts); a framebuffer is not - bound in another window's context it
+    binds nothing, and the clear and the casters would go into that window's viewport -, so
+    shadow_maps makes its framebuffer each time it draws."""
     if count not in _targets:
         import gpu
         size = light_sources.SHADOW_MAP_SIZE
-        colour = gpu.types.GPUTexture((count * size, size), format='R32F')
-        depth = gpu.types.GPUTexture((count * size, size), format='DEPTH_COMPONENT32F')
+        if count * size > gpu.capabilities.max_texture_size_get():
+            raise ValueError("%d shadow maps of %d texels are wider than this GPU's textures (%d)"
+                             % (count, size, gpu.capabilities.max_texture_size_get()))
         _targets.clear()   # one set at a time: the scene's sources
-        _targets[count] = (colour, depth, gpu.types.GPUFrameBuffer(depth_slot=depth, color_slots=colour))
+        _targets[count] = (gpu.types.GPUTexture((count * size, size), format='R32F'),
+                           gpu.types.GPUTexture((count * size, size), format='DEPTH_COMPONENT32F'))
     return _targets[count]
 
 
 def shadow_maps(sources, to_environment, scene, depsgraph, view_layer):
     """(the maps' R32F texture, the shader's rows: light_sources.shadow_rows) of `sources`
     (light_sources.Source, not empty) with the environment rotation g = `to_environment`, rendered
-    when the sources' directions or the casters changed. Draws into its own framebuffer and puts
-    the viewport back as it was; needs a GPU context."""
+    when the sources' directions or the casters changed. Draws into its own framebuffer, puts the
+    viewport back as it was, and leaves depth testing (LESS_EQUAL) and writing on, blending and
+    culling off: the state the live shading draws with (its callers set the same). Needs a GPU
+    context."""
     import gpu
     from mathutils import Matrix
     batch, centre, radius = casters(scene, depsgraph, view_layer)
@@ -100,7 +107,8 @@ def shadow_maps(sources, to_environment, scene, depsgraph, view_layer):
     if _maps[0] == key:
         return _maps[1]
     rows, projections = light_sources.shadow_rows(sources, g, centre, radius)
-    colour, _, framebuffer = _target(len(sources))
+    colour, depth = _target(len(sources))
+    framebuffer = gpu.types.GPUFrameBuffer(depth_slot=depth, color_slots=colour)
     size = light_sources.SHADOW_MAP_SIZE
     viewport = gpu.state.viewport_get()
     try:

@@ -18,13 +18,14 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .. import redraw
+from ..bake.geometry import casts
 from ..store import baked, source
 from ..store.record import RecordError
 
 _verdicts = {}   # object name -> (the bake_id checked, whether it is stale)
 _shown = False   # whether the status bar names stale bakes
 generation = 0   # counts the depsgraph updates, frame changes, undos and loads seen (drawing's caches)
-shape_generation = 0   # counts those that moved or changed some object's geometry (the shadow casters)
+shape_generation = 0   # counts those that moved or changed what casts shadows (source_shadows.casts)
 
 
 def _record(obj):
@@ -103,8 +104,8 @@ def _on_update(_scene, depsgraph):
     global generation, shape_generation
     generation += 1
     objects = [update for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)]
-    if any(update.is_updated_geometry or update.is_updated_transform for update in objects):
-        shape_generation += 1
+    if any((update.is_updated_geometry or update.is_updated_transform) and casts(update.id) for update in objects):
+        shape_generation += 1   # not for a camera, a lamp or an empty moved
     forget({update.id.original.name for update in objects if update.is_updated_geometry})
 
 

@@ -119,6 +119,16 @@ def shadow_rows(sources, to_environment, center, radius, size=SHADOW_MAP_SIZE):
     return rows, projections
 
 
+def rows_from(rows, origin):
+    """shadow_rows' rows for points relative to `origin` (world) instead of the world's: rows 0 - 2
+    of each source take origin's dot product into their constant, in float64."""
+    out = np.array(rows, dtype=np.float64)
+    for i in range(len(out) // SOURCE_ROWS):
+        part = out[SOURCE_ROWS * i:SOURCE_ROWS * i + 3]
+        part[:, 3] += part[:, :3] @ np.asarray(origin, dtype=np.float64)
+    return out
+
+
 def shading_rows(sources, local_to_environment, strength):
     """The shader's per-source rows for one object: the direction towards each source in the
     object's bake space, (g R)^T times its direction, with sin^2 of the radius of the disc of its

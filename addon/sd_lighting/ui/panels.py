@@ -178,6 +178,8 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
                 drawing.watch_background()   # the panel is drawn again when they are found
             for i, line in enumerate(light_sources.lines(sources, settings.source_shadows)):
                 _text(layout, context, line, icon='LIGHT_SUN' if i == 0 else 'DOT')
+            if settings.source_shadows and drawing.source_error:
+                _text(layout, context, "Shaded through SH: " + drawing.source_error, icon='ERROR')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')
         layout.prop(settings, "environment_rotation")

@@ -155,22 +155,23 @@ def ringing_choice(scene, obj, wait=False):
     if record is None:
         return None
     source = environment.source(scene)
+    try:   # the remainder's window where the sources light the lobe on their own, once found
+        remainder = record.lobe == "lambert" and _shading_split(scene, source, wait=False) is not None
+    except background.Failed:
+        remainder = False
     return environment.ringing_window(source, record.lobe, record.exponent, record.light_order,
-                                      ringing_setting(scene), wait,
-                                      remainder=record.lobe == "lambert" and _has_sources(scene, source))
+                                      ringing_setting(scene), wait, remainder=remainder)
 
 
-def _has_sources(scene, source):
-    """Whether the scene's bright sources light Lambert lobes on their own (source_lighting),
-    without waiting for them to be found (not yet: False)."""
+def _shading_split(scene, source, wait):
+    """environment.source_split's split where the scene's bright sources light Lambert lobes on
+    their own (Sharp Source Shadows on, the map has some), else None (also while being found,
+    wait=False)."""
     settings = getattr(scene, "sd_lighting", None)
     if settings is None or not settings.source_shadows:
-        return False
-    try:
-        split = environment.source_split(source, wait=False)
-    except background.Failed:
-        return False
-    return bool(split and split["sources"])
+        return None
+    split = environment.source_split(source, wait)
+    return split if split and split["sources"] else None
 
 
 def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None, remainder=False):
@@ -239,12 +240,9 @@ def source_lighting(scene, source, g, wait, view_layer=None):
     are rendered now when the sources or the casters changed (source_shadows.py)."""
     import bpy
     global source_error
-    settings = getattr(scene, "sd_lighting", None)
-    if settings is None or not settings.source_shadows:
-        return None
     try:
-        split = environment.source_split(source, wait)
-        if not split or not split["sources"]:
+        split = _shading_split(scene, source, wait)
+        if split is None:
             return None
         view_layer = view_layer or bpy.context.view_layer
         texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, view_layer.depsgraph, view_layer)

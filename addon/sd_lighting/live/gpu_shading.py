@@ -50,8 +50,8 @@ EQUIRECT_FILE = "sd_equirect.glsl"
 SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", ("sd_source_shadows.glsl", "sd_shading_frag.glsl"))
 BACKGROUND_FILES = ("sd_background_vert.glsl", "sd_background_frag.glsl")
 CASTER_FILES = ("sd_caster_vert.glsl", "sd_caster_frag.glsl")
-ALL_FILES = (EQUIRECT_FILE, "sd_shading_lib.glsl", "sd_shading_vert.glsl", "sd_source_shadows.glsl",
-             "sd_shading_frag.glsl") + BACKGROUND_FILES + CASTER_FILES
+ALL_FILES = tuple(name for stage in (EQUIRECT_FILE,) + SHADER_FILES + BACKGROUND_FILES + CASTER_FILES
+                  for name in ((stage,) if isinstance(stage, str) else stage))
 BACKGROUND_SAMPLER = "sd_environment"
 
 _shaders = {}                 # Variant -> (GPUShader, interface, create-info)

@@ -25,7 +25,7 @@ from ..store.record import RecordError
 _verdicts = {}   # object name -> (the bake_id checked, whether it is stale)
 _shown = False   # whether the status bar names stale bakes
 generation = 0   # counts the depsgraph updates, frame changes, undos and loads seen (drawing's caches)
-shape_generation = 0   # counts those that moved or changed what casts shadows (source_shadows.casts)
+shape_generation = 0   # counts those that moved or changed what casts shadows (bake/geometry.casts)
 
 
 def _record(obj):

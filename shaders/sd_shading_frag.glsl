@@ -101,28 +101,29 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 }
 
 #ifdef SD_PREFILTERED
-/* The glossy light at the pixel (times 2^exposure): the environment prefiltered by the slot's GGX
- * lobe around the mirrored view, times its strength (the atlas is without it) and the share
- * `visibility` of it the bake lets through. */
-vec3 sd_glossy_light(float visibility, vec3 normal, vec3 view)
+/* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe
+ * around the mirrored view `axis`, times its strength (the atlas is without it). */
+vec3 sd_open_glossy_light(vec3 axis)
 {
-  return (sd.params.x * sd.prefiltered_scale.x * visibility) *
-         sd_prefiltered_light(sd_mirrored_view(normal, view), sd_lobe_weights.z);
+  return sd.prefiltered_scale.x * sd_prefiltered_light(axis, sd_lobe_weights.z);
 }
 #endif
 
-#if defined(SD_SOURCES) && defined(SD_LAMBERT_LAYER)
-/* The sources' light on the Lambert lobe (sd_source_light), and the specular layers' visibility
- * ratio made to see their shadows too: the prefiltered light holds the sources, while the ratio
- * is of the remainder's lobe alone. Mixed by the sources' share of the unshadowed light, as the
- * rough layers (roughness >= 0.5) spread it over nearly the Lambert lobe's directions. `stored`:
- * 1, or 0 where no data is (a lightmap pixel without a texel: no light at all). Called where
- * every pixel does (sd_source_light takes screen-space derivatives). */
-vec3 sd_sources_on_layer(vec3 normal, float stored, inout float visibility)
+#if defined(SD_SOURCES) && defined(SD_PREFILTERED)
+/* The sources' light on the Lambert lobe (sd_source_light), and the glossy light's visibility
+ * ratio made to see their shadows too: the prefiltered light `open` holds the sources, while the
+ * ratio is of the remainder's lobe alone; mixed by the sources' share of `open` (their part of the
+ * prefilter's GGX kernel, sd_source_glossy), so that a highlight of the sun goes dark in the sun's
+ * shadow and the sky's reflection beside it keeps the baked ratio. `stored`: 1, or 0 where no data
+ * is (a lightmap pixel without a texel: no light at all). Called where every pixel does
+ * (sd_source_light takes screen-space derivatives). */
+vec3 sd_sources_on_glossy(vec3 normal, vec3 axis, vec3 open, float stored, inout float visibility)
 {
-  float visible, weight;
-  vec3 lit = sd_source_light(normal, visible, weight);
-  visibility = mix(visibility, visible, stored * weight);
+  vec2 glossy;
+  vec3 lit = sd_source_light(normal, axis, sd_lobe_weights.z, glossy);
+  float share = clamp(glossy.x / max(dot(open, vec3(0.2126, 0.7152, 0.0722)), 1e-8), 0.0, 1.0);
+  float visible = glossy.x > 0.0 ? glossy.y / glossy.x : 1.0;
+  visibility = mix(visibility, visible, stored * share);
   return stored * lit;
 }
 #endif
@@ -191,15 +192,17 @@ void main()
   float visibility = stored * sd_visibility_ratio(rgb, sd_lobe_axis(normal, view), normal);
 #    ifdef SD_LAMBERT_LAYER
   diffuse = rgb;
-#      ifdef SD_SOURCES
-  diffuse += sd_sources_on_layer(normal, stored, visibility);
-#      endif
 #    endif
-  rgb = sd_glossy_light(visibility, normal, view);
+  vec3 axis = sd_mirrored_view(normal, view);
+  vec3 open = sd_open_glossy_light(axis);
+#    ifdef SD_SOURCES
+  diffuse += sd_sources_on_glossy(normal, axis, open, stored, visibility);
+#    endif
+  rgb = (sd.params.x * visibility) * open;
 #  else
 #    ifdef SD_SOURCES
-  float visible, weight;
-  rgb += stored * sd_source_light(normal, visible, weight);
+  vec2 glossy;
+  rgb += stored * sd_source_light(normal, normal, 1.0, glossy);
 #    endif
   rgb *= sd.params.x;
 #  endif
@@ -212,10 +215,12 @@ void main()
   vec3 normal = normalize(sd_normal);
   vec3 view = sd_view_direction(sd_origin_offset);
   float visibility = sd_visibility;
+  vec3 axis = sd_mirrored_view(normal, view);
+  vec3 open = sd_open_glossy_light(axis);
 #    ifdef SD_SOURCES
-  diffuse += sd.params.x * sd_sources_on_layer(normal, 1.0, visibility);
+  diffuse += sd.params.x * sd_sources_on_glossy(normal, axis, open, 1.0, visibility);
 #    endif
-  fragColor = vec4(sd_surface(sd_glossy_light(visibility, normal, view), diffuse, dot(normal, view)), 1.0);
+  fragColor = vec4(sd_surface((sd.params.x * visibility) * open, diffuse, dot(normal, view)), 1.0);
 #  else
   float n_dot_v = 1.0;
 #    ifdef SD_LOBE_WEIGHTS
@@ -223,8 +228,9 @@ void main()
 #    endif
   vec3 color = sd_color;
 #    ifdef SD_SOURCES
-  float visible, weight;
-  color += sd.params.x * sd_source_light(normalize(sd_normal), visible, weight);
+  vec3 normal = normalize(sd_normal);
+  vec2 glossy;
+  color += sd.params.x * sd_source_light(normal, normal, 1.0, glossy);
 #    endif
   fragColor = vec4(sd_surface(color, diffuse, n_dot_v), 1.0);
 #  endif

@@ -1,5 +1,6 @@
 /* sd-lighting: the environment's bright sources (SD_SOURCES: how many), each lighting the Lambert
- * lobe on its own and shadowed per pixel (scene/light_sources.py, live/source_shadows.py).
+ * lobe on its own and shadowing its part of the prefiltered glossy light, per pixel
+ * (scene/light_sources.py, live/source_shadows.py; docs/msd-notes.md, "Bright sources").
  *
  * Source i's shadow map is tile i of sd_shadow_map (SD_SHADOW_MAP_SIZE square, side by side along
  * u): an orthographic view from its direction over the sphere of everything that casts, storing
@@ -125,14 +126,34 @@ float sd_source_cosine(float cos_theta, float sin2_sigma)
   return max(e, 0.0) / (3.14159265 * sin2_sigma);
 }
 
+/* The GGX lobe of the prefiltered atlas at source i: of the map's light P_r(axis) the prefilter
+ * averages around the mirrored view (glossy_prefilter.h, n = v = r: l drawn with density D(h) / 4,
+ * weighted by n . l, over their sum), the part the source gives - its power times that kernel at its
+ * direction, D with alpha^2 widened by the disc's half angle squared (the lobe over a disc, not a
+ * point; h turns half as far as l), over the kernel's integral Z(alpha) (1 for a sharp lobe, 1/4 at
+ * alpha = 1; 1 / (1 + 0.708 alpha + 2.292 alpha^2) within 2 %). Times E_i / 4 = strength x power. */
+float sd_source_glossy(int i, vec3 axis, float roughness)
+{
+  vec3 l = sd.source_direction[i].xyz;
+  float n_dot_l = dot(axis, l);
+  if (n_dot_l <= 0.0) {
+    return 0.0;
+  }
+  float alpha = max(roughness * roughness, 1e-3);
+  float a2 = alpha * alpha + 0.25 * sd.source_direction[i].w;
+  float n_dot_h = dot(axis, normalize(axis + l));
+  float d = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+  float kernel = a2 / (d * d) * n_dot_l * (1.0 + 0.708 * alpha + 2.292 * alpha * alpha);
+  return kernel * 0.25 * dot(sd.source_irradiance[i].rgb, vec3(0.2126, 0.7152, 0.0722));
+}
+
 /* The sources' light on the Lambert lobe at the pixel (position sd_origin_offset from the
  * object's origin, bake-space normal `normal`, unit): the sum of each source's irradiance times
- * its cosine (sd_source_cosine) and its visibility. `visible`: the luminance share of that light the shadows let through
- * (1 where no source faces the normal); `weight`: the sources' share of the unshadowed light,
- * against the remainder's mean radiance L_00 (what the Lambert lobe gives in a uniform world). */
-vec3 sd_source_light(vec3 normal, out float visible, out float weight)
+ * its cosine (sd_source_cosine) and its visibility. glossy: (unshadowed, shadowed) luminance of
+ * the sources' part of the prefiltered light of roughness `roughness` around `axis` (the mirrored
+ * view; sd_source_glossy), a source below the surface's horizon shadowed. */
+vec3 sd_source_light(vec3 normal, vec3 axis, float roughness, out vec2 glossy)
 {
-  const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
   vec3 world = sd_origin_offset;   /* world, relative to the object's origin */
   /* the triangle's own plane (the shading normal of a smooth mesh tilts away from it), on the
    * side the shading normal faces */
@@ -141,18 +162,14 @@ vec3 sd_source_light(vec3 normal, out float visible, out float weight)
   vec3 world_normal = dot(face, face) > 0.0 ? normalize(face) : normalize(shading_normal);
   world_normal *= (dot(world_normal, shading_normal) < 0.0) ? -1.0 : 1.0;
   vec3 lit = vec3(0.0);
-  vec3 open = vec3(0.0);
+  glossy = vec2(0.0);
   for (int i = 0; i < SD_SOURCES; i++) {
     float c = sd_source_cosine(dot(normal, sd.source_direction[i].xyz), sd.source_direction[i].w);
-    if (c > 0.0) {
-      vec3 e = c * sd.source_irradiance[i].rgb;
-      open += e;
-      lit += e * sd_source_visibility(i, world, world_normal);
-    }
+    float g = sd_source_glossy(i, axis, roughness);
+    float v = (c > 0.0) ? sd_source_visibility(i, world, world_normal) : 0.0;
+    lit += (c * v) * sd.source_irradiance[i].rgb;
+    glossy += g * vec2(1.0, v);
   }
-  float open_y = dot(open, luminance);
-  visible = open_y > 0.0 ? dot(lit, luminance) / open_y : 1.0;
-  weight = open_y / max(open_y + dot(sd.light[0].rgb, luminance), 1e-8);
   return lit;
 }
 

@@ -27,7 +27,9 @@ def all_variants():
             for texels, prefiltered, sources in itertools.product(
                     (False, True) if per_pixel and lightmap.applies(method) else (False,),
                     (True,) if lobes == "layer" else (False, True) if weights else (False,),
-                    (0, 2) if lobes in ("lambert", "layer") and not target else (0,)):
+                    (0, 2) if not target else (0,)):
+                if sources and lobes not in ("lambert", "layer") and not (prefiltered and albedo):
+                    continue   # a glossy lobe takes the sources where the prefiltered atlas lights it
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,

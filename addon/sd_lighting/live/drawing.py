@@ -155,8 +155,11 @@ def ringing_choice(scene, obj, wait=False):
     if record is None:
         return None
     source = environment.source(scene)
-    try:   # the remainder's window where the sources light the lobe on their own, once found
-        remainder = record.lobe == "lambert" and _shading_split(scene, source, wait=False) is not None
+    try:   # the remainder's window where the sources light the lobes on their own, once found
+        prefiltered = use_prefiltered_glossy(scene) and \
+            environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False) is not None
+        remainder = gpu_shading.takes_sources(record.lobes, False, prefiltered) and \
+            _shading_split(scene, source, wait=False) is not None
     except background.Failed:
         remainder = False
     return environment.ringing_window(source, record.lobe, record.exponent, record.light_order,
@@ -206,10 +209,10 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     shader has the pixel's position relative to it)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
-    sources = sources if data.takes_sources else None
+    prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
+    sources = sources if data.takes_sources(prefiltered is not None) else None
     remainder = sources is not None
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix, remainder)
-    prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
     textures = {}
     if data.uses_band_limited_texture:
         textures[BAND_LIMITED_TEXTURE_SAMPLER[1]], kwargs["band_limited_scale"] = gpu_shading.band_limited_texture(

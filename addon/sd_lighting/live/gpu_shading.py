@@ -195,6 +195,15 @@ def band_limited_texture(source, light):
     return cached
 
 
+def takes_sources(lobes, vertex_target, prefiltered):
+    """Whether the map's bright sources light data of these lobes (scene/lobes.Lobes) on their own,
+    the rest of the map in its SH light: drawn, with a Lambert lobe 0, or with a glossy one whose
+    light is looked up in the prefiltered atlas (prefiltered: it is, for these data); the sources'
+    shadows then darken their part of that light. A glossy lobe lit through SH alone keeps the whole
+    map (its highlight of a source would need the lobe's SH to hold it)."""
+    return not vertex_target and (lobes.lobe == "lambert" or (lobes.weighted and prefiltered))
+
+
 def prefiltered_layout():
     """(width0, levels) of the prefiltered atlas (sdnative's PREFILTER_WIDTH, PREFILTER_LEVELS)."""
     return native.get().PREFILTER_WIDTH, native.get().PREFILTER_LEVELS
@@ -433,11 +442,10 @@ class ObjectData:
             self._lobe_factors = (key, out)
         return self._lobe_factors[1]
 
-    @property
-    def takes_sources(self):
-        """Whether the map's bright sources can light this data on their own (a Lambert lobe 0,
-        drawn): a Phong lobe 0 keeps the whole map in its SH light."""
-        return not self.variant.glossy and not self.variant.vertex_target
+    def takes_sources(self, prefiltered):
+        """Whether the map's bright sources light this data on their own (takes_sources;
+        prefiltered: whether the prefiltered atlas is there to draw with)."""
+        return takes_sources(self.lobes, self.variant.vertex_target, bool(self.prefiltered) and prefiltered)
 
     def _use_sources(self, count):
         """Switches to the variant lit by `count` sources on their own (0: none)."""

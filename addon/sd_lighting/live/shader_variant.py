@@ -96,8 +96,8 @@ class Variant:
     lightmap: tuple = ()          # (width, height) of texture-space data (per pixel), or ()
     prefiltered: tuple = ()       # (width0, levels) of the prefiltered atlas lobe 0's light is
                                   # looked up in (drawn with weights), or () for its SH result
-    sources: int = 0              # the map's bright sources lighting the Lambert lobe 0 on their
-                                  # own, shadowed per pixel (scene/light_sources.py); L is the rest
+    sources: int = 0              # the map's bright sources lighting the lobes on their own,
+                                  # shadowed per pixel (scene/light_sources.py); L is the rest
 
     def __post_init__(self):
         if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \
@@ -108,8 +108,9 @@ class Variant:
             raise ValueError("the prefiltered glossy light needs the slots' lobe weights (roughness)")
         if self.lightmap and not self.per_pixel:
             raise ValueError("texture-space data are read per pixel")
-        if self.sources and (self.glossy or self.vertex_target):
-            raise ValueError("the bright sources light a Lambert lobe 0 in a drawn image")
+        if self.sources and (self.vertex_target or (self.glossy and not self.prefiltered_lookup)):
+            raise ValueError("the bright sources light a Lambert lobe 0, or a glossy one lit by the "
+                             "prefiltered atlas, in a drawn image")
 
     @property
     def weighted(self):

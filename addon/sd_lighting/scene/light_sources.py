@@ -43,7 +43,7 @@ def lines(sources, sharp=False):
     share = sum(s for _, _, s in sources)
     head = "%s: %.0f %% of the light; %s" % (
         "1 bright source" if len(sources) == 1 else "%d bright sources" % len(sources), 100.0 * share,
-        "shadowed per pixel on diffuse surfaces" if sharp else "SH blurs their shadows")
+        "shadowed per pixel" if sharp else "SH blurs their shadows")
     return [head] + ["%.1f\u00b0 wide at %.0f\u00b0 elevation, %.0f %%" % (width, elevation, 100.0 * s)
                      for width, elevation, s in sources]
 

@@ -195,11 +195,12 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "layers folded into Lambert")
     source_shadows: BoolProperty(
         name="Sharp Source Shadows", default=True, update=_redraw,
-        description="Light diffuse surfaces by the environment's bright compact sources (a sun, "
-                    "lamps, windows: the Environment panel names them) on their own, each "
-                    "shadowed per pixel through a shadow map from its direction with a penumbra as "
-                    "wide as the source, and by the rest of the map through SH; off: the whole map "
-                    "through SH, which blurs their shadows")
+        description="Light surfaces by the environment's bright compact sources (a sun, lamps, "
+                    "windows: the Environment panel names them) on their own, each shadowed per "
+                    "pixel through a shadow map from its direction with a penumbra as wide as the "
+                    "source - their diffuse light, and their share of the prefiltered glossy light "
+                    "-, and by the rest of the map through SH; off: the whole map through SH, which "
+                    "blurs their shadows")
     ringing_window: EnumProperty(
         name="Ringing Window",
         items=[(name.upper(), ringing.LABELS[name], description) for name, description in (

@@ -181,6 +181,57 @@ def test_a_soft_sky_gets_a_lower_order_than_a_sunny_one(sdnative):
     assert soft.setting.light_order < sunny.setting.light_order
 
 
+def sun_split(sdnative):
+    """The sunny sky, and its sun split off (Environment.light_sources) as accuracy.Remainder."""
+    sunny = sky(sdnative, True)
+    split = sunny.light_sources(8)
+    assert len(split["sources"]) == 1
+    remainder = split["remainder"]
+    return sunny, accuracy.Remainder(remainder, lambda s: np.asarray(remainder.sh(s)).reshape(-1, 3))
+
+
+def test_a_sun_shaded_on_its_own_is_taken_and_lowers_the_order(sdnative):
+    """With the sun shaded on its own, the SH carries the soft rest: the target, held for the whole
+    B, is met at a lower order, and the choice says the sources pay."""
+    sunny, remainder = sun_split(sdnative)
+    light = lambda s: np.asarray(sunny.sh(s)).reshape(-1, 3)  # noqa: E731
+    sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=FLOOR, count=48)
+    errors = accuracy.ErrorTable(sdnative, sample, sunny, light, "lambert", 1.0, np.eye(3), ["unshadowed", "prt_matrix"],
+                                 6, 256, remainder=remainder)
+    setting = accuracy.Setting("prt_matrix", 2, 2, 256)
+    assert errors.error(setting, sources=True) < 0.5 * errors.error(setting)
+    choice = choose(sdnative, errors)
+    errors.measured_sources = None
+    alone = choose(sdnative, errors)
+    assert choice.sources is True and alone.sources is None
+    assert choice.met_target and choice.setting.light_order < alone.setting.light_order
+    assert choice.reasons[1].startswith("Sources: shaded on their own - predicted %.1f %%" % (100 * choice.error))
+
+
+class Table:
+    """An ErrorTable's interface with given errors: unshadowed at s = 0..2, `gain` times lower with
+    the sources."""
+    methods, max_order, measured = ("unshadowed",), 2, None
+
+    def __init__(self, errors, gain):
+        self.errors, self.gain = errors, gain
+        self.measured_sources = {}
+
+    def error(self, setting, sources=False):
+        return self.errors[setting.light_order] / (self.gain if sources else 1.0)
+
+    def shadowing(self):
+        return 0.0
+
+
+def test_sources_that_do_not_lower_the_error_by_a_tenth_are_left_in_the_sh(sdnative):
+    kept, paid = (choose(sdnative, Table([0.05, 0.03, 0.015], gain)) for gain in (1.05, 1.6))
+    assert kept.sources is False and kept.setting.light_order == 2 and kept.error == pytest.approx(0.015)
+    assert kept.reasons[1].startswith("Sources: through SH - predicted 1.4 %") and "not worth" in kept.reasons[1]
+    # 1.6 times lower: taken, at the order where the 2 % target is met with them
+    assert paid.sources is True and paid.setting.light_order == 1 and paid.error == pytest.approx(0.01875)
+
+
 def test_an_unreachable_target_takes_the_cheapest_setting_near_the_most_accurate(sdnative, forest):
     errors = table(sdnative, forest, ids=["unshadowed"], max_order=2)
     choice = choose(sdnative, errors, target=1e-4)

@@ -292,3 +292,17 @@ def test_a_larger_predicted_error_elsewhere_stops_the_refinement_sooner():
     balanced = refine.refine(_grid(8), shadowed, WEIGHTS, 0.02, 10 ** 6, aimed=refine.aim(0.02, 0.08))
     assert len(balanced.surface.vertices) < len(to_target.surface.vertices)
     assert balanced.estimated_left <= refine.BALANCE * 0.08
+
+
+def test_a_shadow_of_the_sources_drawn_per_pixel_is_left_to_them():
+    """whole_weights: where the live shading draws the bright sources' shadows per pixel, the
+    edges are measured on the rest of the map's light (here 2 % of the energy, weights scaled by
+    0.02^2), relative to the whole map's B: a shadow edge the sources make is not refined, while the
+    same edge in the whole light is."""
+    shadowed = _synthetic_bake(lambda p: np.where(p[:, 0] < 0.13, 0.2, 1.0))
+    whole = refine.refine(_grid(8), shadowed, WEIGHTS, 0.02, 10 ** 6)
+    rest = refine.refine(_grid(8), shadowed, 0.02 ** 2 * WEIGHTS, 0.02, 10 ** 6, whole_weights=WEIGHTS)
+    assert whole.levels >= 3 and rest.levels == 0
+    assert 0.0 < rest.worst_left < 0.02    # the edge, seen on 2 % of the light: under the target
+    # relative to the part's own B it would be the whole edge again
+    assert refine.refine(_grid(8), shadowed, 0.02 ** 2 * WEIGHTS, 0.02, 10 ** 6).levels == whole.levels

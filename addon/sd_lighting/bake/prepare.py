@@ -76,7 +76,7 @@ def _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, 
     panel = scene.sd_lighting
     return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
                            panel.target_error, panel.max_automatic_order, fixed,
-                           panel.ringing_window.lower(), triangle_pixels)
+                           panel.ringing_window.lower(), triangle_pixels, panel.source_shadows)
 
 
 def recorded_settings(scene, obj, env_source):

@@ -236,14 +236,17 @@ def aim(target, predicted_error=None):
     return share if predicted_error is None else max(share, BALANCE * predicted_error)
 
 
-def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS, aimed=None):
+def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS, aimed=None, whole_weights=None):
     """Refines `surface` (the module's doc). bake(vertices, normals, triangles, rest_vertices,
     rest_triangles) -> T [V, (s+1)²]: the transfer vectors of the object made of those vertices
     and triangles, with rest_triangles (indices into rest_vertices: the surface's other triangles)
     and the scene as occluders, every vertex tracing the same ray directions; weights: band_weights
     of the light; target: the relative error an edge may keep; aimed: the RMS interpolation error
-    refinement aims at (default aim(target)); max_vertices: the budget. Raises what bake raises (a
-    cancel). Returns a Refinement."""
+    refinement aims at (default aim(target)); max_vertices: the budget; whole_weights: band_weights of
+    the light whose B the errors are relative to, where `weights` are of a part of it (the map
+    without the bright sources the live shading shades on their own: their shadows are drawn per
+    pixel, so only the rest's need vertices; default `weights`). Raises what bake raises (a cancel).
+    Returns a Refinement."""
     triangles = np.asarray(surface.triangles)
     if len(surface.vertices) >= max_vertices:
         return Refinement(surface, 0, 0, 0.0, 0.0, True)
@@ -273,7 +276,7 @@ def refine(surface, bake, weights, target, max_vertices, max_levels=MAX_LEVELS, 
         transfer[used] = bake(probe.vertices[used], probe.normals[used], local.reshape(-1, 3),
                               surface.vertices, triangles[~around])
         if scale is None:
-            scale = float(np.mean(transfer[used] ** 2 @ weights))
+            scale = float(np.mean(transfer[used] ** 2 @ (weights if whole_weights is None else whole_weights)))
         a, b = edges[candidate, 0], edges[candidate, 1]
         delta = transfer[midpoint[candidate]] - 0.5 * (transfer[a] + transfer[b])
         error[candidate] = np.sqrt(delta ** 2 @ weights / scale) if scale > 0.0 else 0.0

@@ -142,7 +142,7 @@ class BakeTask:
             method=choice.setting.method, light_order=choice.setting.light_order,
             visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
             predicted_error=float(choice.error),
-            frame_terms=int(choice.frame_terms))
+            frame_terms=int(choice.frame_terms), sources=choice.sources)
         self.predicted_error = float(choice.error)
 
     def adopt(self, settings, predicted_error):
@@ -315,12 +315,15 @@ class BakeTask:
             timed.append((float(result["setup_seconds"]), time.perf_counter() - start))
             return result["transfer"]
 
-        weights = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
+        whole = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
+        # where the automatic mode shades the bright sources on their own, the SH carries the rest
+        remainder = self.analysis.remainder if s.get("sources") else None
+        weights = whole if remainder is None else refine.band_weights(remainder.light(refine.CRITERION_ORDER))
         # the automatic mode's prediction, which its settings record: a chosen method's bake
         # predicts none (the panel's estimate does), and the two would refine differently
         target = float(s["refine_target"])
         refinement = refine.refine(surface, bake, weights, target, max_vertices,
-                                   aimed=refine.aim(target, s.get("predicted_error")))
+                                   aimed=refine.aim(target, s.get("predicted_error")), whole_weights=whole)
         if levels is not None:
             levels.extend(timed)
         return refinement

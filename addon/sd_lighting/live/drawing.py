@@ -158,7 +158,7 @@ def ringing_choice(scene, obj, wait=False):
     try:   # the remainder's window where the sources light the lobes on their own, once found
         prefiltered = use_prefiltered_glossy(scene) and \
             environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False) is not None
-        remainder = gpu_shading.takes_sources(record.lobes, False, prefiltered) and \
+        remainder = gpu_shading.takes_sources(record, False, prefiltered) and \
             _shading_split(scene, source, wait=False) is not None
     except background.Failed:
         remainder = False

@@ -195,13 +195,16 @@ def band_limited_texture(source, light):
     return cached
 
 
-def takes_sources(lobes, vertex_target, prefiltered):
-    """Whether the map's bright sources light data of these lobes (scene/lobes.Lobes) on their own,
-    the rest of the map in its SH light: drawn, with a Lambert lobe 0, or with a glossy one whose
-    light is looked up in the prefiltered atlas (prefiltered: it is, for these data); the sources'
-    shadows then darken their part of that light. A glossy lobe lit through SH alone keeps the whole
-    map (its highlight of a source would need the lobe's SH to hold it)."""
-    return not vertex_target and (lobes.lobe == "lambert" or (lobes.weighted and prefiltered))
+def takes_sources(record, vertex_target, prefiltered):
+    """Whether the map's bright sources light the data of a bake (its store/record.BakeRecord) on
+    their own, the rest of the map in its SH light: drawn, unless the automatic mode found they do
+    not pay (record.sources False), with a Lambert lobe 0, or with a glossy one whose light is looked
+    up in the prefiltered atlas (prefiltered: it is, for these data); the sources' shadows then
+    darken their part of that light. A glossy lobe lit through SH alone keeps the whole map (its
+    highlight of a source would need the lobe's SH to hold it)."""
+    lobes = record.lobes
+    return not vertex_target and record.sources is not False and \
+        (lobes.lobe == "lambert" or (lobes.weighted and prefiltered))
 
 
 def prefiltered_layout():
@@ -334,6 +337,7 @@ class ObjectData:
     def __init__(self, mesh, per_pixel=False, vertex_target=False, band_limited_texture=False, prefiltered=False):
         record = baked.mesh_record(mesh)
         self.method = methods.get(record.method)
+        self.record = record
         self.lobes = record.lobes
         self.lobe, self.exponent = self.lobes.lobe, self.lobes.exponent
         self.light_order, self.visibility_order = record.light_order, record.visibility_order
@@ -445,7 +449,7 @@ class ObjectData:
     def takes_sources(self, prefiltered):
         """Whether the map's bright sources light this data on their own (takes_sources;
         prefiltered: whether the prefiltered atlas is there to draw with)."""
-        return takes_sources(self.lobes, self.variant.vertex_target, bool(self.prefiltered) and prefiltered)
+        return takes_sources(self.record, self.variant.vertex_target, bool(self.prefiltered) and prefiltered)
 
     def _use_sources(self, count):
         """Switches to the variant lit by `count` sources on their own (0: none)."""

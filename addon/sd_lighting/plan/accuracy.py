@@ -33,13 +33,15 @@ REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
 
 
-def relative_error(values, reference, reference_variance=None):
+def relative_error(values, reference, reference_variance=None, whole=None):
     """Relative RMS error of `values` against `reference` over points and channels ([N, 3]), with
-    the reference's own variance (its squared standard error, [N, 3]) removed from the square."""
+    the reference's own variance (its squared standard error, [N, 3]) removed from the square;
+    relative to `whole` (default: the reference), e.g. the remainder's error against the B of the
+    whole map."""
     difference = np.mean(np.sum((np.asarray(values) - reference) ** 2, axis=1))
     if reference_variance is not None:
         difference = max(difference - np.mean(np.sum(reference_variance, axis=1)), 0.0)
-    energy = np.mean(np.sum(np.asarray(reference) ** 2, axis=1))
+    energy = np.mean(np.sum(np.asarray(reference if whole is None else whole) ** 2, axis=1))
     return float(np.sqrt(difference / energy)) if energy > 0.0 else 0.0
 
 
@@ -94,14 +96,23 @@ class Sample:
                    None if views is None else views(sample_vertices), joined)
 
 
-def _reporter(start, progress, stop):
-    """A native progress callback reporting start + half its share to progress(fraction), and
-    cancelling when stop() says so."""
+def _reporter(start, share, progress, stop):
+    """A native progress callback reporting start + share times its own fraction to
+    progress(fraction), and cancelling when stop() says so."""
     def report(done, total):
         if progress is not None:
-            progress(start + 0.5 * done / max(total, 1))
+            progress(start + share * done / max(total, 1))
         return stop is None or not stop()
     return report
+
+
+@dataclass
+class Remainder:
+    """The map without its bright sources (scene/environment.source_split), which the live shading
+    lights through SH while each source is shaded on its own: its sdnative.Environment, and
+    order -> its unrotated L (as ErrorTable's `light`)."""
+    environment: object
+    light: object
 
 
 class ErrorTable:
@@ -114,11 +125,14 @@ class ErrorTable:
     MAX_VISIBILITY_ORDER; rays: the bake's rays per vertex; stop: returns True to cancel (the
     measurement then raises InterruptedError); diffuse_share: with a Phong lobe, the share of a
     Lambert lobe shaded besides it (scene/lobes.Lobes): B and its reference are then the two
-    lobes' sum with these weights; progress(fraction) is called as the reference (the first half)
-    and the bakes (the second) go."""
+    lobes' sum with these weights; progress(fraction) is called as the references (the first half)
+    and the bakes (the second) go. remainder: a Remainder, to measure each setting also with the
+    sources shaded on their own (measured_sources): their exact light added to the remainder's SH
+    result, whose error is then the remainder's against its own reference, relative to the whole
+    map's B (the sources' shadow maps and disc model taken as exact), or None."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
-                 max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None):
+                 max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None, remainder=None):
         self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
         self.max_order = int(max_order)
         self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
@@ -126,10 +140,12 @@ class ErrorTable:
             self._lobes.append(("lambert", 1.0, float(diffuse_share)))
         self.methods = tuple(m for m in methods
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
-        self._sd, self._sample, self._light, self._rotation = sdnative, sample, light, rotation
+        self._sd, self._sample, self._rotation = sdnative, sample, rotation
         self._views = sample.views if sample.views is not None else sample.normals
-        self._progress = [_reporter(start, progress, stop) for start in (0.0, 0.5)]
-        self.reference, error = self._reference(environment, seed, stop)
+        references = 2 if remainder is not None else 1
+        self._progress = [_reporter(0.5 * k / references, 0.5 / references, progress, stop)
+                          for k in range(references)] + [_reporter(0.5, 0.5, progress, stop)]
+        self.reference, error = self._reference(environment, seed, stop, self._progress[0])
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
@@ -140,18 +156,29 @@ class ErrorTable:
         free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
                                       rays=self.rays, seed=seed, transfer_order=0)
         self.lit_fraction = np.asarray(bakes[0]["transfer"])[:, 0] / np.asarray(free["transfer"])[:, 0]
-        self.measured = {}
+        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop)
+        self.measured_sources = None
+        if remainder is not None:
+            reference, error = self._reference(remainder.environment, seed, stop, self._progress[1])
+            self.measured_sources = self._measure(measured, bakes, remainder.light, reference, error ** 2, stop)
+
+    def _measure(self, measured, bakes, light, reference, variance, stop):
+        """{(method, s, s'): Measured} of the two bakes shaded with `light` against `reference`,
+        relative to the whole map's B."""
+        out = {}
         for method in measured:
             for s in range(self.max_order + 1):
                 for sv in range(MAX_VISIBILITY_ORDER + 1) if method.uses_visibility_order else (0,):
                     if stop is not None and stop():
                         raise InterruptedError("cancelled")
-                    first, second = (self._shade(method, s, sv, bake) for bake in bakes)
-                    noise = relative_error(first, second) / np.sqrt(2.0)
-                    total = relative_error(first, self.reference, self.reference_variance)
-                    self.measured[(method.id, s, sv)] = Measured(
-                        float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays)
-    def _reference(self, environment, seed, stop):
+                    first, second = (self._shade(method, s, sv, bake, light) for bake in bakes)
+                    noise = relative_error(first, second, whole=self.reference) / np.sqrt(2.0)
+                    total = relative_error(first, reference, variance, whole=self.reference)
+                    out[(method.id, s, sv)] = Measured(float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))),
+                                                       noise, self.rays)
+        return out
+
+    def _reference(self, environment, seed, stop, progress):
         """sdnative.reference on the sample (one scene: against a large mesh its build is most of
         the time), cancelled within a few vertices by stop."""
         sample = self._sample
@@ -159,7 +186,7 @@ class ErrorTable:
             parts = [(weight, self._sd.reference(
                 environment, sample.vertices, sample.normals, sample.triangles, views=self._lobe_views(lobe),
                 rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
-                seed=seed, progress=self._progress[0], **sample.occluders)) for lobe, exponent, weight in self._lobes]
+                seed=seed, progress=progress, **sample.occluders)) for lobe, exponent, weight in self._lobes]
         except self._sd.BakeCancelled as exc:
             raise InterruptedError("cancelled") from exc
         radiance = sum(weight * np.asarray(value) for weight, (value, _) in parts)
@@ -182,12 +209,12 @@ class ErrorTable:
         twice = dict(self._sd.bake_transfer(
             np.concatenate([sample.vertices] * 2), np.concatenate([sample.normals] * 2),
             np.concatenate([sample.triangles, sample.triangles + count]), rays=self.rays, seed=seed,
-            progress=self._progress[1], **arguments, **sample.occluders))
+            progress=self._progress[-1], **arguments, **sample.occluders))
         return [{key: value[half * count:(half + 1) * count]
                  for key, value in twice.items() if isinstance(value, np.ndarray) and len(value) == 2 * count}
                 for half in (0, 1)]
 
-    def _shade(self, method, s, sv, bake):
+    def _shade(self, method, s, sv, bake, light):
         data = {}
         if method.data is not None:   # the arrays of order s, s': prefixes of the baked ones
             shape = method.data.shape(s, sv) if method.data.shape else ()
@@ -197,16 +224,21 @@ class ErrorTable:
             data["visibility_order"] = sv
         # displayed radiance is never negative, lobe by lobe (the shader's sd_surface)
         return sum(weight * np.maximum(self._sd.shade(
-            method.id, self._light(s), self._sample.normals, views=self._lobe_views(lobe),
+            method.id, light(s), self._sample.normals, views=self._lobe_views(lobe),
             rotation=self._rotation, lobe=lobe, exponent=exponent, **data), 0.0)
             for lobe, exponent, weight in self._lobes)
 
-    def error(self, setting):
-        """The predicted relative RMS error of a setting (KeyError for one not measured)."""
+    def error(self, setting, sources=False):
+        """The predicted relative RMS error of a setting (KeyError for one not measured); sources:
+        with the bright sources shaded on their own (measured_sources)."""
+        return self.measurement(setting, sources).at(setting.rays)
+
+    def measurement(self, setting, sources=False):
+        """The setting's Measured (sources: as `error`)."""
         method = method_table.get(setting.method)
         key = (method.measured_as, setting.light_order,
                setting.visibility_order if method.uses_visibility_order else 0)
-        return self.measured[key].at(setting.rays)
+        return (self.measured_sources if sources else self.measured)[key]
 
     def shadowing(self):
         """The sampled vertices' mean blocked fraction of the hemisphere, cosine-weighted: 0 when

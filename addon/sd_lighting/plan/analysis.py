@@ -27,11 +27,16 @@ class Inputs:
     max_order: int
     fixed: dict = field(default_factory=dict)   # the object's overrides (automatic.choose)
     triangle_pixels: object = None   # its triangles' mean area on screen (None: no camera)
+    remainder: object = None     # accuracy.Remainder where the map's bright sources may be shaded
+                                 # on their own, else None
 
 
 def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
-           triangle_pixels):
-    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake space."""
+           triangle_pixels, sources=False):
+    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake space;
+    sources: whether the map's bright sources may be shaded on their own (the scene's Sharp Source
+    Shadows): for a Lambert lobe with sources in the map, the measurement then weighs them
+    (accuracy.Remainder; found here, on the main thread, when not yet)."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
         env = native.get().environment_from_pixels(pixels)
@@ -42,14 +47,21 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
         env = environment.environment(src)
         scale = 1.0 / src.strength if src.strength > 0.0 else 0.0
 
-        def light(order):   # the reference reads the map without the strength: so does this
-            return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True)
+        def light(order, remainder=False):   # the reference reads the map without the strength: so does this
+            return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True, remainder)
+    remainder = None
+    if sources and lobe == "lambert" and src.kind != "uniform":
+        split = environment.source_split(src, wait=True)
+        if split["sources"]:
+            remainder = accuracy.Remainder(split["remainder"], lambda order: light(order, remainder=True))
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
     return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
-                  triangle_pixels)
+                  triangle_pixels, remainder)
 
 
-def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None):
+def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None, sources=True):
+    """The ErrorTable of the object's sample (sources: also measured with the bright sources on
+    their own, where inputs.remainder has them)."""
     eye = inputs.eye
 
     def views(points):
@@ -62,7 +74,8 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
                                      occluders, views)
     return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
                                lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
-                               stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress)
+                               stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress,
+                               remainder=inputs.remainder if sources else None)
 
 
 def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None,
@@ -85,9 +98,11 @@ def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, 
 
 def predict(inputs, geometry, occluders, settings, stop):
     """The predicted relative RMS error of a bake's chosen settings (its `sd_bake` dict; any
-    thread), measured as the automatic mode measures every setting."""
+    thread), measured as the automatic mode measures every setting (with the bright sources on their
+    own where its choice took them)."""
     setting = accuracy.Setting(settings["method"], int(settings["light_order"]),
                                int(settings["visibility_order"]), int(settings["rays"]))
+    sources = bool(settings.get("sources")) and inputs.remainder is not None
     table = _table(inputs, geometry, occluders, lobes.Lobes.of_bake(settings), [setting.method],
-                   setting.light_order, setting.rays, stop)
-    return table.error(setting)
+                   setting.light_order, setting.rays, stop, sources=sources)
+    return table.error(setting, sources)

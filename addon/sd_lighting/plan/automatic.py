@@ -7,7 +7,11 @@ qualifies when its predicted error is within the target and its predicted bake w
 budget (plan/cost.bake_seconds); the one chosen has the fewest frame terms, then the fewest stored
 floats, then the shortest bake. So a convex object, whose unshadowed result already meets the
 target, stores no visibility; a diffuse one gets PRT (2), exact in V, when it is cheapest; and a
-soft environment gets a lower s than one with a sun, whose truncation error is larger. When no
+soft environment gets a lower s than one with a sun, whose truncation error is larger - unless the
+sun is shaded on its own (Sharp Source Shadows): a Lambert lobe's table then measures every setting
+also with the map's bright sources taken out (accuracy.Remainder), the target holding for the whole
+B, and they are taken where they pay (the setting chosen with them would be more than NEAR_BEST
+worse through SH alone), usually at a lower s and fewer rays. When no
 setting qualifies, the cheapest within NEAR_BEST of the most accurate one's error (within the
 budget) is chosen and the reason says so: a last few percent of accuracy at many times the frame
 cost is not worth it (the report's bowl under forest: PRT (8) at s = 7, s' = 4, 5022 ns per vertex
@@ -44,6 +48,8 @@ class Choice:
     bake_seconds: float
     met_target: bool
     reasons: tuple = field(default=())   # one line per choice, for the panel and the bake's record
+    sources: object = None     # whether the map's bright sources are shaded on their own (None:
+                               # not measured - none in the map, or a glossy lobe: the scene's option)
 
 
 @dataclass(frozen=True)
@@ -59,7 +65,7 @@ class _Candidate:
         return (self.frame_terms, self.floats, self.bake_seconds)
 
 
-def _candidates(table, gaunt, vertices, threads, fixed, fitted_points):
+def _candidates(table, gaunt, vertices, threads, fixed, fitted_points, sources=False):
     for method_id in table.methods:
         method = methods.get(method_id)
         if fixed.get("method", method_id) != method_id:
@@ -76,7 +82,7 @@ def _candidates(table, gaunt, vertices, threads, fixed, fitted_points):
                 rays_options = (fixed["rays"],) if "rays" in fixed else RAYS
                 for rays in rays_options if method.data is not None else rays_options[:1]:
                     setting = accuracy.Setting(method_id, s, sv, rays)
-                    yield _Candidate(setting, table.error(setting), method.frame_terms(s, sv, gaunt),
+                    yield _Candidate(setting, table.error(setting, sources), method.frame_terms(s, sv, gaunt),
                                      cost.stored_floats(method, s, sv),
                                      cost.bake_seconds(method, s, sv, rays, traced, threads), traced)
 
@@ -93,15 +99,36 @@ def choose(table, target_error, gaunt, vertices, threads, bake_budget, fixed=Non
     candidates = list(_candidates(table, gaunt, vertices, threads, fixed, fitted_points))
     if not candidates:
         raise ValueError("no measured setting matches the overrides %s" % fixed)
+    best, qualified = _best(candidates, target_error, bake_budget)
+    sources = None
+    if table.measured_sources is not None:
+        # The sources pay where the setting chosen with them would be more than NEAR_BEST worse
+        # through SH alone; otherwise the SH alone does as well and their shadow maps cost frames.
+        with_sources = list(_candidates(table, gaunt, vertices, threads, fixed, fitted_points, sources=True))
+        best_with, qualified_with = _best(with_sources, target_error, bake_budget)
+        alone = table.error(best_with.setting)
+        sources = alone > NEAR_BEST * best_with.error
+        if sources:
+            best, qualified, candidates = best_with, qualified_with, with_sources
+    reasons = _reasons(table, best, candidates, target_error, qualified, fixed, sources)
+    if sources is not None:
+        reasons.insert(2 if fixed else 1, (   # after the visibility's line
+            "Sources: shaded on their own - predicted %.1f %% with them, %.1f %% through SH alone"
+            if sources else "Sources: through SH - predicted %.1f %% with them on their own, %.1f %% "
+            "through SH alone: not worth their shadow maps") % (100 * best_with.error, 100 * alone))
+    return Choice(best.setting, best.error, best.frame_terms, best.floats, best.bake_seconds,
+                  qualified, tuple(reasons), sources)
+
+
+def _best(candidates, target_error, bake_budget):
+    """(the candidate chosen, whether it met the target): the cheapest within the target and the
+    budget, else the cheapest within NEAR_BEST of the most accurate one's error."""
     affordable = [c for c in candidates if c.bake_seconds <= bake_budget] or candidates
     qualified = [c for c in affordable if c.error <= target_error]
     if not qualified:
         most_accurate = min(c.error for c in affordable)
     near = qualified or [c for c in affordable if c.error <= NEAR_BEST * most_accurate]
-    best = min(near, key=_Candidate.cost)
-    return Choice(best.setting, best.error, best.frame_terms, best.floats, best.bake_seconds,
-                  bool(qualified), tuple(_reasons(table, best, candidates, target_error, bool(qualified),
-                                                  fixed)))
+    return min(near, key=_Candidate.cost), bool(qualified)
 
 
 def projected_triangle_pixels(world_positions, triangles, view_projection, width, height):
@@ -135,7 +162,7 @@ def _best_error(candidates, **fixed):
     return min(matching) if matching else None
 
 
-def _reasons(table, best, candidates, target, met, fixed):
+def _reasons(table, best, candidates, target, met, fixed, sources):
     setting = best.setting
     method = methods.get(setting.method)
     lines = ["Overridden: %s" % ", ".join("%s = %s" % kv for kv in sorted(fixed.items()))] if fixed else []
@@ -155,8 +182,7 @@ def _reasons(table, best, candidates, target, met, fixed):
     if method.uses_visibility_order:
         lines.append("s' = %d: visibility's order (predicted above)" % setting.visibility_order)
     if method.data is not None:
-        measured = table.measured[(method.measured_as, setting.light_order,
-                                   setting.visibility_order if method.uses_visibility_order else 0)]
+        measured = table.measurement(setting, bool(sources))
         lines.append("Rays: %d - ray noise %.1f %% (measured %.1f %% at %d)" % (
             setting.rays, 100 * measured.noise * (measured.rays / setting.rays) ** 0.5,
             100 * measured.noise, measured.rays))

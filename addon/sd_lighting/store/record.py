@@ -59,6 +59,8 @@ class BakeRecord:
     per_pixel: Optional[bool] = None
     predicted_error: Optional[float] = None
     frame_terms: Optional[int] = None
+    sources: Optional[bool] = None   # the map's bright sources shaded on their own (None: the
+                                     # scene's Sharp Source Shadows decides)
     # What the bake found.
     bake_id: str = _found("")
     inputs: str = _found("")     # digest of everything the result depends on (BakeTask.inputs_hash)

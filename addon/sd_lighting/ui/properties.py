@@ -200,7 +200,9 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "pixel through a shadow map from its direction with a penumbra as wide as the "
                     "source - their diffuse light, and their share of the prefiltered glossy light "
                     "-, and by the rest of the map through SH; off: the whole map through SH, which "
-                    "blurs their shadows")
+                    "blurs their shadows. The automatic mode takes them per object where they lower "
+                    "its error and then chooses the SH for the rest alone: bake again after turning "
+                    "this off")
     ringing_window: EnumProperty(
         name="Ringing Window",
         items=[(name.upper(), ringing.LABELS[name], description) for name, description in (

@@ -236,4 +236,5 @@ def main():
     return checks.summary()
 
 
-sdtest.run(main)
+if __name__ == "__main__":   # benchmark_eevee_sources.py imports the scene, the map and the comparison
+    sdtest.run(main)

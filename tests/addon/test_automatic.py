@@ -98,7 +98,7 @@ def test_truncated_arrays_shade_as_a_bake_at_the_lower_orders(sdnative, forest):
                                        sample.normals, rotation=np.eye(3), visibility_order=1,
                                        product_matrices=baked["product_matrices"]), 0.0)
     direct = accuracy.relative_error(shaded, errors.reference, errors.reference_variance)
-    measured = errors.measured[("prt_matrix", 3, 1)]
+    measured, = errors.measured[("prt_matrix", 3, 1)]   # one part: the whole sample
     assert np.hypot(measured.truncation, measured.noise) == pytest.approx(direct, rel=1e-9)
 
 
@@ -200,6 +200,9 @@ def test_a_sun_shaded_on_its_own_is_taken_and_lowers_the_order(sdnative):
                                  6, 256, remainder=remainder)
     setting = accuracy.Setting("prt_matrix", 2, 2, 256)
     assert errors.error(setting, sources=True) < 0.5 * errors.error(setting)
+    # the sphere's side away from the sun is measured against its own light too, which is less
+    whole, shade = errors.measured_sources[("prt_matrix", 2, 2)]
+    assert errors.error(setting, sources=True) == max(whole.at(256), shade.at(256)) and shade.at(256) > whole.at(256)
     choice = choose(sdnative, errors)
     errors.measured_sources = None
     alone = choose(sdnative, errors)

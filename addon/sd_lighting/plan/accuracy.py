@@ -26,11 +26,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import methods as method_table
+from ..scene import lobes
 from . import bake_time
 
 SAMPLE_TRIANGLES = 96        # about 250 sampled vertices
 REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
+SHADE_SHARE = 0.5            # a sampled vertex the sources give less of its light is in their shade
+MIN_SHADE_VERTICES = 16      # fewer in the shade: their error is not measured on its own
 
 
 def relative_error(values, reference, reference_variance=None, whole=None):
@@ -129,7 +132,9 @@ class ErrorTable:
     and the bakes (the second) go. remainder: a Remainder, to measure each setting also with the
     sources shaded on their own (measured_sources): their exact light added to the remainder's SH
     result, whose error is then the remainder's against its own reference, relative to the whole
-    map's B (the sources' shadow maps and disc model taken as exact), or None."""
+    map's B (the sources' shadow maps and disc model taken as exact); or None. With a remainder,
+    both are measured over the whole sample and over the vertices in the sources' shade
+    (SHADE_SHARE), relative to their own B, the larger counting: a view of that side shows it."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
                  max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None, remainder=None):
@@ -149,6 +154,16 @@ class ErrorTable:
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
+        parts = remainder_reference = None
+        if remainder is not None:
+            remainder_reference, remainder_error = self._reference(remainder.environment, seed, stop, self._progress[1])
+            # the vertices the sources give under half their light: a view of that side shows the
+            # error against their own B, which the whole sample's B would hide
+            luminance = np.asarray(lobes.LUMINANCE)
+            shade = remainder_reference @ luminance >= (1.0 - SHADE_SHARE) * (self.reference @ luminance)
+            parts = [np.ones(len(shade), dtype=bool)]
+            if MIN_SHADE_VERTICES <= shade.sum() < len(shade):
+                parts.append(shade)
         measured = [method_table.get(m) for m in sorted({method_table.get(m).measured_as for m in self.methods})]
         bakes = self._bakes(measured, seed, stop)
         # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
@@ -156,15 +171,15 @@ class ErrorTable:
         free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
                                       rays=self.rays, seed=seed, transfer_order=0)
         self.lit_fraction = np.asarray(bakes[0]["transfer"])[:, 0] / np.asarray(free["transfer"])[:, 0]
-        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop)
-        self.measured_sources = None
-        if remainder is not None:
-            reference, error = self._reference(remainder.environment, seed, stop, self._progress[1])
-            self.measured_sources = self._measure(measured, bakes, remainder.light, reference, error ** 2, stop)
+        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop, parts)
+        self.measured_sources = None if remainder is None else self._measure(
+            measured, bakes, remainder.light, remainder_reference, remainder_error ** 2, stop, parts)
 
-    def _measure(self, measured, bakes, light, reference, variance, stop):
-        """{(method, s, s'): Measured} of the two bakes shaded with `light` against `reference`,
-        relative to the whole map's B."""
+    def _measure(self, measured, bakes, light, reference, variance, stop, parts=None):
+        """{(method, s, s'): [Measured per part]} of the two bakes shaded with `light` against
+        `reference`, relative to the whole map's B, over each of `parts` (masks of the sample;
+        default: all of it)."""
+        parts = [slice(None)] if parts is None else parts
         out = {}
         for method in measured:
             for s in range(self.max_order + 1):
@@ -172,10 +187,12 @@ class ErrorTable:
                     if stop is not None and stop():
                         raise InterruptedError("cancelled")
                     first, second = (self._shade(method, s, sv, bake, light) for bake in bakes)
-                    noise = relative_error(first, second, whole=self.reference) / np.sqrt(2.0)
-                    total = relative_error(first, reference, variance, whole=self.reference)
-                    out[(method.id, s, sv)] = Measured(float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))),
-                                                       noise, self.rays)
+                    out[(method.id, s, sv)] = []
+                    for rows in parts:
+                        noise = relative_error(first[rows], second[rows], whole=self.reference[rows]) / np.sqrt(2.0)
+                        total = relative_error(first[rows], reference[rows], variance[rows], whole=self.reference[rows])
+                        out[(method.id, s, sv)].append(
+                            Measured(float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays))
         return out
 
     def _reference(self, environment, seed, stop, progress):
@@ -234,11 +251,12 @@ class ErrorTable:
         return self.measurement(setting, sources).at(setting.rays)
 
     def measurement(self, setting, sources=False):
-        """The setting's Measured (sources: as `error`)."""
+        """The setting's Measured (sources: as `error`), of the part of the sample whose error is
+        larger at its rays."""
         method = method_table.get(setting.method)
         key = (method.measured_as, setting.light_order,
                setting.visibility_order if method.uses_visibility_order else 0)
-        return (self.measured_sources if sources else self.measured)[key]
+        return max((self.measured_sources if sources else self.measured)[key], key=lambda part: part.at(setting.rays))
 
     def shadowing(self):
         """The sampled vertices' mean blocked fraction of the hemisphere, cosine-weighted: 0 when

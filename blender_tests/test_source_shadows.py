@@ -48,8 +48,8 @@ MAX_ERROR = 0.03
 MAX_SHADOW_MISMATCH = 0.03
 MAX_BIAS = 0.015
 # A Principled BSDF's specular layer reads the prefiltered whole map, its visibility mixed with the
-# sources' (msd-notes, Bright sources): the sun's highlight is not its own lobe yet (issue 29, item
-# 3). Measured: 2.7 % on 3.4.1 (Principled v1), 4.7 % on 5.0 / 5.3 (v2), against 7.1 / 11.9 % SH alone.
+# sources' by their share of it (msd-notes, Bright sources). Measured: 2.7 % on 3.4.1 (Principled
+# v1), 4.7 % on 5.0 / 5.3 (v2).
 MAX_LAYER_ERROR = 0.06
 # A glossy red plastic: measured 5.1 % on 5.0 / 5.3, 8.1 % on 3.4.1, where Principled v1's ground is
 # 8 % brighter than ours everywhere, in the sun and in the shadow (its material, not the shadows),

@@ -103,7 +103,8 @@ class BakeTask:
             # The refinement's settings as the types they are asked in (an ID property keeps a
             # bool as an int): a bake and its recorded settings give one digest.
             refinement = (bool(self.settings.get("refine")), float(self.settings.get("refine_target", 0.0)),
-                          int(self.settings.get("refine_max_vertices", 0)), self.settings.get("bake_seconds_budget"))
+                          int(self.settings.get("refine_max_vertices", 0)), self.settings.get("bake_seconds_budget"),
+                          self.settings.get("sources") is not False)   # its edges: the remainder's light
             arguments = dict(self.bake_arguments(), refine=refinement, lightmap=int(self.settings.get("lightmap", 0)))
             for key, value in sorted(arguments.items()):
                 digest.update(key.encode())
@@ -317,7 +318,7 @@ class BakeTask:
 
         whole = refine.band_weights(self.analysis.light(refine.CRITERION_ORDER))
         # where the automatic mode shades the bright sources on their own, the SH carries the rest
-        remainder = self.analysis.remainder if s.get("sources") else None
+        remainder = self.analysis.remainder if s.get("sources") is not False else None
         weights = whole if remainder is None else refine.band_weights(remainder.light(refine.CRITERION_ORDER))
         # the automatic mode's prediction, which its settings record: a chosen method's bake
         # predicts none (the panel's estimate does), and the two would refine differently

@@ -156,7 +156,7 @@ def ringing_choice(scene, obj, wait=False):
         return None
     source = environment.source(scene)
     try:   # the remainder's window where the sources light the lobes on their own, once found
-        prefiltered = use_prefiltered_glossy(scene) and \
+        prefiltered = record.lobe != "lambert" and record.lobes.weighted and use_prefiltered_glossy(scene) and \
             environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False) is not None
         remainder = gpu_shading.takes_sources(record, False, prefiltered) and \
             _shading_split(scene, source, wait=False) is not None
@@ -167,8 +167,8 @@ def ringing_choice(scene, obj, wait=False):
 
 
 def _shading_split(scene, source, wait):
-    """environment.source_split's split where the scene's bright sources light Lambert lobes on
-    their own (Sharp Source Shadows on, the map has some), else None (also while being found,
+    """environment.source_split's split where the scene's bright sources light the lobes that take
+    them on their own (Sharp Source Shadows on, the map has some), else None (also while being found,
     wait=False)."""
     settings = getattr(scene, "sd_lighting", None)
     if settings is None or not settings.source_shadows:
@@ -236,7 +236,7 @@ def exposure_scale(scene):
 
 def source_lighting(scene, source, g, wait, view_layer=None):
     """(scene/light_sources.Source list, their shadow maps' texture, the maps' shader rows) of the
-    map's bright sources that light diffuse objects on their own (the scene's Sharp Source
+    map's bright sources that light objects on their own (gpu_shading.takes_sources) (the scene's Sharp Source
     Shadows), or None: the option is off, the map has none, or (wait=False) they are still being
     found (the whole map through SH meanwhile), or their search or their shadow maps failed (the
     whole map through SH; source_error says why, the panel shows it; wait=True raises). The maps

@@ -34,6 +34,7 @@ REFERENCE_SAMPLES = 2048     # sample pairs per vertex of the reference
 MAX_VISIBILITY_ORDER = 4     # the largest s' measured
 SHADE_SHARE = 0.5            # a sampled vertex the sources give less of its light is in their shade
 MIN_SHADE_VERTICES = 16      # fewer in the shade: their error is not measured on its own
+SHADE_FLOOR = 0.05           # of the sample's mean light: darker vertices are not in the shade part
 
 
 def relative_error(values, reference, reference_variance=None, whole=None):
@@ -160,7 +161,9 @@ class ErrorTable:
             # the vertices the sources give under half their light: a view of that side shows the
             # error against their own B, which the whole sample's B would hide
             luminance = np.asarray(lobes.LUMINANCE)
-            shade = remainder_reference @ luminance >= (1.0 - SHADE_SHARE) * (self.reference @ luminance)
+            whole = self.reference @ luminance
+            shade = (remainder_reference @ luminance >= (1.0 - SHADE_SHARE) * whole) & \
+                (whole > SHADE_FLOOR * np.mean(whole))   # not the unlit, whose error nobody sees
             parts = [np.ones(len(shade), dtype=bool)]
             if MIN_SHADE_VERTICES <= shade.sum() < len(shade):
                 parts.append(shade)

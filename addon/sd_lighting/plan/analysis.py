@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import methods, native
+from .. import background, methods, native
 from ..scene import environment, lobes
 from . import accuracy, automatic, bake_time, cost
 
@@ -51,7 +51,10 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
             return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True, remainder)
     remainder = None
     if sources and lobe == "lambert" and src.kind != "uniform":
-        split = environment.source_split(src, wait=True)
+        try:
+            split = environment.source_split(src, wait=True)
+        except background.Failed:   # the draw shades them through SH then (and the panel says why)
+            split = {"sources": []}
         if split["sources"]:
             remainder = accuracy.Remainder(split["remainder"], lambda order: light(order, remainder=True))
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
@@ -59,9 +62,9 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
                   triangle_pixels, remainder)
 
 
-def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None, sources=True):
-    """The ErrorTable of the object's sample (sources: also measured with the bright sources on
-    their own, where inputs.remainder has them)."""
+def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None):
+    """The ErrorTable of the object's sample (also measured with the bright sources on their own,
+    where inputs.remainder has them)."""
     eye = inputs.eye
 
     def views(points):
@@ -75,7 +78,7 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
     return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
                                lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
                                stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress,
-                               remainder=inputs.remainder if sources else None)
+                               remainder=inputs.remainder)
 
 
 def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None,
@@ -99,10 +102,10 @@ def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, 
 def predict(inputs, geometry, occluders, settings, stop):
     """The predicted relative RMS error of a bake's chosen settings (its `sd_bake` dict; any
     thread), measured as the automatic mode measures every setting (with the bright sources on their
-    own where its choice took them)."""
+    own where the draw takes them)."""
     setting = accuracy.Setting(settings["method"], int(settings["light_order"]),
                                int(settings["visibility_order"]), int(settings["rays"]))
-    sources = bool(settings.get("sources")) and inputs.remainder is not None
     table = _table(inputs, geometry, occluders, lobes.Lobes.of_bake(settings), [setting.method],
-                   setting.light_order, setting.rays, stop, sources=sources)
-    return table.error(setting, sources)
+                   setting.light_order, setting.rays, stop)
+    # None (a method picked, or none measured): the draw takes the sources where the map has them
+    return table.error(setting, settings.get("sources") is not False and table.measured_sources is not None)

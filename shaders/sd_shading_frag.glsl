@@ -121,7 +121,7 @@ vec3 sd_sources_on_glossy(vec3 normal, vec3 axis, vec3 open, float stored, inout
 {
   vec2 glossy;
   vec3 lit = sd_source_light(normal, axis, sd_lobe_weights.z, glossy);
-  float share = clamp(glossy.x / max(dot(open, vec3(0.2126, 0.7152, 0.0722)), 1e-8), 0.0, 1.0);
+  float share = clamp(glossy.x / max(dot(open, SD_LUMINANCE), 1e-8), 0.0, 1.0);
   float visible = glossy.x > 0.0 ? glossy.y / glossy.x : 1.0;
   visibility = mix(visibility, visible, stored * share);
   return stored * lit;

@@ -66,6 +66,9 @@
  * Metal-safe: explicit float literals, no implicit int/float conversions.
  */
 
+/* Luminance of linear Rec. 709 RGB, Blender's default scene-linear (scene/lobes.LUMINANCE). */
+#define SD_LUMINANCE vec3(0.2126, 0.7152, 0.0722)
+
 /* ---------------------------------------------------------------------------------------------
  * Real spherical harmonics in the sdnative convention (spherical_harmonics.h): orthonormal for
  * dmu = dx / 4pi, y_00 = 1, y_1,-1 = sqrt(3) y, y_10 = sqrt(3) z, y_11 = sqrt(3) x, no
@@ -328,7 +331,7 @@ vec3 sd_open_light(vec3 a, int lobe, int order)
  * a dark ground) their ratio would swing between 0 and 1 with the ringing, not the shadow. */
 float sd_visibility_ratio(vec3 b0, vec3 a0, vec3 n)
 {
-  const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
+  const vec3 luminance = SD_LUMINANCE;
   float offset = max(0.1 * dot(sd.light[0].rgb, luminance), 1e-8);
   float horizon = min(sd_legendre_sum(dot(a0, normalize(n)), SD_HORIZON_LOBE, SD_HORIZON_ORDER), 1.0);
   float open = max(horizon * dot(sd_open_light(a0, 0, SD_OPEN_ORDER), luminance), 0.0);

@@ -144,7 +144,7 @@ float sd_source_glossy(int i, vec3 axis, float roughness)
   float n_dot_h = dot(axis, normalize(axis + l));
   float d = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
   float kernel = a2 / (d * d) * n_dot_l * (1.0 + 0.708 * alpha + 2.292 * alpha * alpha);
-  return kernel * 0.25 * dot(sd.source_irradiance[i].rgb, vec3(0.2126, 0.7152, 0.0722));
+  return kernel * 0.25 * dot(sd.source_irradiance[i].rgb, SD_LUMINANCE);
 }
 
 /* The sources' light on the Lambert lobe at the pixel (position sd_origin_offset from the

@@ -3,8 +3,8 @@ Environment.light_sources splits off the map (native light_sources.h says how th
 the panel names them and as the live shading lights them.
 
 With Sharp Source Shadows on, a surface is lit by the remainder of the map through SH and by each
-source on its own (diffuse light, and its share of the prefiltered glossy light), shadowed per pixel through a shadow map rendered from the source's
-direction (live/source_shadows.py). The maps are orthographic over the bounding sphere of what
+source on its own (diffuse light, and its share of the prefiltered glossy light), shadowed per
+pixel through a shadow map rendered from the source's direction (live/source_shadows.py). The maps are orthographic over the bounding sphere of what
 casts shadows; this module computes their frames and the shader's rows of each source.
 
 Nothing here needs Blender.

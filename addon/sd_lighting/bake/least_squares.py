@@ -26,6 +26,8 @@ import time
 
 import numpy as np
 
+from . import refine
+
 SMOOTHNESS = 0.01
 # Above this many vertices the fit is skipped: such a mesh is dense against the shading's signal,
 # where the fit gains least, and its factorization takes minutes and gigabytes (a 2M-vertex
@@ -95,9 +97,9 @@ def gradient_jumps(vertices, triangles):
     vertices = np.asarray(vertices, np.float64)
     triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
     sides = np.concatenate([triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]], triangles[:, [2, 0, 1]]])
-    keys = np.sort(sides[:, :2], axis=1)
-    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
+    edges, side_edge = refine.edges_of(triangles)   # side k of a triangle is sides' row k·T + t
+    inverse = side_edge.T.ravel()
+    counts = np.bincount(inverse, minlength=len(edges))
     shared = counts[inverse] == 2
     order = np.argsort(inverse[shared], kind="stable")
     pairs = sides[shared][order].reshape(-1, 2, 3)       # the two sides of each shared edge

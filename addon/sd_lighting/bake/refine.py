@@ -142,7 +142,10 @@ def edges_of(triangles):
     """(edges [E, 2] with a < b, side_edge [T, 3]): side k of triangle t runs from t[k] to
     t[(k + 1) % 3] and is edge side_edge[t, k]."""
     sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
-    edges, inverse = np.unique(np.sort(sides, axis=1), axis=0, return_inverse=True)
+    ends = np.sort(sides, axis=1).astype(np.int64)
+    # one int64 key per pair: np.unique of rows (axis=0) sorts them as structured values, far slower
+    keys, inverse = np.unique((ends[:, 0] << 32) | ends[:, 1], return_inverse=True)
+    edges = np.stack([keys >> 32, keys & 0xFFFFFFFF], axis=1).astype(triangles.dtype)
     return edges, inverse.reshape(-1, 3)
 
 

@@ -35,13 +35,38 @@ class ShRotation {
   const double* band(int l) const { return bands_[l].data(); }
 
   /// out = D(R) in for `channels` interleaved channels: in[i * channels + c] is coefficient i of
-  /// channel c; both arrays hold sh_count(order) * channels doubles and must not overlap.
-  /// Throws std::invalid_argument if channels < 1.
-  void apply(const double* in, double* out, int channels = 1) const;
+  /// channel c; both arrays hold sh_count(bands) * channels doubles and must not overlap. bands:
+  /// the highest band turned, -1 for order() (a lower one is unchecked). Throws
+  /// std::invalid_argument if channels < 1.
+  void apply(const double* in, double* out, int channels = 1, int bands = -1) const;
 
  private:
   int order_;
   std::vector<std::vector<double>> bands_;
+};
+
+/// D(R) applied without building it, for the many rotations of a bake (each vertex's ray set is
+/// turned by its own R, and its sums are turned back): R = Rz(α) Ry(β) Rz(γ), and
+/// Ry(β) = Rx(−90°) Rz(β) Rx(90°), so D(R) = Z(α) Xᵀ Z(β) X Z(γ) with X = D(Rx(90°)), built once,
+/// and Z(θ) = D(Rz(θ)) turning each pair of coefficients ±m by mθ (the "zxzxz" rotation of Kautz,
+/// Sloan and Snyder, "Fast, Arbitrary BRDF Shading for Low-Frequency Lighting Using Spherical
+/// Harmonics", EGRW 2002). Agrees with ShRotation to rounding.
+class EulerShRotation {
+ public:
+  /// Prepares bands 0..order; order must lie in [0, kMaxShOrder] (std::invalid_argument otherwise).
+  explicit EulerShRotation(int order);
+
+  /// The highest band it can turn.
+  int order() const { return x_.order(); }
+
+  /// data ← D(R) data for bands 0..bands (bands <= order(), unchecked): data holds sh_count(bands)
+  /// rows of `channels` doubles (ShRotation::apply's layout). R must be a proper rotation
+  /// (unchecked: ShRotation and proper_rotation check one).
+  void apply(const glm::dmat3& rotation, double* data, int channels, int bands) const;
+
+ private:
+  ShRotation x_;          // X = D(Rx(90°))
+  ShRotation x_inverse_;  // Xᵀ = D(Rx(−90°))
 };
 
 /// THE convention of the environment rotation g of eq. (1), stated here only: the environment

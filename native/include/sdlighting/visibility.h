@@ -18,6 +18,9 @@
 //   diffuse transfer   T_lm = (1/R) Σ_r V_r 4 max(0, n·x_r) y_lm(x_r),           l <= s   (PRT (2))
 //   design             sd::weighted_design({x_r : V_r = 1}, 1/R each, s + s')     (Theorem 2.2)
 //
+// The sums run over the unturned Fibonacci set, whose y_lm are evaluated once per bake, and are then
+// turned with the vertex's rotation R (y(R x) = D(R) y(x): EulerShRotation, sh_rotation.h).
+//
 // The design is a positive rule for the discrete measure of V: Σ_ν λ_ν f(x_ν) = (1/R) Σ_r V_r f(x_r)
 // for every polynomial f of degree <= s + s', its weights summing to AO. A vertex none of whose rays
 // escapes gets an EMPTY design (0 nodes): its B of (13) is 0. Each design is refitted from an

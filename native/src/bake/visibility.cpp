@@ -2,6 +2,7 @@
 
 #include "util/parallel_for.h"
 #include "sdlighting/spherical_design.h"
+#include "sdlighting/sh_rotation.h"
 #include "sdlighting/spherical_harmonics.h"
 #include "sdlighting/weighted_design.h"
 
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -67,7 +69,7 @@ void check_pair(const char* name, int s, int s_prime) {
 
 // The bytes a bake allocates: per vertex its results (designs counted at their most nodes,
 // (degree+1)², held twice while flattened) and the recorded rays; per thread the SH values at the
-// escaping rays and a design's matrices (weighted_design_bytes); once the ray set.
+// escaping rays and a design's matrices (weighted_design_bytes); once the ray set and its SH values.
 double bake_bytes(const TransferOptions& o, std::size_t vertices) {
   auto count = [](int order) { return order < 0 ? 0.0 : double(sh_count(order)); };
   const double rays = o.rays;
@@ -78,7 +80,7 @@ double bake_bytes(const TransferOptions& o, std::size_t vertices) {
   const int basis = std::max({o.visibility_order, o.product_order, o.product_visibility_order, o.transfer_order});
   const double per_thread = rays * (8.0 * count(basis) + 32.0) + (degree < 0 ? 0.0 : weighted_design_bytes(o.rays, degree));
   const int threads = o.threads > 0 ? o.threads : default_thread_count();
-  return vertices * per_vertex + threads * per_thread + 24.0 * rays;
+  return vertices * per_vertex + threads * per_thread + rays * (24.0 + 8.0 * count(basis));
 }
 
 // ---- the per-vertex work ----
@@ -88,6 +90,7 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 struct Plan {
   int rays = 0;
   int basis_order = -1;  // SH order evaluated at the escaping rays (-1: none)
+  int visibility_order = -1, product_order = -1, product_visibility_order = -1, transfer_order = -1;
   int visibility_count = 0, product_rows = 0, product_cols = 0, transfer_count = 0;
   int design_degree = -1;
   bool record_rays = false;
@@ -95,6 +98,8 @@ struct Plan {
   bool horizon = false;  // TransferOptions::horizon
   std::uint64_t seed = 0;
   const std::vector<glm::dvec3>* fibonacci = nullptr;
+  const RowMatrix* basis = nullptr;  // the SH to basis_order at the unrotated ray set, a row per ray
+  const EulerShRotation* turn = nullptr;  // to basis_order
 };
 
 struct Scratch {
@@ -102,11 +107,11 @@ struct Scratch {
   std::vector<glm::dvec3> directions;  // their directions in double
   std::vector<int> traced;             // their indices in the ray set
   std::vector<glm::dvec3> escaped;
+  std::vector<int> escaped_rays;       // their indices in the ray set
   std::vector<double> weights;
   std::vector<const SphericalDesign*> starts;  // the walk's candidates' designs (weighted_design)
-  RowMatrix y;           // [escaping rays][sh_count(basis_order)]
-  Eigen::VectorXd cosine;  // 4 max(0, n·x_r) at the escaping rays
-  Eigen::MatrixXd product;
+  RowMatrix y;           // [escaping rays][the product's larger count], at the unrotated rays
+  RowMatrix product;
   Eigen::VectorXd vector;
 };
 
@@ -131,6 +136,7 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   s.escaped.clear();
+  s.escaped_rays.clear();
   for (int start = 0; start < rays; start += kStreamBlock) {
     const int count = std::min(kStreamBlock, rays - start);
     s.directions.clear();
@@ -150,7 +156,10 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
     rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(s.stream.size()), sizeof(RTCRay));
     for (std::size_t k = 0; k < s.stream.size(); ++k) {
       const bool escapes = !is_occluded(s.stream[k]);
-      if (escapes) s.escaped.push_back(s.directions[k]);
+      if (escapes) {
+        s.escaped.push_back(s.directions[k]);
+        s.escaped_rays.push_back(s.traced[k]);
+      }
       if (record) record[s.traced[k]] = escapes ? 1 : 0;
     }
   }
@@ -160,29 +169,41 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   TransferBake& bake = *out.bake;
   bake.ambient_occlusion[v] = e * inv_rays;
 
-  if (plan.basis_order >= 0) {
-    const int k = sh_count(plan.basis_order);
-    s.y.resize(e, k);
-    for (int r = 0; r < e; ++r) sh_basis(plan.basis_order, s.escaped[r], s.y.row(r).data());
-  }
+  // The sums over the rays run in the unrotated ray set, whose SH values are computed once per bake,
+  // and only their results turn with the vertex: y(R x) = D(R) y(x) (sh_rotation.h). Evaluating the
+  // basis at every rotated ray instead took most of a bake's time at orders 5 and over.
+  const auto ray_sh = [&](int r) { return plan.basis->row(s.escaped_rays[r]); };
   if (plan.visibility_count > 0) {
-    s.vector = s.y.leftCols(plan.visibility_count).colwise().sum().transpose() * inv_rays;
+    s.vector.setZero(plan.visibility_count);
+    for (int r = 0; r < e; ++r) s.vector += ray_sh(r).head(plan.visibility_count).transpose();
+    s.vector *= inv_rays;
+    plan.turn->apply(rotation, s.vector.data(), 1, plan.visibility_order);
     std::copy(s.vector.data(), s.vector.data() + plan.visibility_count,
               bake.visibility.data() + v * static_cast<std::size_t>(plan.visibility_count));
   }
   if (plan.product_rows > 0) {
-    s.product.noalias() = s.y.leftCols(plan.product_rows).transpose() * s.y.leftCols(plan.product_cols);
-    double* dst = bake.product_matrices.data() + v * static_cast<std::size_t>(plan.product_rows) * plan.product_cols;
-    for (int i = 0; i < plan.product_rows; ++i) {
-      for (int j = 0; j < plan.product_cols; ++j) dst[i * plan.product_cols + j] = s.product(i, j) * inv_rays;
-    }
+    const int rows = plan.product_rows, cols = plan.product_cols;
+    const int count = std::max(rows, cols);  // s' may exceed s
+    s.y.resize(e, count);
+    for (int r = 0; r < e; ++r) s.y.row(r) = ray_sh(r).head(count);
+    s.product.noalias() = s.y.leftCols(rows).transpose() * s.y.leftCols(cols) * inv_rays;
+    plan.turn->apply(rotation, s.product.data(), cols, plan.product_order);  // D_s P: turns the rows
+    s.product.transposeInPlace();
+    plan.turn->apply(rotation, s.product.data(), rows, plan.product_visibility_order);  // (P D_s'ᵀ)ᵀ
+    s.product.transposeInPlace();
+    std::copy(s.product.data(), s.product.data() + rows * cols,
+              bake.product_matrices.data() + v * static_cast<std::size_t>(rows) * cols);
   }
   if (plan.transfer_count > 0) {
-    s.cosine.resize(e);
-    for (int r = 0; r < e; ++r) s.cosine(r) = 4.0 * std::max(0.0, glm::dot(n, s.escaped[r]));
-    s.vector.noalias() = s.y.leftCols(plan.transfer_count).transpose() * s.cosine;
-    double* dst = bake.transfer.data() + v * static_cast<std::size_t>(plan.transfer_count);
-    for (int i = 0; i < plan.transfer_count; ++i) dst[i] = s.vector(i) * inv_rays;
+    s.vector.setZero(plan.transfer_count);
+    for (int r = 0; r < e; ++r) {
+      const double cosine = 4.0 * std::max(0.0, glm::dot(n, s.escaped[r]));
+      s.vector += cosine * ray_sh(r).head(plan.transfer_count).transpose();
+    }
+    s.vector *= inv_rays;
+    plan.turn->apply(rotation, s.vector.data(), 1, plan.transfer_order);
+    std::copy(s.vector.data(), s.vector.data() + plan.transfer_count,
+              bake.transfer.data() + v * static_cast<std::size_t>(plan.transfer_count));
   }
   if (plan.design_degree >= 0 && e > 0) {
     s.weights.assign(e, inv_rays);
@@ -291,6 +312,19 @@ TransferBake bake_transfer(const std::vector<glm::dvec3>& vertices, const std::v
   plan.horizon = options.horizon;
   plan.basis_order = std::max({options.visibility_order, options.product_order, options.product_visibility_order,
                                options.transfer_order});
+  RowMatrix basis;
+  std::optional<EulerShRotation> turn;
+  if (plan.basis_order >= 0) {
+    basis.resize(options.rays, sh_count(plan.basis_order));
+    for (int r = 0; r < options.rays; ++r) sh_basis(plan.basis_order, fibonacci[r], basis.row(r).data());
+    plan.basis = &basis;
+    turn.emplace(plan.basis_order);
+    plan.turn = &*turn;
+  }
+  plan.visibility_order = options.visibility_order;
+  plan.product_order = options.product_order;
+  plan.product_visibility_order = options.product_visibility_order;
+  plan.transfer_order = options.transfer_order;
   if (options.visibility_order >= 0) plan.visibility_count = sh_count(options.visibility_order);
   if (options.product_order >= 0) {
     plan.product_rows = sh_count(options.product_order);

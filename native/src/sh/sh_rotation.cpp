@@ -183,15 +183,70 @@ ShRotation::ShRotation(const glm::dmat3& rotation, int order) : order_(order) {
   for (int l = 2; l <= order; ++l) bands_.push_back(band_from_previous(l, bands_[1], bands_[l - 1]));
 }
 
-void ShRotation::apply(const double* in, double* out, int channels) const {
+void ShRotation::apply(const double* in, double* out, int channels, int bands) const {
   if (channels < 1) throw std::invalid_argument("ShRotation::apply: channels must be >= 1");
+  const int order = bands < 0 ? order_ : bands;
   // Fixed channel counts let the compiler unroll the inner loop (RGB is the hot case).
   switch (channels) {
-    case 1: return apply_bands<1>(bands_, order_, in, out, 1);
-    case 3: return apply_bands<3>(bands_, order_, in, out, 3);
-    case 4: return apply_bands<4>(bands_, order_, in, out, 4);
-    default: return apply_bands<0>(bands_, order_, in, out, channels);
+    case 1: return apply_bands<1>(bands_, order, in, out, 1);
+    case 3: return apply_bands<3>(bands_, order, in, out, 3);
+    case 4: return apply_bands<4>(bands_, order, in, out, 4);
+    default: return apply_bands<0>(bands_, order, in, out, channels);
   }
+}
+
+namespace {
+
+glm::dmat3 quarter_turn_about_x(double sign) {
+  glm::dmat3 r(0.0);  // column-major: r[column][row]
+  r[0][0] = 1.0;
+  r[1][2] = sign;   // y -> ±z
+  r[2][1] = -sign;  // z -> ∓y
+  return r;
+}
+
+// data ← Z(θ) data: f turned about z by θ, f(Rz(θ)ᵀ x), moves each azimuthal pair, cos mφ (index
+// l² + l + m) and sin mφ (l² + l − m), as a' = a cos mθ − b sin mθ, b' = a sin mθ + b cos mθ.
+void turn_about_z(double angle, double* data, int channels, int bands) {
+  const double c1 = std::cos(angle), s1 = std::sin(angle);
+  double c = 1.0, s = 0.0;  // cos mθ, sin mθ
+  for (int m = 1; m <= bands; ++m) {
+    const double next_c = c * c1 - s * s1;
+    s = s * c1 + c * s1;
+    c = next_c;
+    for (int l = m; l <= bands; ++l) {
+      double* a = data + size_t(l * l + l + m) * channels;
+      double* b = data + size_t(l * l + l - m) * channels;
+      for (int k = 0; k < channels; ++k) {
+        const double ak = a[k], bk = b[k];
+        a[k] = ak * c - bk * s;
+        b[k] = ak * s + bk * c;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+EulerShRotation::EulerShRotation(int order)
+    : x_(quarter_turn_about_x(1.0), order), x_inverse_(quarter_turn_about_x(-1.0), order) {}
+
+void EulerShRotation::apply(const glm::dmat3& rotation, double* data, int channels, int bands) const {
+  // R = Rz(α) Ry(β) Rz(γ): its third column is (cos α, sin α) sin β, cos β, and its upper 2×2
+  // block holds (1 + cos β) times the cosine and sine of α + γ and (1 − cos β) times those of α − γ.
+  // Near β = 0 (or π) α is known only to rounding / sin β, but γ taken from the well-determined sum
+  // (or difference) makes up for it, so that the turn stays exact to rounding through gimbal lock.
+  auto r = [&](int row, int column) { return rotation[column][row]; };
+  const double beta = std::atan2(std::hypot(r(0, 2), r(1, 2)), r(2, 2));
+  const double alpha = std::atan2(r(1, 2), r(0, 2));
+  const double gamma = r(2, 2) >= 0.0 ? std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1)) - alpha
+                                      : alpha - std::atan2(-(r(1, 0) + r(0, 1)), r(1, 1) - r(0, 0));
+  std::vector<double> scratch(size_t(sh_count(bands)) * channels);
+  turn_about_z(gamma, data, channels, bands);
+  x_.apply(data, scratch.data(), channels, bands);
+  turn_about_z(beta, scratch.data(), channels, bands);
+  x_inverse_.apply(scratch.data(), data, channels, bands);
+  turn_about_z(alpha, data, channels, bands);
 }
 
 std::vector<double> rotated_sh(const std::vector<double>& coeffs, int order, const glm::dmat3& g, int channels) {

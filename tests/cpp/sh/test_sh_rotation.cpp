@@ -197,6 +197,37 @@ TEST(ShRotation, ApplyHandlesInterleavedChannels) {
   EXPECT_THROW(d.apply(interleaved.data(), out.data(), 0), std::invalid_argument);
 }
 
+// EulerShRotation against ShRotation: random rotations and those where the Euler angles degenerate
+// (β = 0: a turn about z; β = π; β within 1e-10 of 0 or π), every order to 12, a lower band than
+// prepared, one and several channels.
+TEST(EulerShRotation, AgreesWithTheRecurrence) {
+  const int order = 12, channels = 3;
+  std::mt19937_64 rng(31);
+  glm::dmat3 half_turn_about_x(1.0);
+  half_turn_about_x[1][1] = half_turn_about_x[2][2] = -1.0;
+  glm::dmat3 slight_turn_about_x(1.0);
+  slight_turn_about_x[1][2] = 1e-10, slight_turn_about_x[2][1] = -1e-10;  // orthogonal to rounding
+  std::vector<glm::dmat3> rotations = {glm::dmat3(1.0), rotation_about_z(2.1), half_turn_about_x,
+                                       rotation_about_z(0.4) * half_turn_about_x,
+                                       rotation_about_z(0.3) * slight_turn_about_x * rotation_about_z(1.2),
+                                       rotation_about_z(-2.5) * half_turn_about_x * slight_turn_about_x};
+  for (int trial = 0; trial < 8; ++trial) rotations.push_back(random_rotation(rng));
+  const EulerShRotation turn(order);
+  EXPECT_EQ(turn.order(), order);
+  for (const glm::dmat3& r : rotations) {
+    const ShRotation d(r, order);
+    for (int bands : {0, 1, 5, order}) {
+      const int k = sh_count(bands);
+      std::vector<double> data(size_t(k) * channels);
+      for (double& v : data) v = std::normal_distribution<double>()(rng);
+      std::vector<double> expected(data.size());
+      d.apply(data.data(), expected.data(), channels, bands);
+      turn.apply(r, data.data(), channels, bands);
+      for (size_t i = 0; i < data.size(); ++i) EXPECT_NEAR(data[i], expected[i], kExact) << "bands " << bands << ", " << i;
+    }
+  }
+}
+
 TEST(ShRotation, OrderZeroIsTheScalar) {
   const ShRotation d(rotation_about_z(1.0), 0);
   const double in = 2.5;

@@ -125,6 +125,11 @@ def test_outputs_equal_direct_sums_over_the_rays(sd):
         cosine = 4 * np.maximum(0, dirs[hit] @ n[i])
         np.testing.assert_allclose(out["transfer"][i], cosine @ y / rays, rtol=0, atol=EXACT)
         assert out["ambient_occlusion"][i] == pytest.approx(hit.sum() / rays, abs=EXACT)
+    # s' above s: the rows' and the columns' turns of different orders
+    wide = sd.bake_transfer(v, n, t, rays, seed=6, product_orders=(2, 4), return_rays=True)
+    for i in range(len(v)):
+        y = sd.sh_basis(4, sd.vertex_ray_directions(rays, 6, i)[wide["ray_visibility"][i]])
+        np.testing.assert_allclose(wide["product_matrices"][i], y[:, :9].T @ y / rays, rtol=0, atol=EXACT)
 
 
 def test_threads_change_nothing(sd):

@@ -142,18 +142,23 @@ def edges_of(triangles):
     """(edges [E, 2] with a < b, side_edge [T, 3]): side k of triangle t runs from t[k] to
     t[(k + 1) % 3] and is edge side_edge[t, k]."""
     sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
-    ends = np.sort(sides, axis=1).astype(np.int64)
-    # one int64 key per pair: np.unique of rows (axis=0) sorts them as structured values, far slower
-    keys, inverse = np.unique((ends[:, 0] << 32) | ends[:, 1], return_inverse=True)
+    # np.unique of the rows themselves (axis=0) sorts them as structured values, far slower
+    keys, inverse = np.unique(_pair_keys(sides), return_inverse=True)
     edges = np.stack([keys >> 32, keys & 0xFFFFFFFF], axis=1).astype(triangles.dtype)
     return edges, inverse.reshape(-1, 3)
+
+
+def _pair_keys(pairs):
+    """One int64 per unordered pair of ids [N, 2], ordered as the sorted pairs are: ids stay below
+    2³¹ (Embree indexes vertices with 32 bits, and a weld id is a vertex's)."""
+    ends = np.sort(pairs, axis=1).astype(np.int64)
+    return (ends[:, 0] << 32) | ends[:, 1]
 
 
 def _places(weld, edges):
     """(the index of each edge's place among the distinct places, an int64 key of each place):
     a place is the unordered pair of its ends' weld ids."""
-    ends = np.sort(weld[edges], axis=1).astype(np.int64)
-    keys = (ends[:, 0] << 32) | ends[:, 1]     # the same key at every level: ids stay below 2³²
+    keys = _pair_keys(weld[edges])     # the same key at every level
     return np.unique(keys, return_inverse=True)[1].reshape(-1), keys
 
 

@@ -36,7 +36,7 @@ class ShRotation {
 
   /// out = D(R) in for `channels` interleaved channels: in[i * channels + c] is coefficient i of
   /// channel c; both arrays hold sh_count(bands) * channels doubles and must not overlap. bands:
-  /// the highest band turned, -1 for order() (a lower one is unchecked). Throws
+  /// the highest band turned, -1 for order(); one above order() is unchecked. Throws
   /// std::invalid_argument if channels < 1.
   void apply(const double* in, double* out, int channels = 1, int bands = -1) const;
 
@@ -59,9 +59,9 @@ class EulerShRotation {
   /// The highest band it can turn.
   int order() const { return x_.order(); }
 
-  /// data ← D(R) data for bands 0..bands (bands <= order(), unchecked): data holds sh_count(bands)
-  /// rows of `channels` doubles (ShRotation::apply's layout). R must be a proper rotation
-  /// (unchecked: ShRotation and proper_rotation check one).
+  /// data ← D(R) data for bands 0..bands: data holds sh_count(bands) rows of `channels` doubles
+  /// (ShRotation::apply's layout). Throws std::invalid_argument unless 0 <= bands <= order() and
+  /// channels >= 1. R must be a proper rotation (unchecked: ShRotation and proper_rotation check one).
   void apply(const glm::dmat3& rotation, double* data, int channels, int bands) const;
 
  private:

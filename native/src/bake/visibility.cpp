@@ -89,7 +89,7 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 
 struct Plan {
   int rays = 0;
-  int basis_order = -1;  // SH order evaluated at the escaping rays (-1: none)
+  int basis_order = -1;  // SH order of the sums over the rays (-1: none)
   int visibility_order = -1, product_order = -1, product_visibility_order = -1, transfer_order = -1;
   int visibility_count = 0, product_rows = 0, product_cols = 0, transfer_count = 0;
   int design_degree = -1;

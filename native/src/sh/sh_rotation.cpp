@@ -232,6 +232,11 @@ EulerShRotation::EulerShRotation(int order)
     : x_(quarter_turn_about_x(1.0), order), x_inverse_(quarter_turn_about_x(-1.0), order) {}
 
 void EulerShRotation::apply(const glm::dmat3& rotation, double* data, int channels, int bands) const {
+  if (bands < 0 || bands > order() || channels < 1) {
+    throw std::invalid_argument("EulerShRotation::apply: bands must lie in [0, " + std::to_string(order()) +
+                                "] and channels be >= 1, got " + std::to_string(bands) + " and " +
+                                std::to_string(channels));
+  }
   // R = Rz(α) Ry(β) Rz(γ): its third column is (cos α, sin α) sin β, cos β, and its upper 2×2
   // block holds (1 + cos β) times the cosine and sine of α + γ and (1 − cos β) times those of α − γ.
   // Near β = 0 (or π) α is known only to rounding / sin β, but γ taken from the well-determined sum

@@ -198,10 +198,12 @@ TEST(ShRotation, ApplyHandlesInterleavedChannels) {
 }
 
 // EulerShRotation against ShRotation: random rotations and those where the Euler angles degenerate
-// (β = 0: a turn about z; β = π; β within 1e-10 of 0 or π), every order to 12, a lower band than
-// prepared, one and several channels.
+// - β = 0 (a turn about z) and β = π exactly, β within 1e-10 of either, and turns about z whose
+// third column carries only rounding (A Aᵀ Rz, A random), where the angles taken from it alone
+// would be noise - at bands 0, 1, 5 and 12 of 12, with one, three and seven channels; and the
+// bands and channels it refuses.
 TEST(EulerShRotation, AgreesWithTheRecurrence) {
-  const int order = 12, channels = 3;
+  const int order = 12;
   std::mt19937_64 rng(31);
   glm::dmat3 half_turn_about_x(1.0);
   half_turn_about_x[1][1] = half_turn_about_x[2][2] = -1.0;
@@ -211,21 +213,34 @@ TEST(EulerShRotation, AgreesWithTheRecurrence) {
                                        rotation_about_z(0.4) * half_turn_about_x,
                                        rotation_about_z(0.3) * slight_turn_about_x * rotation_about_z(1.2),
                                        rotation_about_z(-2.5) * half_turn_about_x * slight_turn_about_x};
+  for (int trial = 0; trial < 4; ++trial) {
+    const glm::dmat3 a = random_rotation(rng);
+    const glm::dmat3 rounded = a * (glm::transpose(a) * rotation_about_z(0.7 + trial));
+    rotations.push_back(rounded);
+    rotations.push_back(rounded * half_turn_about_x);
+  }
   for (int trial = 0; trial < 8; ++trial) rotations.push_back(random_rotation(rng));
   const EulerShRotation turn(order);
   EXPECT_EQ(turn.order(), order);
   for (const glm::dmat3& r : rotations) {
     const ShRotation d(r, order);
-    for (int bands : {0, 1, 5, order}) {
-      const int k = sh_count(bands);
-      std::vector<double> data(size_t(k) * channels);
-      for (double& v : data) v = std::normal_distribution<double>()(rng);
-      std::vector<double> expected(data.size());
-      d.apply(data.data(), expected.data(), channels, bands);
-      turn.apply(r, data.data(), channels, bands);
-      for (size_t i = 0; i < data.size(); ++i) EXPECT_NEAR(data[i], expected[i], kExact) << "bands " << bands << ", " << i;
+    for (int channels : {1, 3, 7}) {
+      for (int bands : {0, 1, 5, order}) {
+        std::vector<double> data(size_t(sh_count(bands)) * channels);
+        for (double& v : data) v = std::normal_distribution<double>()(rng);
+        std::vector<double> expected(data.size());
+        d.apply(data.data(), expected.data(), channels, bands);
+        turn.apply(r, data.data(), channels, bands);
+        for (size_t i = 0; i < data.size(); ++i) {
+          EXPECT_NEAR(data[i], expected[i], kExact) << "bands " << bands << ", channels " << channels << ", " << i;
+        }
+      }
     }
   }
+  std::vector<double> data(size_t(sh_count(order + 1)));
+  EXPECT_THROW(turn.apply(glm::dmat3(1.0), data.data(), 1, order + 1), std::invalid_argument);
+  EXPECT_THROW(turn.apply(glm::dmat3(1.0), data.data(), 1, -1), std::invalid_argument);
+  EXPECT_THROW(turn.apply(glm::dmat3(1.0), data.data(), 0, order), std::invalid_argument);
 }
 
 TEST(ShRotation, OrderZeroIsTheScalar) {

@@ -237,10 +237,11 @@ def exposure_scale(scene):
 def source_lighting(scene, source, g, wait, view_layer=None):
     """(scene/light_sources.Source list, their shadow maps' texture, the maps' shader rows) of the
     map's bright sources that light objects on their own (the scene's Sharp Source Shadows;
-    gpu_shading.takes_sources says which), or None: the option is off, the map has none, or (wait=False) they are still being
-    found (the whole map through SH meanwhile), or their search or their shadow maps failed (the
-    whole map through SH; source_error says why, the panel shows it; wait=True raises). The maps
-    are rendered now when the sources or the casters changed (source_shadows.py)."""
+    gpu_shading.takes_sources says which), or None: the option is off, the map has none, or
+    (wait=False) they are still being found (the whole map through SH meanwhile), or their search
+    or their shadow maps failed (the whole map through SH; source_error says why, the panel shows
+    it; wait=True raises). The maps are rendered now when the sources or the casters changed
+    (source_shadows.py)."""
     import bpy
     global source_error
     try:

@@ -4,8 +4,9 @@ the panel names them and as the live shading lights them.
 
 With Sharp Source Shadows on, a surface is lit by the remainder of the map through SH and by each
 source on its own (diffuse light, and its share of the prefiltered glossy light), shadowed per
-pixel through a shadow map rendered from the source's direction (live/source_shadows.py). The maps are orthographic over the bounding sphere of what
-casts shadows; this module computes their frames and the shader's rows of each source.
+pixel through a shadow map rendered from the source's direction (live/source_shadows.py). The
+maps are orthographic over the bounding sphere of what casts shadows; this module computes their
+frames and the shader's rows of each source.
 
 Nothing here needs Blender.
 """

@@ -19,6 +19,20 @@ def test_surface_area_of_a_rectangle_and_of_nothing():
     assert budget.surface_area(*SQUARE, block=1) == pytest.approx(6.0)   # summed over blocks
 
 
+def test_the_selection_seconds_grow_with_its_vertices_between_the_floor_and_the_cap():
+    per_vertex = budget.SECONDS_PER_VERTEX
+    assert budget.selection_seconds(0) == budget.MIN_SELECTION_SECONDS
+    between = 1.5 * budget.MIN_SELECTION_SECONDS / per_vertex   # 2 x that is still under the cap
+    assert 3.0 * budget.MIN_SELECTION_SECONDS < budget.SELECTION_SECONDS
+    assert budget.selection_seconds(between) == pytest.approx(per_vertex * between)
+    assert budget.selection_seconds(2 * between) == pytest.approx(2 * per_vertex * between)
+    assert budget.selection_seconds(10 ** 9) == budget.SELECTION_SECONDS
+    # issue 30: a sub-1k-vertex model (assimp's spider: 1,084 vertices once its corners are split)
+    # gets a few seconds, a CAD model of tens of thousands the whole budget
+    assert budget.selection_seconds(1084) < 0.2 * budget.SELECTION_SECONDS
+    assert budget.selection_seconds(20_000) == budget.SELECTION_SECONDS
+
+
 def test_shares_follow_the_areas_and_sum_to_one():
     shares = budget.shares([1.0, 3.0, 0.0])
     assert shares == pytest.approx([0.25, 0.75, 0.0])

@@ -3,9 +3,10 @@ seconds where they show, instead of the whole Max Verts and a minute of rays for
 CAD model imported as dozens of parts baked for minutes where the same model joined into one
 object took under one: README, Use, item 6).
 
-The panel's Max Verts and SELECTION_SECONDS are the selection's. Each object gets the share of both
-that its surface area is of the selection's: what it covers of the view, whichever way the user
-turns it (a camera's view would favour one side, and the viewport is turned). Within its share of
+The panel's Max Verts and the seconds of `selection_seconds` are the selection's. Each object gets
+the share of both that its surface area is of the selection's: what it covers of the view,
+whichever way the user turns it (a camera's view would favour one side, and the viewport is
+turned). Within its share of
 the seconds the automatic mode chooses among the settings its copy as it is affords, and its
 refinement stops where the vertices it adds would take the bake past that share at the chosen rays.
 
@@ -16,10 +17,21 @@ import numpy as np
 
 from . import cost
 
-# The rays of a selection's bake at the defaults, all objects together. The refinement's tests, the
-# automatic mode's measurement and the least-squares fit come on top - on a CAD model about as much
-# again - and the defaults are to bake such a model within a minute (issue 30).
+# The rays of a selection's bake at the defaults, all objects together: SECONDS_PER_VERTEX for each
+# vertex it bakes before any refinement, within MIN_SELECTION_SECONDS .. SELECTION_SECONDS. The
+# refinement's tests, the automatic mode's measurement and the least-squares fit come on top - on a
+# CAD model about as much again. So a CAD model of tens of thousands of vertices bakes within a
+# minute and a model of under a thousand in seconds (issue 30), while a plane of a few vertices that
+# a shadow crosses still gets the seconds its refinement needs to draw it.
 SELECTION_SECONDS = 25.0
+SECONDS_PER_VERTEX = 2e-3
+MIN_SELECTION_SECONDS = 2.0
+
+
+def selection_seconds(vertices):
+    """The seconds the rays of a selection of `vertices` baked vertices (before any refinement) may
+    take at the defaults."""
+    return float(np.clip(SECONDS_PER_VERTEX * vertices, MIN_SELECTION_SECONDS, SELECTION_SECONDS))
 
 
 def surface_area(positions, triangles, block=1 << 20):

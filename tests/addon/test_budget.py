@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from sd_lighting import methods
+from sd_lighting.bake import refine
 from sd_lighting.bake.task import BakeTask
 from sd_lighting.plan import analysis, bake_time, budget, cost
 
@@ -48,6 +49,14 @@ def test_affordable_vertices_is_the_bake_time_model_inverted(method_id, s, sv):
         assert points * cost.bake_seconds(method, s, sv, rays, n + 1, 2) > 10.0
     assert budget.affordable_vertices(10.0, method, s, sv, 4096, 2, 1.0) < \
         budget.affordable_vertices(10.0, method, s, sv, 256, 2, 1.0)
+    # a refined copy's tests: TESTED_POINTS_PER_VERTEX points a vertex at their own rays
+    test = (methods.get("prt_diffuse"), 6, 256)
+    def seconds(vertices):
+        return (3.0 * cost.bake_seconds(method, s, sv, 1024, vertices, 2) +
+                budget.TESTED_POINTS_PER_VERTEX * cost.bake_seconds(test[0], 6, 0, 256, vertices, 2))
+    n = budget.affordable_vertices(10.0, method, s, sv, 1024, 2, 3.0, test)
+    assert seconds(n) <= 10.0 < seconds(n + 1)
+    assert n < budget.affordable_vertices(10.0, method, s, sv, 1024, 2, 3.0)
 
 
 def task(**settings):
@@ -57,7 +66,9 @@ def task(**settings):
 
 
 def test_a_chosen_task_refines_no_further_than_its_seconds_afford():
-    affordable = budget.affordable_vertices(2.0, methods.get("prt_diffuse"), 6, 0, 1024, os.cpu_count() or 1, 3.0)
+    test = (methods.get("prt_diffuse"), refine.CRITERION_ORDER, refine.CRITERION_RAYS)   # its tests too
+    affordable = budget.affordable_vertices(2.0, methods.get("prt_diffuse"), 6, 0, 1024, os.cpu_count() or 1, 3.0,
+                                            test)
     assert affordable < 250_000
     assert task().refine_budget() == affordable
     assert task(bake_seconds_budget=1e6).refine_budget() == 250_000      # Max Verts' share binds

@@ -268,8 +268,9 @@ class BakeTask:
 
     def refine_budget(self):
         """The vertices its refinement may reach: its share of Max Verts, and, once its method is
-        chosen, no more than its share of the selection's seconds affords at its rays - with least
-        squares each vertex also traces about two face centres (plan/budget.py)."""
+        chosen, no more than its share of the selection's seconds affords at its rays and with the
+        refinement's tests - with least squares each vertex also traces about two face centres
+        (plan/budget.py)."""
         s = self.settings
         vertices = int(s["refine_max_vertices"])
         if s["method"] == analysis.AUTOMATIC or s.get("bake_seconds_budget") is None:
@@ -278,7 +279,8 @@ class BakeTask:
         fitted = bool(s.get("least_squares")) and least_squares.applies(method)
         return min(vertices, budget.affordable_vertices(
             float(s["bake_seconds_budget"]), method, int(s["light_order"]), int(s["visibility_order"]),
-            int(s["rays"]), os.cpu_count() or 1, 3.0 if fitted else 1.0))
+            int(s["rays"]), os.cpu_count() or 1, 3.0 if fitted else 1.0,
+            test=(methods.get("prt_diffuse"), refine.CRITERION_ORDER, min(int(s["rays"]), refine.CRITERION_RAYS))))
 
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement

@@ -17,15 +17,19 @@ import numpy as np
 
 from . import cost
 
-# The rays of a selection's bake at the defaults, all objects together: SECONDS_PER_VERTEX for each
-# vertex it bakes before any refinement, within MIN_SELECTION_SECONDS .. SELECTION_SECONDS. The
-# refinement's tests, the automatic mode's measurement and the least-squares fit come on top - on a
-# CAD model about as much again. So a CAD model of tens of thousands of vertices bakes within a
+# The rays of a selection's bake at the defaults, all objects together, the refinement's tests
+# included: SECONDS_PER_VERTEX for each vertex it bakes before any refinement, within
+# MIN_SELECTION_SECONDS .. SELECTION_SECONDS. The automatic mode's measurement and the least-squares
+# fit come on top. So a CAD model of tens of thousands of vertices bakes within a
 # minute and a model of under a thousand in seconds (issue 30), while a plane of a few vertices that
 # a shadow crosses still gets the seconds its refinement needs to draw it.
 SELECTION_SECONDS = 25.0
 SECONDS_PER_VERTEX = 2e-3
 MIN_SELECTION_SECONDS = 2.0
+# The points a refinement's tests trace for each vertex of the refined copy (each level's ends and
+# midpoints, bake/refine.py): 3.3 - 4.8 on Wuson, Suzanne, the spider and the glTF engine. At the
+# engine's 256 rays its tests traced 1.6 x the points of its bake, which the seconds had left out.
+TESTED_POINTS_PER_VERTEX = 4.0
 
 
 def selection_seconds(vertices):
@@ -53,9 +57,14 @@ def shares(areas):
     return areas / total if total > 0.0 else np.full(len(areas), 1.0 / max(len(areas), 1))
 
 
-def affordable_vertices(seconds, method, light_order, visibility_order, rays, threads, points_per_vertex):
+def affordable_vertices(seconds, method, light_order, visibility_order, rays, threads, points_per_vertex,
+                        test=None):
     """How many vertices a bake of the method at these orders and rays traces within `seconds` on
     `threads` cores, each vertex tracing `points_per_vertex` points (least squares adds the face
-    centres: about 3 points a vertex on a refined mesh)."""
+    centres: about 3 points a vertex on a refined mesh); test: None, or for a refined copy the
+    (method, light order, rays) its refinement tests with, TESTED_POINTS_PER_VERTEX points a vertex."""
     per_vertex = cost.bake_seconds(method, light_order, visibility_order, rays, 1, threads) * points_per_vertex
+    if test is not None:
+        test_method, test_order, test_rays = test
+        per_vertex += cost.bake_seconds(test_method, test_order, 0, test_rays, 1, threads) * TESTED_POINTS_PER_VERTEX
     return int(seconds / per_vertex) if per_vertex > 0.0 else np.iinfo(np.int64).max

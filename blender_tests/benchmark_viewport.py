@@ -30,8 +30,11 @@ texture: its designs' node counts where the model puts them, neighbours alike or
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
                   --model PATH (e.g. assimp's 2CylinderEngine.glb)
+                  --json PATH: the MSD / PRT ratios of the last two tables, for the accuracy
+                  report's Table 1 (docs/report/viewport_frames.json)
 """
 
+import json
 import os
 import sys
 import time
@@ -48,7 +51,7 @@ ROUNDS = 3   # interleaved rounds of the every-method table, whose medians it qu
 
 def options():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    out = {"sizes": [10000, 100000, 1000000], "frames": 5, "methods_size": 100000, "model": None}
+    out = {"sizes": [10000, 100000, 1000000], "frames": 5, "methods_size": 100000, "model": None, "json": None}
     for i, arg in enumerate(argv):
         if arg == "--sizes":
             out["sizes"] = [int(s) for s in argv[i + 1].split(",")]
@@ -58,6 +61,8 @@ def options():
             out["methods_size"] = int(argv[i + 1])
         elif arg == "--model":
             out["model"] = argv[i + 1]
+        elif arg == "--json":
+            out["json"] = argv[i + 1]
     return out
 
 
@@ -227,7 +232,8 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
 
 def real_model_table(package, scene, view, path, frames):
     """MSD (13) against PRT (8) on a real bake of the model at `path` (3 units across, at the
-    origin): each of two copies baked with one method, then both drawn in interleaved rounds."""
+    origin): each of two copies baked with one method, then both drawn in interleaved rounds.
+    Returns the ratios for --json."""
     model = sdtest.sized_model(path, 3.0, (0.0, 0.0, 0.0))
     copy = model.copy()
     copy.data = model.data.copy()
@@ -261,6 +267,12 @@ def real_model_table(package, scene, view, path, frames):
         print("%-44s %10.1f %10.1f %12.2f %10.2f" % (label, seconds, obj["sd_bake"]["bytes_per_vertex"],
                                                     1e3 * times[method, texture],
                                                     times[method, texture] / times["prt_matrix", False]), flush=True)
+    return {"model": os.path.basename(path), "vertices": len(model.data.vertices),
+            "design_nodes_mean": float(counts.mean()),
+            "msd_visibility": {"texture": times["msd_visibility", True] / times["prt_matrix", False],
+                               "sh": times["msd_visibility", False] / times["prt_matrix", False]},
+            "bytes": baked["msd_visibility"][0]["sd_bake"]["bytes_per_vertex"] /
+            baked["prt_matrix"][0]["sd_bake"]["bytes_per_vertex"]}
 
 
 def main():
@@ -287,6 +299,9 @@ def main():
     print("%10s %10s %14s %14s %8s %14s %8s" % ("vertices", "triangles", "uniform (ms)",
                                                 "MSD/vertex(ms)", "ratio", "MSD/pixel(ms)", "ratio"))
     rows = []
+    # --json: the MSD / PRT frame-time ratios, which the accuracy report's Table 1 quotes
+    # (scripts/accuracy_summary.py reads docs/report/viewport_frames.json)
+    record = {"renderer": gpu.platform.renderer_get(), "blender": bpy.app.version_string, "rounds": ROUNDS}
     for size in opts["sizes"]:
         positions, normals, triangles = heightfield(size)
         obj = baked_object(package, scene, positions, normals, triangles, real_counts)
@@ -344,6 +359,10 @@ def main():
               "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
         print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
         methods = package.methods
+        record["synthetic"] = {"vertices": len(positions), "design_nodes_mean": float(real_counts.mean())}
+        for method, base in (("msd_visibility", "prt_matrix"), ("msd_lobe", "prt_gaunt")):
+            record["synthetic"][method] = {"texture": times[method, True] / times[base, False],
+                                           "sh": times[method, False] / times[base, False]}
         for method, texture in (("msd_visibility", False), ("msd_visibility", True),
                                 ("msd_lobe", False), ("msd_lobe", True),
                                 ("prt_matrix", False), ("prt_gaunt", False)):
@@ -376,7 +395,11 @@ def main():
                   flush=True)
         glossy_table(package, scene, view, (positions, normals, triangles), real_counts, opts["frames"])
     if opts["model"]:
-        real_model_table(package, scene, view, opts["model"], opts["frames"])
+        record["baked"] = real_model_table(package, scene, view, opts["model"], opts["frames"])
+    if opts["json"]:
+        with open(opts["json"], "w") as f:
+            json.dump(record, f, indent=1)
+        print("\nratios written to", opts["json"])
     return 0
 
 

@@ -30,8 +30,9 @@ texture: its designs' node counts where the model puts them, neighbours alike or
 
 Options after --: --sizes 10000,100000,1000000 --frames 5 --methods-size 100000 (0: skip)
                   --model PATH (e.g. assimp's 2CylinderEngine.glb)
-                  --json PATH: the MSD / PRT ratios of the last two tables, for the accuracy
-                  report's Table 1 (docs/report/viewport_frames.json)
+                  --json PATH: the ratios of the "MSD against PRT" and --model tables, with the
+                  frames of the built-in shaders, for the accuracy report's Table 1
+                  (docs/report/viewport_frames.json)
 """
 
 import json
@@ -177,18 +178,34 @@ def design_node_counts_of_a_real_bake(package, scene):
 
 def uniform_drawer(uniform, projection, positions, triangles):
     """(draw function, batch) of Blender's uniform-colour shader on the mesh."""
+    return _builtin_drawer(uniform, projection, triangles, {"pos": positions.astype(np.float32)},
+                           lambda: uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0)))
+
+
+def smooth_colour_drawer(projection, positions, normals, triangles):
+    """(draw function, batch) of Blender's smooth-colour shader on the mesh, a colour per vertex: the
+    rasteriser's interpolation of a per-vertex colour, which every per-vertex method pays on top of
+    its own evaluation (the uniform colour has nothing to interpolate)."""
+    import gpu
+    shader = gpu.shader.from_builtin('3D_SMOOTH_COLOR' if bpy.app.version < (3, 5, 0) else 'SMOOTH_COLOR')
+    colours = np.c_[0.5 + 0.5 * normals, np.ones(len(normals))].astype(np.float32)
+    return _builtin_drawer(shader, projection, triangles,
+                           {"pos": positions.astype(np.float32), "color": colours}, lambda: None)
+
+
+def _builtin_drawer(shader, projection, triangles, attributes, set_uniforms):
     import gpu
     from gpu_extras.batch import batch_for_shader
     from mathutils import Matrix
-    batch = batch_for_shader(uniform, 'TRIS', {"pos": positions.astype(np.float32)}, indices=triangles)
+    batch = batch_for_shader(shader, 'TRIS', attributes, indices=triangles)
 
     def draw():
         with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
             gpu.matrix.load_matrix(Matrix.Identity(4))
             gpu.matrix.load_projection_matrix(projection)
-            uniform.bind()
-            uniform.uniform_float("color", (0.8, 0.8, 0.8, 1.0))
-            batch.draw(uniform)
+            shader.bind()
+            set_uniforms()
+            batch.draw(shader)
     return draw, batch
 
 
@@ -325,6 +342,7 @@ def main():
     if opts["methods_size"]:
         positions, normals, triangles = heightfield(opts["methods_size"])
         draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)
+        draw_smooth, smooth_batch = smooth_colour_drawer(projection, positions, normals, triangles)
         settings = scene.sd_lighting
         objects = {method.id: baked_object(package, scene, positions, normals, triangles, real_counts, method.id)
                    for method in package.methods.METHODS}
@@ -332,9 +350,10 @@ def main():
                  for texture in ((False, True) if method.band_limited_texture else (False,))]
         # in interleaved rounds, each case's median: a load elsewhere on the machine then falls on
         # every case alike, not on the one it happened to meet
-        samples = {case: [] for case in cases + ["uniform"]}
+        samples = {case: [] for case in cases + ["uniform", "smooth"]}
         for _ in range(ROUNDS):
             samples["uniform"].append(time_frames(draw_uniform, opts["frames"]))
+            samples["smooth"].append(time_frames(draw_smooth, opts["frames"]))
             for method, texture in cases:
                 settings.band_limited_texture = texture
                 obj = objects[method]
@@ -343,8 +362,9 @@ def main():
         settings.band_limited_texture = False
         times = {case: float(np.median(t)) for case, t in samples.items()}
         t_uniform = times["uniform"]
-        print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms; "
-              "medians of %d interleaved rounds):" % (len(positions), 1e3 * t_uniform, ROUNDS))
+        print("\nEvery method per vertex, %d vertices, s = 4, s' = 2, Lambert (uniform colour: %.2f ms, "
+              "smooth colour: %.2f ms; medians of %d interleaved rounds):" % (
+                  len(positions), 1e3 * t_uniform, 1e3 * times["smooth"], ROUNDS))
         print("%-44s %10s %12s %8s" % ("method", "bytes/v", "frame (ms)", "ratio"))
         for method, texture in cases:
             label = package.methods.get(method).label + (", band-limited texture" if texture else "")
@@ -353,13 +373,16 @@ def main():
                                                  t / t_uniform), flush=True)
         for obj in objects.values():
             remove_object(package, obj)
-        del batch
+        del batch, smooth_batch
         width, height = package.live.band_limited_map.texture_size(4)
         print("\nMSD against PRT, %d vertices, s = 4, s' = 2, Lambert, per vertex (frame-time ratios; "
               "band-limited texture %dx%d RGBA32F, bilinear):" % (len(positions), width, height))
         print("%-44s %12s %12s %12s" % ("", "frame (ms)", "/ PRT (8)", "/ PRT (10)"))
         methods = package.methods
-        record["synthetic"] = {"vertices": len(positions), "design_nodes_mean": float(real_counts.mean())}
+        record["synthetic"] = {"vertices": len(positions), "design_nodes_mean": float(real_counts.mean()),
+                               "uniform_ms": 1e3 * t_uniform, "smooth_ms": 1e3 * times["smooth"],
+                               "frame_ms": {method + ("_texture" if texture else ""): 1e3 * times[method, texture]
+                                            for method, texture in cases}}
         for method, base in (("msd_visibility", "prt_matrix"), ("msd_lobe", "prt_gaunt")):
             record["synthetic"][method] = {"texture": times[method, True] / times[base, False],
                                            "sh": times[method, False] / times[base, False]}

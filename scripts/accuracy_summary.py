@@ -5,11 +5,12 @@
 
 reads DIR/accuracy_report.json (blender_tests/accuracy_report.py; stored compressed as
 accuracy_report.json.gz, its cost model also as cost_model.json) and WORK/strip.npz (default
-build/accuracy_report_work), and DIR/viewport_frames.json where it is there (the MSD / PRT frame ratios
-at scale, from blender_tests/benchmark_viewport.py --json, for Table 1), and writes into DIR: report.md, error_vs_frame_<scene>.png and
-error_vs_bake_<scene>.png (every Monte Carlo row, mean over the HDRIs, per material, with the Pareto
-front), strip.png (Cycles, the add-on's previews, the reference and each method at the vertices,
-and error heat maps). Needs matplotlib (python3-matplotlib).
+build/accuracy_report_work), and DIR/viewport_frames.json where it is there (the MSD / PRT frame
+ratios at scale, from blender_tests/benchmark_viewport.py --json, for Table 1), and writes into DIR:
+report.md, error_vs_frame_<scene>.png and error_vs_bake_<scene>.png (every Monte Carlo row, mean
+over the HDRIs, per material, with the Pareto front), strip.png (Cycles, the add-on's previews, the
+reference and each method at the vertices, and error heat maps). Needs matplotlib
+(python3-matplotlib).
 """
 
 import gzip
@@ -415,24 +416,31 @@ def markdown(report, averaged, plots, strip_file, viewport=None):
               "blender_tests/benchmark_viewport.py measures 100k vertices), the floats the add-on stores "
               "(without the normal; a design at its own length, three floats a node and its count) and "
               "the design nodes." % (min(report["vertices"].values()), max(report["vertices"].values()))]
-    large = ""
-    if viewport:   # benchmark_viewport.py --json: where the vertices, not the frame's fixed cost, dominate
-        synthetic, baked = viewport.get("synthetic"), viewport.get("baked")
-        lines[-1] += (" Beside them, from blender_tests/benchmark_viewport.py --json (%s, Blender %s, medians of %d "
-                      "interleaved rounds): the same ratios at %d vertices on synthetic designs (%.1f nodes on "
-                      "average, each vertex drawn independently)%s." % (
-                          viewport["renderer"], viewport["blender"], viewport["rounds"], synthetic["vertices"],
-                          synthetic["design_nodes_mean"],
-                          "" if not baked else ", and on %s baked for real (%d vertices, %.1f nodes on average, "
-                          "neighbours alike; MSD (13) stores %.3fx PRT (8)'s bytes)" % (
-                              baked["model"], baked["vertices"], baked["design_nodes_mean"], baked["bytes"])))
-        scales = [("synthetic", "%.0fk vertices, synthetic" % (synthetic["vertices"] / 1000.0))]
-        if baked:
-            scales.append(("baked", "%s baked" % baked["model"]))
-        large = "".join(" | GPU frame / PRT, %s" % label for _, label in scales)
+    scales, measured = [], []   # benchmark_viewport.py --json: the same ratios where the vertices are many
+    synthetic, baked = (viewport.get("synthetic"), viewport.get("baked")) if viewport else (None, None)
+    if synthetic:
+        scales.append(("synthetic", "%.0fk vertices, synthetic" % (synthetic["vertices"] / 1000.0)))
+        baselines = ""
+        if "smooth_ms" in synthetic:
+            baselines = ("; whole frames, of which Blender's uniform-colour shader takes %.0f ms and its "
+                         "smooth-colour one, which interpolates a colour per vertex as every method does, %.0f ms, "
+                         "against PRT (8)'s %.0f ms" % (synthetic["uniform_ms"], synthetic["smooth_ms"],
+                                                        synthetic["frame_ms"]["prt_matrix"]))
+        measured.append("at %d vertices on synthetic designs (%.1f nodes on average, each vertex drawn "
+                        "independently%s)" % (synthetic["vertices"], synthetic["design_nodes_mean"], baselines))
+    if baked:
+        scales.append(("baked", "%s baked" % baked["model"]))
+        measured.append("on %s baked for real (%d vertices, %.1f nodes on average, neighbours alike; MSD (13) "
+                        "stores %.3fx PRT (8)'s bytes)" % (baked["model"], baked["vertices"],
+                                                          baked["design_nodes_mean"], baked["bytes"]))
+    if measured:
+        lines[-1] += (" Beside them, from blender_tests/benchmark_viewport.py --json (%s, Blender %s, medians of "
+                      "%d interleaved rounds): the same ratios %s." % (
+                          viewport["renderer"], viewport["blender"], viewport["rounds"], ", and ".join(measured)))
+    large = "".join(" | GPU frame / PRT, %s" % label for _, label in scales)
     lines += ["", "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) "
               "| GPU frame / PRT (texture; SH sum)%s | stored floats | design nodes mean / max |" % large,
-              "|---|---|---|---|---|%s---|---|" % ("---|" * len(scales) if large else "")]
+              "|---|---|---|---|---|%s---|---|" % ("---|" * len(scales))]
     gpu = report["gpu_rows"]
 
     def gpu_ratios(method, base, light):
@@ -454,10 +462,8 @@ def markdown(report, averaged, plots, strip_file, viewport=None):
             continue
         nodes = [r for r in rows if r.get("design_nodes_mean")]
         base = {"msd_visibility": "prt_matrix", "msd_lobe": "prt_gaunt"}.get(method)
-        at_scale = ""
-        if large:
-            at_scale = "".join(" | %.2fx; %.2fx" % (viewport[k][method]["texture"], viewport[k][method]["sh"])
-                               if method in viewport[k] else " | -" for k, _ in scales)
+        at_scale = "".join(" | %.2fx; %.2fx" % (viewport[k][method]["texture"], viewport[k][method]["sh"])
+                           if method in viewport[k] else " | -" for k, _ in scales)
         lines.append("| %s | %s | %s | %.0f, %.0f | %s%s | %d | %s |" % (
             LABELS[method], terms, floats, np.median([r["frame_ns_per_vertex"] for r in lam]) if lam else float("nan"),
             np.median([r["frame_ns_per_vertex"] for r in pho]) if pho else float("nan"),

@@ -198,7 +198,7 @@ def prepare(context, objects, rebake=False, unwrap=True):
                         "select one or more mesh objects to bake")
     if not rebake:
         selection_vertices = int(scene.sd_lighting.refine_max_vertices)
-        seconds = budget.selection_seconds(sum(len(task.geometry.vertices) for task in tasks))
+        seconds = budget.selection_seconds(sum(task.budget_points() for task in tasks))
         for task, share in zip(tasks, budget.shares(areas)):
             task.settings.update(refine_max_vertices=max(int(share * selection_vertices), 1),
                                  bake_seconds_budget=float(share * seconds))

@@ -138,6 +138,11 @@ class Surface:
                        slots=first(self.slots), uvs=mean(self.uvs), sides=first(self.sides))
 
 
+def criterion_rays(rays):
+    """The rays per point of the test for a bake of `rays` rays."""
+    return min(int(rays), CRITERION_RAYS)
+
+
 def edges_of(triangles):
     """(edges [E, 2] with a < b, side_edge [T, 3]): side k of triangle t runs from t[k] to
     t[(k + 1) % 3] and is edge side_edge[t, k]."""

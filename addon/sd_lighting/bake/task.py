@@ -164,6 +164,12 @@ class BakeTask:
         size = int(self.settings.get("lightmap", 0))
         return size if size > 0 and lightmap.applies(methods.get(self.settings["method"])) else 0
 
+    def budget_points(self):
+        """What the selection's seconds count for it (plan/budget.py): its mesh's vertices and the
+        texels of the texture-space data asked for - counted from the mesh as it is, on the main
+        thread, where the split it is baked with waits for the worker (geometry.Geometry)."""
+        return len(self.geometry.mesh_positions) + lightmap.expected_texels(int(self.settings.get("lightmap", 0)))
+
     @property
     def bakes_lightmap(self):
         """Whether the bake adds texture-space data (lightmap_size, the copy unwrapped by prepare)."""
@@ -280,7 +286,7 @@ class BakeTask:
         return min(vertices, budget.affordable_vertices(
             float(s["bake_seconds_budget"]), method, int(s["light_order"]), int(s["visibility_order"]),
             int(s["rays"]), os.cpu_count() or 1, 3.0 if fitted else 1.0,
-            test=(methods.get("prt_diffuse"), refine.CRITERION_ORDER, min(int(s["rays"]), refine.CRITERION_RAYS))))
+            test=(methods.get("prt_diffuse"), refine.CRITERION_ORDER, refine.criterion_rays(s["rays"]))))
 
     def refine(self, sd, progress):
         """Sets `baked` (any thread): the Geometry, or with `refine` on, its refinement
@@ -298,7 +304,7 @@ class BakeTask:
         `others` [(vertices, triangles)]; `levels`: None, or a list given each level's
         (setup seconds, seconds) of its bake."""
         s = self.settings
-        kwargs = above_horizon({"rays": min(int(s["rays"]), refine.CRITERION_RAYS), "seed": int(s["seed"]),
+        kwargs = above_horizon({"rays": refine.criterion_rays(s["rays"]), "seed": int(s["seed"]),
                                 "transfer_order": refine.CRITERION_ORDER, "common_rotation": True})
         timed = []
 

@@ -6,9 +6,9 @@ object took under one: README, Use, item 6).
 The panel's Max Verts and the seconds of `selection_seconds` are the selection's. Each object gets
 the share of both that its surface area is of the selection's: what it covers of the view,
 whichever way the user turns it (a camera's view would favour one side, and the viewport is
-turned). Within its share of
-the seconds the automatic mode chooses among the settings its copy as it is affords, and its
-refinement stops where the vertices it adds would take the bake past that share at the chosen rays.
+turned). Within its share of the seconds the automatic mode chooses among the settings its copy as
+it is affords, and its refinement stops where the vertices it adds, with its tests, would take the
+bake past that share at the chosen rays.
 
 Nothing here needs Blender.
 """
@@ -18,13 +18,13 @@ import numpy as np
 from . import cost
 
 # The rays of a selection's bake at the defaults, all objects together, the refinement's tests
-# included: SECONDS_PER_VERTEX for each vertex it bakes before any refinement, within
-# MIN_SELECTION_SECONDS .. SELECTION_SECONDS. The automatic mode's measurement and the least-squares
-# fit come on top. So a CAD model of tens of thousands of vertices bakes within a
-# minute and a model of under a thousand in seconds (issue 30), while a plane of a few vertices that
-# a shadow crosses still gets the seconds its refinement needs to draw it.
+# included: SECONDS_PER_POINT for each mesh vertex and each texel of texture-space data asked for,
+# within MIN_SELECTION_SECONDS .. SELECTION_SECONDS. The automatic mode's measurement and the
+# least-squares fit come on top. So a CAD model of tens of thousands of vertices bakes within a
+# minute and a model of under a thousand in seconds (issue 30), while a plane of a few vertices
+# that a shadow crosses still gets the seconds its refinement needs to draw it.
 SELECTION_SECONDS = 25.0
-SECONDS_PER_VERTEX = 2e-3
+SECONDS_PER_POINT = 3e-3
 MIN_SELECTION_SECONDS = 2.0
 # The points a refinement's tests trace for each vertex of the refined copy (each level's ends and
 # midpoints, bake/refine.py): 3.3 - 4.8 on Wuson, Suzanne, the spider and the glTF engine. At the
@@ -32,10 +32,10 @@ MIN_SELECTION_SECONDS = 2.0
 TESTED_POINTS_PER_VERTEX = 4.0
 
 
-def selection_seconds(vertices):
-    """The seconds the rays of a selection of `vertices` baked vertices (before any refinement) may
-    take at the defaults."""
-    return float(np.clip(SECONDS_PER_VERTEX * vertices, MIN_SELECTION_SECONDS, SELECTION_SECONDS))
+def selection_seconds(points):
+    """The seconds the rays of a selection's bake may take at the defaults; points: its mesh vertices
+    and the texels of the texture-space data asked for (BakeTask.budget_points)."""
+    return float(np.clip(SECONDS_PER_POINT * points, MIN_SELECTION_SECONDS, SELECTION_SECONDS))
 
 
 def surface_area(positions, triangles, block=1 << 20):

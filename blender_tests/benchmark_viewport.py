@@ -12,12 +12,15 @@ depends on the node counts, not on the values.
 
 Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender_tests/benchmark_viewport.py -- --zip Z
      (or blender -b ...: the GPU then comes from a Workbench render)
-A second table compares every method per vertex at --methods-size vertices (100k), with
-synthetic per-vertex data of each method's real size (V~ of order s', M, T, designs), each the
-median of ROUNDS interleaved rounds (a load elsewhere on this shared machine moved single runs'
-ratios by tens of percent); the MSD
-methods (12), (13) twice: L~ as an SH sum (exact, default) and looked up in the band-limited
-texture (the band-limited texture option). It ends with MSD (13) and (12), SH and texture,
+The tables after the first draw without the bright sources' own shadows (Sharp Source Shadows
+off): under forest.exr's sun they are shaded per pixel for a Lambert lobe, the same for every method
+(blender_tests/benchmark_source_shadows.py times them), and they took about 580 ms of each 100k
+frame here, which hid what the methods' own work costs. A second table compares every method per
+vertex at --methods-size vertices (100k), with synthetic per-vertex data of each method's real size
+(V~ of order s', M, T, designs), each the median of ROUNDS interleaved rounds (a load elsewhere on
+this shared machine moved single runs' ratios by tens of percent); the MSD methods (12), (13)
+twice: L~ as an SH sum (exact, default) and looked up in the band-limited texture (the
+band-limited texture option). It ends with MSD (13) and (12), SH and texture,
 as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) with the lobes a
 material can ask for - Lambert, Phong (sigma 61, a roughness of 0.3) and both, weighted per pixel as
 from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth times that
@@ -339,6 +342,7 @@ def main():
         remove_object(package, obj)
     print("ratio = frame time of the live shading / frame time of Blender's uniform-colour shader")
 
+    scene.sd_lighting.source_shadows = False   # the methods' own work (the module's doc)
     if opts["methods_size"]:
         positions, normals, triangles = heightfield(opts["methods_size"])
         draw_uniform, batch = uniform_drawer(uniform, projection, positions, triangles)

@@ -435,7 +435,8 @@ def markdown(report, averaged, plots, strip_file, viewport=None):
                                                           baked["design_nodes_mean"], baked["bytes"]))
     if measured:
         lines[-1] += (" Beside them, from blender_tests/benchmark_viewport.py --json (%s, Blender %s, medians of "
-                      "%d interleaved rounds): the same ratios %s." % (
+                      "%d interleaved rounds; without the bright sources' per-pixel shadows, the same for every method): the "
+                      "same ratios %s." % (
                           viewport["renderer"], viewport["blender"], viewport["rounds"], ", and ".join(measured)))
     large = "".join(" | GPU frame / PRT, %s" % label for _, label in scales)
     lines += ["", "| formula | seed: terms | seed: floats | measured CPU ns/vertex (Lambert, Phong 16) "

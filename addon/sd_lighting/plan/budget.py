@@ -27,8 +27,8 @@ SELECTION_SECONDS = 25.0
 SECONDS_PER_POINT = 3e-3
 MIN_SELECTION_SECONDS = 2.0
 # The points a refinement's tests trace for each vertex of the refined copy (each level's ends and
-# midpoints, bake/refine.py): 3.3 - 4.8 on Wuson, Suzanne, the spider and the glTF engine. At the
-# engine's 256 rays its tests traced 1.6 x the points of its bake, which the seconds had left out.
+# midpoints, bake/refine.py), as measured on real models (README, Use, item 6): left out, a bake at
+# few rays spent up to twice its seconds.
 TESTED_POINTS_PER_VERTEX = 4.0
 
 

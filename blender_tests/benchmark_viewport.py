@@ -14,8 +14,8 @@ Run: xvfb-run -a blender --factory-startup --python-exit-code 1 --python blender
      (or blender -b ...: the GPU then comes from a Workbench render)
 The tables after the first draw without the bright sources' own shadows (Sharp Source Shadows
 off): under forest.exr's sun they are shaded per pixel for a Lambert lobe, the same for every method
-(blender_tests/benchmark_source_shadows.py times them), and they took about 580 ms of each 100k
-frame here, which hid what the methods' own work costs. A second table compares every method per
+(blender_tests/benchmark_source_shadows.py times them), and there they took most of each 100k
+frame (README, Accuracy against cost), which hid what the methods' own work costs. A second table compares every method per
 vertex at --methods-size vertices (100k), with synthetic per-vertex data of each method's real size
 (V~ of order s', M, T, designs), each the median of ROUNDS interleaved rounds (a load elsewhere on
 this shared machine moved single runs' ratios by tens of percent); the MSD methods (12), (13)

@@ -1,13 +1,14 @@
-"""The zip is a valid Blender 4.2+ extension: Blender's own validator accepts its manifest, it
-installs through the extension operator (Get Extensions > Install from Disk) into the user
-repository, registers as bl_ext.user_default.sd_lighting with the native module and shaders from
-the extension's folder, disables and enables twice leaving nothing behind, bakes and renders a
+"""The extension zip is a valid Blender 4.2+ extension: Blender's own validator accepts its manifest,
+it installs through the extension operator (Get Extensions > Install from Disk) into the user
+repository, registers as bl_ext.user_default.sd_lighting with the shaders from the extension's
+folder and the native module from the wheel of its Python that Blender installed, disables and enables twice leaving nothing behind, bakes and renders a
 preview from there, and uninstalls.
 Run (Blender 4.2+, or Blender 4.2+ as a Python module):
     blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_extension.py -- --zip Z --out DIR
 """
 
 import os
+import re
 import subprocess
 import sys
 
@@ -67,17 +68,25 @@ def main():
     checks.check(manifest["id"] == "sd_lighting" and
                  tuple(int(p) for p in manifest["version"].split(".")) == bl_info["version"],
                  "manifest id and version agree with bl_info", "%s %s" % (manifest["id"], manifest["version"]))
-    pythons = sorted(name.split(".")[1] for name in os.listdir(root) if name.startswith("sdnative.cpython-"))
-    checks.check(manifest.get("blender_version_max") == (None if "cpython-313-x86_64-linux-gnu" in pythons
-                                                         else "5.1.0"),
-                 "blender_version_max matches the native modules' Pythons",
+    pythons = sorted(set(re.findall(r"-(cp3\d+)-", " ".join(manifest.get("wheels", [])))))
+    checks.check(manifest.get("blender_version_max") == (None if "cp313" in pythons else "5.1.0"),
+                 "blender_version_max matches the wheels' Pythons",
                  "%s: %s" % (", ".join(pythons), manifest.get("blender_version_max")))
     on = sdtest.registration_state()
     for key in ("scene_property", "panel", "bake_operator", "preview_operator"):
         checks.check(on[key], "registered: " + key)
-    checks.check(package.native.available() and
-                 os.path.dirname(package.native.get().__file__) == root,
-                 "sdnative loads from the extension's folder", package.native.error_message())
+    # The native module comes as a wheel per CPython (issue 31): Blender installs the one of its
+    # Python into the extensions' own site-packages.
+    python = "-cp%d%d-" % sys.version_info[:2]
+    checks.check(any(python in w for w in manifest.get("wheels", [])) and
+                 all(os.path.isfile(os.path.join(root, w)) for w in manifest.get("wheels", [])),
+                 "the manifest lists the wheels it carries, one of them this Python's",
+                 ", ".join(manifest.get("wheels", [])))
+    loaded = package.native.get().__file__ if package.native.available() else package.native.error_message()
+    site = os.path.join(extensions, ".local")
+    checks.check(os.path.realpath(loaded).startswith(os.path.realpath(site) + os.sep) and
+                 os.path.basename(os.path.dirname(loaded)) == package.native.WHEEL_PACKAGE,
+                 "sdnative loads from the wheel Blender installed", loaded)
     checks.check(package.live.gpu_shading.shader_directory().startswith(root),
                  "shaders are the extension's copy", package.live.gpu_shading.shader_directory())
 
@@ -115,8 +124,9 @@ def main():
                       if repo.module == sdtest.EXTENSION_REPOSITORY)
     result = bpy.ops.extensions.package_uninstall(repo_index=repo_index, pkg_id="sd_lighting")
     checks.check(result == {'FINISHED'} and not os.path.exists(root) and sdtest.registration_state() == before and
-                 module not in bpy.context.preferences.addons,
-                 "uninstall removes the extension", "%s, %s" % (result, sdtest.registration_state()))
+                 module not in bpy.context.preferences.addons and not os.path.exists(os.path.dirname(loaded)),
+                 "uninstall removes the extension and its wheel's files",
+                 "%s, %s" % (result, sdtest.registration_state()))
     sdtest.addon_module = None
     return checks.summary()
 

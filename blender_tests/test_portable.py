@@ -4,7 +4,8 @@ Blender as Python module (blender.org's builds carry their own libraries; Debian
 the hidden ones itself). SD_HIDDEN_LIBRARIES lists the hidden files; without it (a plain run) the
 test still checks which libraries the add-on loaded.
 
-- The zip installs as an extension and its module loads the Embree carried beside it (Blender
+- The extension zip installs, Blender installs its wheel, and the module loads the Embree that
+  auditwheel grafted into the wheel (Blender
   4.2+ maps its own Embree 4 and OpenImageIO, which the module does not use; Debian's Blender 3.4
   loads the system's Embree 3 itself, so the test does not apply there).
 - The default scene (Suzanne on a ground under forest.exr, an Environment Texture read by
@@ -48,15 +49,16 @@ def main():
     checks.check(np.isfinite(image).all() and covered.mean() > 0.2 and image[covered][:, :3].max() > 0.05,
                  "and previews", "%.0f %% covered" % (100 * covered.mean()))
 
-    folder = os.path.dirname(os.path.realpath(package.__file__))
+    # The wheel's package and auditwheel's folder of the libraries it grafted, beside it.
+    folder = os.path.dirname(os.path.realpath(package.native.get().__file__))
     files = mapped_files()
     module = [f for f in files if os.path.basename(f).startswith("sdnative")]
     embree = [f for f in files if os.path.basename(f).startswith("libembree3")]   # Blender 4.2+ maps its own 4
     # both builds where the CPU runs x86-64-v3: native.py opens the portable one to ask cpuid
-    checks.check(module and all(os.path.dirname(os.path.realpath(f)) == folder for f in module) and
-                 os.path.realpath(package.native.get().__file__) in {os.path.realpath(f) for f in module} and
-                 embree and all(os.path.dirname(os.path.realpath(f)) == folder for f in embree),
-                 "the add-on's module runs on the Embree it carries",
+    checks.check(os.path.basename(folder) == package.native.WHEEL_PACKAGE and module and
+                 all(os.path.dirname(os.path.realpath(f)) == folder for f in module) and
+                 embree and all(os.path.dirname(os.path.realpath(f)) == folder + ".libs" for f in embree),
+                 "the add-on's module runs on the Embree its wheel carries",
                  "%s; %s" % (module, embree))
     return checks.summary()
 

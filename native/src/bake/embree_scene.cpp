@@ -130,7 +130,7 @@ int EmbreeScene::add(const std::vector<glm::dvec3>& vertices, const std::vector<
     const glm::dvec3& a = vertices[triangles[t][0]];
     normals[t] = glm::vec3(glm::cross(vertices[triangles[t][1]] - a, vertices[triangles[t][2]] - a));
   }
-  // Only rtcIntersect1 (first_hit) calls it: the bake's rtcOccluded1M rays run without a filter.
+  // Only rtcIntersect1 (first_hit) calls it: the bake's occlusion rays run without a filter.
   rtcSetGeometryIntersectFilterFunction(geometry, &EmbreeScene::probe_filter);
   rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
   rtcCommitGeometry(geometry);
@@ -152,19 +152,37 @@ void EmbreeScene::commit() {
   check("rtcCommitScene");
 }
 
-bool EmbreeScene::occluded(const glm::dvec3& origin, const glm::dvec3& dir) const {
+void trace_occlusion(RTCScene scene, RTCRay* rays, unsigned count) {
+#if SD_EMBREE_MAJOR >= 4
+  for (unsigned i = 0; i < count; ++i) rtcOccluded1(scene, &rays[i]);
+#else
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
+  if (count == 1) {
+    rtcOccluded1(scene, &context, rays);
+  } else {
+    rtcOccluded1M(scene, &context, rays, count, sizeof(RTCRay));
+  }
+#endif
+}
+
+bool EmbreeScene::occluded(const glm::dvec3& origin, const glm::dvec3& dir) const {
   RTCRay ray = occlusion_ray(origin, dir);
-  rtcOccluded1(scene_, &context, &ray);
+  trace_occlusion(scene_, &ray, 1);
   return is_occluded(ray);
 }
 
 namespace {
 
-// rtcIntersect1's context, extended with the probe's state (Embree passes the pointer through).
+// rtcIntersect1's context, extended with the probe's state (Embree passes the pointer through to
+// the filter: Embree 3's intersect context, Embree 4's ray query context).
+#if SD_EMBREE_MAJOR >= 4
+using QueryContext = RTCRayQueryContext;
+#else
+using QueryContext = RTCIntersectContext;
+#endif
 struct ProbeContext {
-  RTCIntersectContext context;
+  QueryContext context;
   const std::vector<std::vector<glm::vec3>>* face_normals;
   const std::vector<std::vector<std::int8_t>>* orientation;
   int skipped_geometry;
@@ -208,7 +226,11 @@ EmbreeScene::Hit EmbreeScene::first_hit(const glm::dvec3& origin, const glm::dve
                                         int skipped_geometry, const std::vector<unsigned>& skipped,
                                         double tolerance) const {
   ProbeContext probe;
+#if SD_EMBREE_MAJOR >= 4
+  rtcInitRayQueryContext(&probe.context);
+#else
   rtcInitIntersectContext(&probe.context);
+#endif
   probe.face_normals = &face_normals_;
   probe.orientation = &orientation_;
   probe.skipped_geometry = skipped_geometry;
@@ -220,7 +242,14 @@ EmbreeScene::Hit EmbreeScene::first_hit(const glm::dvec3& origin, const glm::dve
   query.ray = occlusion_ray(origin, dir);
   query.ray.tfar = static_cast<float>(t_max);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+#if SD_EMBREE_MAJOR >= 4
+  RTCIntersectArguments arguments;
+  rtcInitIntersectArguments(&arguments);
+  arguments.context = &probe.context;
+  rtcIntersect1(scene_, &query, &arguments);
+#else
   rtcIntersect1(scene_, &probe.context, &query);
+#endif
   return {probe.first_side, static_cast<double>(probe.first_t)};
 }
 

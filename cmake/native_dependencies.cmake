@@ -10,7 +10,10 @@ if(NOT embree_FOUND)
   find_package(embree 3 CONFIG REQUIRED)
 endif()
 set(SD_EMBREE_MAJOR ${embree_VERSION_MAJOR})
-if(NOT DEFINED SD_IMAGE_FILES OR SD_IMAGE_FILES)   # the wheel's build reads no image files
+if(NOT DEFINED SD_IMAGE_FILES)   # the fuzzer build's: the main build's option (CMakeLists.txt)
+  set(SD_IMAGE_FILES ON)
+endif()
+if(SD_IMAGE_FILES)   # the wheel's build reads no image files
   # Debian's OpenImageIO CMake target names a non-existent OpenCV include directory; its .pc is clean.
   # Elsewhere (vcpkg: CMakePresets.json, untested here) its CMake package, under the same target name.
   find_package(PkgConfig)

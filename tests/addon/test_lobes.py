@@ -53,6 +53,18 @@ def test_partly_metallic_surfaces_have_both_lobes():
     assert lobes.principled_weights(0.3, 1.7, F0)[0] == 1.0      # inputs clamped to [0, 1]
 
 
+def test_a_single_scattering_distribution_negates_the_layer_code():
+    # GGX (3.x's default) scatters once; Multiscatter GGX (4.0's) keeps the light it bounces
+    assert lobes.principled_weights(0.3, 1.0, F0, multiscatter=False) == (1.0, F0, 0.3, -lobes.LAYER_OVER)
+    assert lobes.principled_weights(0.3, 0.0, F0, False, False)[3] == -lobes.LAYER_ADDED
+    assert lobes.principled_weights(0.9, 0.0, 0.0, multiscatter=False) == lobes.DIFFUSE_ONLY
+    assert lobes.rough_layer(lobes.principled_weights(0.5, 0.0, F0, multiscatter=False))
+    grey = (0.5, 0.5, 0.5)
+    for layer_over in (True, False):
+        assert lobes.reflected(grey, lobes.principled_weights(0.3, 0.0, F0, layer_over, False)) == \
+            pytest.approx(lobes.reflected(grey, lobes.principled_weights(0.3, 0.0, F0, layer_over)))
+
+
 def test_reflected_light_per_lobe():
     grey = (0.5, 0.5, 0.5)
     assert lobes.reflected(grey, lobes.DIFFUSE_ONLY) == pytest.approx((0.0, 0.5))

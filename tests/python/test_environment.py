@@ -378,6 +378,21 @@ def test_environment_brdf_and_its_table():
         sdnative.environment_brdf(0.5, 0.4, 512, ior=0.9)
 
 
+def test_glossy_bend_and_its_table():
+    table = sdnative.glossy_bend_table(8, 256)
+    assert table.shape == (8, 8) and table.dtype == np.float64
+    assert table[5, 3] == pytest.approx(sdnative.glossy_bend(3.5 / 8, 5 / 7, 256), rel=1e-6)
+    # a mirror reads the mirrored view, the roughest lobe about the normal; a rough lobe seen at
+    # grazing leans towards the normal
+    assert (table[0] > 0.999).all() and sdnative.glossy_bend(1.0, 0.5) == 1.0
+    assert table[-1].max() < 0.05
+    assert 0.0 < table[5, 0] < table[4, 0] < table[4, -1] < 1.0
+    with pytest.raises(ValueError, match="n_dot_v must be in"):
+        sdnative.glossy_bend(0.0, 0.5)
+    with pytest.raises(ValueError, match="size must be in"):
+        sdnative.glossy_bend_table(300)
+
+
 def test_light_sources_split_a_sun_off_and_give_back_the_remainder():
     # a 2-degree sun at the zenith's side on a grey sky, through the binding
     height, width = 128, 256

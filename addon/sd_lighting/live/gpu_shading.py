@@ -230,18 +230,20 @@ def prefiltered_texture(source, wait):
 
 
 def brdf_table_texture():
-    """The GGX lobe's split-sum terms over n.v and roughness as the RGBA32F texture the shader's
-    sd_environment_brdf reads (made once): (A, B) of Schlick's Fresnel
-    (sdnative.environment_brdf_table), each roughness row's E_avg (lobes.average_albedo), and B of
-    the dielectric Fresnel of lobes.DIELECTRIC_SHAPE_IOR."""
+    """The GGX lobe's tables over n.v and roughness as the RGBA32F texture the shader's
+    sd_brdf_table reads (made once), one above the other: the split-sum terms (A, B) of Schlick's
+    Fresnel (sdnative.environment_brdf_table), each roughness row's E_avg (lobes.average_albedo)
+    and B of the dielectric Fresnel of lobes.DIELECTRIC_SHAPE_IOR; then where the prefiltered
+    light is read (sdnative.glossy_bend_table)."""
     if not _brdf_table:
         sd = native.get()
         table = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE))
-        texels = np.zeros((BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, 4), dtype=np.float32)
-        texels[..., :2] = table
-        texels[..., 2] = lobes.average_albedo(table)[:, None]
-        texels[..., 3] = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE, ior=lobes.DIELECTRIC_SHAPE_IOR))[..., 1]
-        _brdf_table.append(_texture(BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, texels))
+        texels = np.zeros((2, BRDF_TABLE_SIZE, BRDF_TABLE_SIZE, 4), dtype=np.float32)
+        texels[0, ..., :2] = table
+        texels[0, ..., 2] = lobes.average_albedo(table)[:, None]
+        texels[0, ..., 3] = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE, ior=lobes.DIELECTRIC_SHAPE_IOR))[..., 1]
+        texels[1, ..., 0] = np.asarray(sd.glossy_bend_table(BRDF_TABLE_SIZE))
+        _brdf_table.append(_texture(BRDF_TABLE_SIZE, 2 * BRDF_TABLE_SIZE, texels))
     return _brdf_table[0]
 
 

@@ -23,8 +23,8 @@ BAND_LIMITED_TEXTURE_SAMPLER = (2, "sd_band_limited_texture")  # L~ on cube face
 ALBEDO_TEXTURE_SAMPLER = (3, "sd_albedo_texture")           # the material's image texture
 LIGHTMAP_INDEX_SAMPLER = (4, "sd_lightmap_index")           # each lightmap texel's data row, or -1
 PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment prefiltered per roughness
-BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's (A, B) over n.v, roughness
-BRDF_TABLE_SIZE = 32   # its side (sdnative.environment_brdf_table)
+BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's tables over n.v, roughness
+BRDF_TABLE_SIZE = 32   # each table's side (sdnative.environment_brdf_table, glossy_bend_table)
 SHADOW_MAP_SAMPLER = (7, "sd_shadow_map")                   # the sources' shadow maps, side by side
 
 

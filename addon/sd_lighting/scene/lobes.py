@@ -15,8 +15,8 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
   GGX lobe at the view's n.v and the roughness (sdnative.environment_brdf_table, integrated
   natively), times the light that multiple scattering adds as Cycles computes it (Kulla and
   Conty's F_ms with E_avg from `average_albedo`: a metal keeps its energy, a rough plastic's layer
-  gains hardly any) - Cycles' Multiscatter GGX, the default from 4.0; the node's distribution is
-  not read (msd-notes, "Glossy light", on 3.x's single-scattering default). As in Cycles, the
+  gains hardly any) where the node's distribution is Multiscatter GGX (the default from 4.0; GGX,
+  3.x's default, scatters once). As in Cycles, the
   dielectric layer's Fresnel is the real one (of IOR DIELECTRIC_SHAPE_IOR; the slot's F0) remapped
   to F0..1, which rises earlier than Schlick's; from 4.0 the metal is Schlick's of the base
   colour, mixed with the dielectric by metallic, before 4.0 one lobe of F0' = mix(F0, base colour,
@@ -25,7 +25,7 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
   Principled BSDF of Blender 4.0 and later; before 4.0 the layer adds to the diffuse)
   (shaders/sd_shading_frag.glsl, sd_surface). Per slot that is `principled_weights`: (metallic,
   F0, roughness, layer), layer 0 for a slot without a specular layer (Diffuse BSDF, F0 = 0),
-  LAYER_OVER or LAYER_ADDED.
+  LAYER_OVER or LAYER_ADDED, negated where the lobe scatters once (GGX, not Multiscatter GGX).
 - The Phong exponent is sigma = 1 / (2 alpha^2) - 1/2, alpha = roughness^2 (Blender's GGX alpha):
   the Beckmann-equivalent Blinn-Phong exponent 2/alpha^2 - 2 divided by 4, the usual factor
   between a half-vector lobe and a lobe around the mirrored view; clamped to [1, 1000]
@@ -100,22 +100,23 @@ def dielectric_reflectance(ior=1.5, ior_level=None, specular=None):
     return min(max(f0 * 2.0 * (0.5 if ior_level is None else float(ior_level)), 0.0), 1.0)
 
 
-def principled_weights(roughness, metallic, f0, layer_over=True):
+def principled_weights(roughness, metallic, f0, layer_over=True, multiscatter=True):
     """A Principled BSDF's weights for the shader (see the module's doc): (metallic, F0,
     roughness, layer); layer_over: the BSDF's specular layer takes its energy from the diffuse
-    (Blender 4.0 and later)."""
+    (Blender 4.0 and later); multiscatter: its distribution is Multiscatter GGX (else GGX)."""
     metallic = min(max(float(metallic), 0.0), 1.0)
     roughness = min(max(float(roughness), 0.0), 1.0)
     if metallic == 0.0 and float(f0) <= 0.0:
         return DIFFUSE_ONLY
-    return (metallic, float(f0), roughness, LAYER_OVER if layer_over else LAYER_ADDED)
+    layer = LAYER_OVER if layer_over else LAYER_ADDED
+    return (metallic, float(f0), roughness, layer if multiscatter else -layer)
 
 
 def rough_layer(weights):
     """Whether principled_weights are a rough dielectric's: its specular layer is lit by the
     prefiltered environment only, and folded into Lambert without it."""
     metal, _, roughness, layer = weights
-    return layer > 0.0 and metal == 0.0 and roughness >= LAYER_MIN_ROUGHNESS
+    return layer != 0.0 and metal == 0.0 and roughness >= LAYER_MIN_ROUGHNESS
 
 
 def reflected(colour, weights):
@@ -125,7 +126,7 @@ def reflected(colour, weights):
     luminance = sum(w * c for w, c in zip(LUMINANCE, colour))
     if layer == 0.0:
         return 0.0, luminance
-    over = f0 if layer == LAYER_OVER else 0.0
+    over = f0 if abs(layer) == LAYER_OVER else 0.0
     return f0 + metal * (luminance - f0), (1.0 - metal) * (1.0 - over) * luminance
 
 

@@ -124,7 +124,8 @@ def _principled(node):
     """(weights, Lobes, why, note) of a Principled BSDF."""
     roughness, metallic = _input_value(node, "Roughness", 0.5), _input_value(node, "Metallic", 0.0)
     f0 = _dielectric_reflectance(node)
-    weights = lobes.principled_weights(roughness, metallic, f0, compat.principled_layered(node))
+    weights = lobes.principled_weights(roughness, metallic, f0, compat.principled_layered(node),
+                                       getattr(node, "distribution", 'MULTI_GGX') != 'GGX')
     found, why = lobes.lobes_from_principled(roughness, metallic, f0)
     notes = []
     if found.lobe == "phong":

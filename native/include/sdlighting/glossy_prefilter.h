@@ -4,8 +4,10 @@
 // the first factor a map of the environment prefiltered by the lobe with n = v = r (looked up in
 // the mirrored view r, per roughness: prefilter_ggx), the second the lobe's directional albedo
 // F0·A + B over n·v and roughness (environment_brdf, tabulated for the shader by
-// environment_brdf_table). Baked visibility is applied to the first
-// factor separately (the shader's visibility ratio, msd-notes "Glossy light").
+// environment_brdf_table). The first factor's n = v = r holds at normal incidence only: at grazing
+// views it is looked up where the BRDF's lobe lies (glossy_bend). Baked
+// visibility is applied to the first factor separately (the shader's visibility ratio, msd-notes
+// "Glossy light").
 //
 // GGX (Trowbridge–Reitz) with Blender's parameterisation: α = r², r the Principled BSDF's
 // roughness; D(h) = α² / (π ((α² − 1) (n·h)² + 1)²); Smith's height-correlated masking-shadowing
@@ -73,5 +75,19 @@ std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int sam
 /// row-major, size × size × 2. Both cores. Throws std::invalid_argument for size outside [2, 256],
 /// samples outside [1, 2^20] or an ior environment_brdf refuses.
 std::vector<float> environment_brdf_table(int size = 32, int samples = 1024, double ior = 0.0);
+
+/// Where the prefiltered light is read for a view at n·v (issue 28: the split sum's dark rims). The
+/// lobe a view at n·v reflects, f₁ (n·l) with F = 1 (single scattering, Smith height-correlated),
+/// leans from the mirrored view r towards the normal as n·v falls, while a level of the prefiltered
+/// map is centred on its lookup direction. Returns the bend: the lobe's mean direction is
+/// normalize(mix(n, r, bend)) (it lies in the plane of n and v; 1 at n·v = 1). `samples` GGX half
+/// vectors (Hammersley). n_dot_v in (0, 1], roughness in [0, 1]; throws std::invalid_argument
+/// outside them or for samples outside [1, 2^20].
+double glossy_bend(double n_dot_v, double roughness, int samples = 1024);
+
+/// glossy_bend tabulated as environment_brdf_table is: at n·v = (i + ½) / size (column i) and
+/// roughness j / (size − 1) (row j); float, row-major, size × size. Both cores. Throws
+/// std::invalid_argument for size outside [2, 256] or samples outside [1, 2^20].
+std::vector<float> glossy_bend_table(int size = 32, int samples = 1024);
 
 }  // namespace sd

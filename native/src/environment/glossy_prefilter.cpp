@@ -297,55 +297,99 @@ double dielectric_fresnel(double c, double n) {
   return 0.5 * a * a * (1.0 + b * b);
 }
 
+
+void check_lobe_point(const char* caller, double n_dot_v, double roughness, int samples) {
+  if (!(n_dot_v > 0.0 && n_dot_v <= 1.0))
+    throw std::invalid_argument(std::string(caller) + ": n_dot_v must be in (0, 1], got " + std::to_string(n_dot_v));
+  if (!(roughness >= 0.0 && roughness <= 1.0))
+    throw std::invalid_argument(std::string(caller) + ": roughness must be in [0, 1], got " + std::to_string(roughness));
+  if (samples < 1 || samples > 1 << 20)
+    throw std::invalid_argument(std::string(caller) + ": samples must be in [1, 2^20], got " + std::to_string(samples));
+}
+
+void check_table(const char* caller, int size, int samples) {
+  if (size < 2 || size > 256)
+    throw std::invalid_argument(std::string(caller) + ": size must be in [2, 256], got " + std::to_string(size));
+  if (samples < 1 || samples > 1 << 20)
+    throw std::invalid_argument(std::string(caller) + ": samples must be in [1, 2^20], got " + std::to_string(samples));
+}
+
+/// f(n·v, roughness) -> std::array<double, N> at n·v = (i + ½) / size and roughness j / (size − 1),
+/// row-major, both cores.
+template <size_t N, typename F>
+std::vector<float> tabulate(int size, F f) {
+  std::vector<float> table(static_cast<size_t>(size) * size * N);
+  parallel_for(static_cast<size_t>(size), 1, [&](size_t begin, size_t end) {
+    for (size_t j = begin; j < end; ++j)
+      for (int i = 0; i < size; ++i) {
+        const std::array<double, N> value = f((i + 0.5) / size, static_cast<double>(j) / (size - 1));
+        std::copy(value.begin(), value.end(), table.begin() + N * (j * size + i));
+      }
+  });
+  return table;
+}
+
+/// Calls reflect(l, v·h, weight) for each of `samples` GGX half vectors h around n = +z seen from
+/// v = (√(1 − (n·v)²), 0, n·v) whose reflection l lies above the surface, with weight
+/// f₁ (n·l) / pdf(l) = G2 (v·h) / ((n·h) (n·v)) (F = 1; Smith height-correlated G2, Heitz 2014,
+/// eq. 99); the sum of the weights over `samples` is the lobe's albedo A + B.
+template <typename F>
+void for_each_reflection(double n_dot_v, double alpha, int samples, F reflect) {
+  const double a2 = alpha * alpha;
+  const glm::dvec3 v(std::sqrt(1.0 - n_dot_v * n_dot_v), 0.0, n_dot_v);
+  const auto lambda_term = [a2](double c) { return std::sqrt(a2 + (1.0 - a2) * c * c); };
+  for (int i = 0; i < samples; ++i) {
+    const glm::dvec3 h = ggx_half_vector(hammersley(i, samples), alpha);
+    const double v_dot_h = glm::dot(v, h);
+    const glm::dvec3 l = 2.0 * v_dot_h * h - v;
+    if (l.z <= 0.0 || v_dot_h <= 0.0) continue;
+    const double g2 = 2.0 * l.z * n_dot_v / (l.z * lambda_term(n_dot_v) + n_dot_v * lambda_term(l.z));
+    reflect(l, v_dot_h, g2 * v_dot_h / (h.z * n_dot_v));
+  }
+}
+
 }  // namespace
 
 std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int samples, double ior) {
-  if (!(n_dot_v > 0.0 && n_dot_v <= 1.0))
-    throw std::invalid_argument("environment_brdf: n_dot_v must be in (0, 1], got " + std::to_string(n_dot_v));
-  if (!(roughness >= 0.0 && roughness <= 1.0))
-    throw std::invalid_argument("environment_brdf: roughness must be in [0, 1], got " + std::to_string(roughness));
-  if (samples < 1 || samples > 1 << 20)
-    throw std::invalid_argument("environment_brdf: samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_lobe_point("environment_brdf", n_dot_v, roughness, samples);
   check_ior("environment_brdf", ior);
-  const double alpha = std::max(roughness * roughness, kMinAlpha), a2 = alpha * alpha;
-  const glm::dvec3 v(std::sqrt(1.0 - n_dot_v * n_dot_v), 0.0, n_dot_v);
-  const auto lambda_term = [a2](double c) { return std::sqrt(a2 + (1.0 - a2) * c * c); };
   const double normal_fresnel = ior > 0.0 ? dielectric_fresnel(1.0, ior) : 0.0;
   const auto shape = [&](double c) {
     return ior > 0.0 ? (dielectric_fresnel(c, ior) - normal_fresnel) / (1.0 - normal_fresnel) : std::pow(1.0 - c, 5.0);
   };
   double a = 0.0, b = 0.0;
-  for (int i = 0; i < samples; ++i) {
-    const glm::dvec3 h = ggx_half_vector(hammersley(i, samples), alpha);
-    const double v_dot_h = glm::dot(v, h);
-    const double n_dot_l = 2.0 * v_dot_h * h.z - v.z;
-    if (n_dot_l <= 0.0 || v_dot_h <= 0.0) continue;
-    // Smith height-correlated G2 (Heitz 2014, eq. 99); f₁ (n·l) / pdf(l) = G2 (v·h) / ((n·h) (n·v)).
-    const double g2 = 2.0 * n_dot_l * n_dot_v / (n_dot_l * lambda_term(n_dot_v) + n_dot_v * lambda_term(n_dot_l));
-    const double g_vis = g2 * v_dot_h / (h.z * n_dot_v);
-    const double fresnel = shape(v_dot_h);
-    a += (1.0 - fresnel) * g_vis;
-    b += fresnel * g_vis;
-  }
+  for_each_reflection(n_dot_v, std::max(roughness * roughness, kMinAlpha), samples,
+                      [&](const glm::dvec3&, double v_dot_h, double weight) {
+                        const double fresnel = shape(v_dot_h);
+                        a += (1.0 - fresnel) * weight;
+                        b += fresnel * weight;
+                      });
   return {a / samples, b / samples};
 }
 
 std::vector<float> environment_brdf_table(int size, int samples, double ior) {
-  if (size < 2 || size > 256)
-    throw std::invalid_argument("environment_brdf_table: size must be in [2, 256], got " + std::to_string(size));
-  if (samples < 1 || samples > 1 << 20)
-    throw std::invalid_argument("environment_brdf_table: samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_table("environment_brdf_table", size, samples);
   check_ior("environment_brdf_table", ior);
-  std::vector<float> table(static_cast<size_t>(size) * size * 2);
-  parallel_for(static_cast<size_t>(size), 1, [&](size_t begin, size_t end) {
-    for (size_t j = begin; j < end; ++j)
-      for (int i = 0; i < size; ++i) {
-        const auto ab = environment_brdf((i + 0.5) / size, static_cast<double>(j) / (size - 1), samples, ior);
-        table[2 * (j * size + i)] = static_cast<float>(ab[0]);
-        table[2 * (j * size + i) + 1] = static_cast<float>(ab[1]);
-      }
+  return tabulate<2>(size, [&](double n_dot_v, double roughness) { return environment_brdf(n_dot_v, roughness, samples, ior); });
+}
+
+double glossy_bend(double n_dot_v, double roughness, int samples) {
+  check_lobe_point("glossy_bend", n_dot_v, roughness, samples);
+  glm::dvec3 mean(0.0);
+  for_each_reflection(n_dot_v, std::max(roughness * roughness, kMinAlpha), samples,
+                      [&](const glm::dvec3& l, double, double weight) { mean += weight * l; });
+  // The mean direction's angle θ from n, towards r at θ_r = acos(n·v); mix(n, r, bend) makes
+  // tan θ = bend sin θ_r / (1 − bend (1 − cos θ_r)).
+  const double tan_mean = -mean.x / mean.z;
+  const double sin_r = std::sqrt(1.0 - n_dot_v * n_dot_v);
+  return sin_r > 1e-9 ? std::clamp(tan_mean / (sin_r + tan_mean * (1.0 - n_dot_v)), 0.0, 1.0) : 1.0;
+}
+
+std::vector<float> glossy_bend_table(int size, int samples) {
+  check_table("glossy_bend_table", size, samples);
+  return tabulate<1>(size, [&](double n_dot_v, double roughness) {
+    return std::array<double, 1>{glossy_bend(n_dot_v, roughness, samples)};
   });
-  return table;
 }
 
 }  // namespace sd

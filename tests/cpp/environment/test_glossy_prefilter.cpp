@@ -1,5 +1,6 @@
 // The split sum (glossy_prefilter.h): the prefiltered atlas against a brute-force convolution of
-// the map's texels, its layout and level 0, and the GGX directional albedo against closed forms.
+// the map's texels, its layout and level 0, the GGX directional albedo against closed forms, and the
+// lobe's mean direction (glossy_bend) against a quadrature over the hemisphere.
 #include "environment_test_support.h"
 #include "sdlighting/glossy_prefilter.h"
 
@@ -18,6 +19,8 @@ constexpr double kFilteredSampling = 0.02;
 constexpr double kSampledTexel = 0.08;
 // Quasi-Monte Carlo (Hammersley, 4096 points) against a closed form.
 constexpr double kQuasiMonteCarlo = 2e-3;
+// The lobe's mean direction by Hammersley half vectors against a quadrature over l (degrees).
+constexpr double kMeanDirectionDegrees = 0.5;
 
 // The atlas's RGB at texel (i, j) of level k (rows bottom-first within the level).
 glm::dvec3 atlas_texel(const std::vector<float>& atlas, const PrefilterLayout& layout, int k, int i, int j) {
@@ -201,6 +204,74 @@ TEST(EnvironmentBrdf, TableHoldsTheIntegralAtItsEntries) {
     }
   EXPECT_THROW(environment_brdf_table(1), std::invalid_argument);
   EXPECT_THROW(environment_brdf_table(300), std::invalid_argument);
+}
+
+// The mean direction of f₁ (n·l) (GGX, F = 1, Smith height-correlated G2), n = +z, v in the xz
+// plane, by the midpoint rule over l in (θ, φ): its angle from n in degrees, towards r (x < 0).
+double lobe_mean_angle_by_quadrature(double n_dot_v, double roughness) {
+  const double alpha = roughness * roughness, a2 = alpha * alpha;
+  const glm::dvec3 v(std::sqrt(1.0 - n_dot_v * n_dot_v), 0.0, n_dot_v);
+  const auto lambda_term = [a2](double c) { return std::sqrt(a2 + (1.0 - a2) * c * c); };
+  const int rows = 1200, columns = 2400;
+  double x = 0.0, z = 0.0;
+  for (int j = 0; j < rows; ++j) {
+    const double theta = (j + 0.5) * 0.5 * kPi / rows;
+    for (int i = 0; i < columns; ++i) {
+      const double phi = (i + 0.5) * 2.0 * kPi / columns;
+      const glm::dvec3 l(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+      const glm::dvec3 h = glm::normalize(l + v);
+      const double d = (a2 - 1.0) * h.z * h.z + 1.0;
+      const double g2 = 2.0 * l.z * n_dot_v / (l.z * lambda_term(n_dot_v) + n_dot_v * lambda_term(l.z));
+      // f₁ (n·l) dl = D G2 / (4 n·v) sin θ dθ dφ; constant factors drop out of the direction
+      const double weight = a2 / (d * d) * g2 * std::sin(theta);
+      x += weight * l.x;
+      z += weight * l.z;
+    }
+  }
+  return std::atan2(-x, z) * 180.0 / kPi;
+}
+
+// The angle from n of normalize(mix(n, r, bend)) in degrees.
+double bent_angle(double n_dot_v, double bend) {
+  const double sin_r = std::sqrt(1.0 - n_dot_v * n_dot_v);
+  return std::atan2(bend * sin_r, 1.0 - bend + bend * n_dot_v) * 180.0 / kPi;
+}
+
+TEST(GlossyBend, IsTheLobesMeanDirection) {
+  for (double roughness : {0.3, 0.5, 0.8})
+    for (double n_dot_v : {0.9, 0.5, 0.15}) {
+      const double bend = glossy_bend(n_dot_v, roughness, 4096);
+      EXPECT_NEAR(bent_angle(n_dot_v, bend), lobe_mean_angle_by_quadrature(n_dot_v, roughness), kMeanDirectionDegrees)
+          << roughness << " " << n_dot_v;
+    }
+}
+
+TEST(GlossyBend, AMirrorReadsTheMirroredViewAndRoughLobesLeanToTheNormal) {
+  for (double n_dot_v : {1.0, 0.7, 0.2, 0.05}) EXPECT_NEAR(glossy_bend(n_dot_v, 0.0, 4096), 1.0, 1e-4) << n_dot_v;   // α = 1e-4
+  for (double roughness : {0.3, 0.5, 1.0}) EXPECT_EQ(glossy_bend(1.0, roughness, 256), 1.0) << roughness;
+  for (double roughness : {0.3, 0.5, 0.8}) {
+    double last = 1.0;
+    for (double n_dot_v : {0.95, 0.7, 0.4, 0.1}) {
+      const double bend = glossy_bend(n_dot_v, roughness, 4096);
+      EXPECT_LT(bend, last) << roughness << " " << n_dot_v;
+      EXPECT_GE(bend, 0.0);
+      last = bend;
+    }
+  }
+  EXPECT_LT(glossy_bend(0.3, 0.8, 4096), glossy_bend(0.3, 0.4, 4096));
+}
+
+TEST(GlossyBend, TableHoldsItAtItsEntriesAndBadInputIsRefused) {
+  const int size = 8;
+  const std::vector<float> table = glossy_bend_table(size, 256);
+  ASSERT_EQ(table.size(), static_cast<size_t>(size * size));
+  for (int j : {0, 3, 7})
+    for (int i : {0, 4, 7}) EXPECT_FLOAT_EQ(table[j * size + i], static_cast<float>(glossy_bend((i + 0.5) / size, j / 7.0, 256)));
+  EXPECT_THROW(glossy_bend(0.0, 0.5), std::invalid_argument);
+  EXPECT_THROW(glossy_bend(0.5, -0.1), std::invalid_argument);
+  EXPECT_THROW(glossy_bend(0.5, 0.5, 0), std::invalid_argument);
+  EXPECT_THROW(glossy_bend_table(1), std::invalid_argument);
+  EXPECT_THROW(glossy_bend_table(8, 0), std::invalid_argument);
 }
 
 }  // namespace

@@ -45,7 +45,7 @@ SAMPLES = 256
 RED = (0.8, 0.15, 0.05, 1.0)
 GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, largest |bias| per channel
     ("plastic", RED, 0.3, 0.0, 0.03, 0.04),
-    ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.11, 0.05),
+    ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.08, 0.05),
     ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.045, 0.03),
     ("rough plastic", (0.3, 0.45, 0.8, 1.0), 0.6, 0.0, 0.03, 0.04)]
 
@@ -204,6 +204,12 @@ def left_out(checks, package):
     checks.check("left out" not in plain and "opaque" not in plain,
                  "a default Principled BSDF leaves nothing out", repr(plain))
     bsdf = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
+    codes = {}
+    for distribution in ('GGX', 'MULTI_GGX'):   # 3.x's default scatters once, 4.0's keeps the bounces
+        bsdf.distribution = distribution
+        codes[distribution] = package.scene.materials.albedo(material).weights[3]
+    checks.check(codes['GGX'] == -codes['MULTI_GGX'] < 0.0,
+                 "the shader adds multiple scattering only for Multiscatter GGX", repr(codes))
     for names, value in ((("Coat Weight", "Clearcoat"), 0.5), (("Transmission Weight", "Transmission"), 1.0),
                          (("Alpha",), 0.5)):
         bsdf.inputs[next(name for name in names if name in bsdf.inputs)].default_value = value

@@ -42,8 +42,8 @@ vec4 sd_brdf_table(float n_dot_v, float roughness, int first_row)
   return mix(bottom, top, f.y);
 }
 
-/* The split sum's terms integrated natively (sdnative.environment_brdf_table), the table's first
- * rows: (A, B) of Schlick's Fresnel (single-scattering albedo F0 A + B), E_avg the cosine-weighted
+/* The split sum's terms integrated natively (sdnative.environment_brdf_table), rows
+ * 0..SD_BRDF_TABLE_SIZE - 1 of the table: (A, B) of Schlick's Fresnel (single-scattering albedo F0 A + B), E_avg the cosine-weighted
  * mean of A + B over n.v (scene/lobes.average_albedo), and B of the dielectric Fresnel of IOR 1.5
  * remapped to F0..1 (A + B is the same for both shapes). */
 vec4 sd_environment_brdf(float n_dot_v, float roughness)
@@ -114,12 +114,15 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 #ifdef SD_PREFILTERED
 /* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe,
  * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
- * view reflects (sdnative.glossy_bend_table, the table's rows after the split sum's: the lobe leans
- * from the mirrored view towards the normal at grazing views). */
+ * view reflects (sdnative.glossy_bend_table, rows SD_BRDF_TABLE_SIZE.. of the table: the lobe leans
+ * from the mirrored view towards the normal at grazing views). The visibility ratio stays the
+ * baked lobe's, around the mirrored view. */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
 {
   float bend = sd_brdf_table(dot(normal, view), sd_lobe_weights.z, SD_BRDF_TABLE_SIZE).x;
-  axis = normalize(mix(normal, sd_mirrored_view(normal, view), bend));
+  axis = mix(normal, sd_mirrored_view(normal, view), bend);
+  /* a back-facing shading normal (view = -normal) can cancel the mix */
+  axis = dot(axis, axis) > 1e-12 ? normalize(axis) : normal;
   return sd.prefiltered_scale.x * sd_prefiltered_light(axis, sd_lobe_weights.z);
 }
 #endif

@@ -42,7 +42,8 @@
  *   SD_GAUNT_COUNT       real Gaunt coefficients (eq. 10)
  *   SD_PREFILTERED       (with SD_LOBE_WEIGHTS) lobe 0's light is the environment prefiltered by
  *                        the slot's GGX lobe (native glossy_prefilter.h: the split sum), looked up
- *                        per pixel at g R r in the atlas sd_prefiltered (SD_PREFILTERED_MAP names
+ *                        per pixel at g R d, d the mean direction of the lobe the view reflects
+ *                        (sdnative.glossy_bend), in the atlas sd_prefiltered (SD_PREFILTERED_MAP names
  *                        it; SD_PREFILTERED_WIDTH, SD_PREFILTERED_LEVELS its layout), times the
  *                        share of lobe 0's low-order light the baked visibility lets through
  *                        (sd_visibility_ratio; SD_OPEN_ORDER: the order the method's B reaches

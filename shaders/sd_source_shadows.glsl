@@ -127,7 +127,7 @@ float sd_source_cosine(float cos_theta, float sin2_sigma)
 }
 
 /* The GGX lobe of the prefiltered atlas at source i: of the map's light P_r(axis) the prefilter
- * averages around the mirrored view (glossy_prefilter.h, n = v = r: l drawn with density D(h) / 4,
+ * averages around the direction it is read at (glossy_prefilter.h, n = v = r: l drawn with density D(h) / 4,
  * weighted by n . l, over their sum), the part the source gives - its power times that kernel at its
  * direction, D with alpha^2 widened by the disc's half angle squared (the lobe over a disc, not a
  * point; h turns half as far as l), over the kernel's integral Z(alpha) (1 for a sharp lobe, 1/4 at
@@ -150,8 +150,8 @@ float sd_source_glossy(int i, vec3 axis, float roughness)
 /* The sources' light on the Lambert lobe at the pixel (position sd_origin_offset from the
  * object's origin, bake-space normal `normal`, unit): the sum of each source's irradiance times
  * its cosine (sd_source_cosine) and its visibility. glossy: (unshadowed, shadowed) luminance of
- * the sources' part of the prefiltered light of roughness `roughness` around `axis` (the mirrored
- * view; sd_source_glossy), a source below the surface's horizon shadowed. */
+ * the sources' part of the prefiltered light of roughness `roughness` around `axis` (where it is
+ * read; sd_source_glossy), a source below the surface's horizon shadowed. */
 vec3 sd_source_light(vec3 normal, vec3 axis, float roughness, out vec2 glossy)
 {
   vec3 world = sd_origin_offset;   /* world, relative to the object's origin */

@@ -14,6 +14,22 @@
 #include <vector>
 
 namespace sdpy {
+namespace {
+
+/// A table made without the GIL (make() -> std::vector<float>), as float64 of `shape`.
+template <typename F>
+py::array_t<double> table_array(std::vector<py::ssize_t> shape, F make) {
+  std::vector<float> table;
+  {
+    py::gil_scoped_release release;
+    table = make();
+  }
+  py::array_t<double> out(shape);
+  std::copy(table.begin(), table.end(), out.mutable_data());
+  return out;
+}
+
+}  // namespace
 
 void bind_glossy_prefilter(py::module_& m) {
   py::class_<sd::Environment> env = environment_class(m);
@@ -53,14 +69,7 @@ dielectric layer). ValueError outside those ranges.)doc");
   m.def(
       "environment_brdf_table",
       [](int size, int samples, double ior) {
-        std::vector<float> table;
-        {
-          py::gil_scoped_release release;
-          table = sd::environment_brdf_table(size, samples, ior);
-        }
-        py::array_t<double> out({size, size, 2});
-        std::copy(table.begin(), table.end(), out.mutable_data());
-        return out;
+        return table_array({size, size, 2}, [&] { return sd::environment_brdf_table(size, samples, ior); });
       },
       py::arg("size") = 32, py::arg("samples") = 1024, py::arg("ior") = 0.0,
       R"doc(environment_brdf tabulated: float64 [size, size, 2], (A, B) at n.v = (i + 0.5) / size (column
@@ -72,16 +81,7 @@ in [0, 1]: at normalize(mix(n, r, bend)), the GGX lobe's mean direction (r the m
 ValueError outside those ranges or for samples outside [1, 2^20].)doc");
   m.def(
       "glossy_bend_table",
-      [](int size, int samples) {
-        std::vector<float> table;
-        {
-          py::gil_scoped_release release;
-          table = sd::glossy_bend_table(size, samples);
-        }
-        py::array_t<double> out({size, size});
-        std::copy(table.begin(), table.end(), out.mutable_data());
-        return out;
-      },
+      [](int size, int samples) { return table_array({size, size}, [&] { return sd::glossy_bend_table(size, samples); }); },
       py::arg("size") = 32, py::arg("samples") = 1024,
       R"doc(glossy_bend tabulated as environment_brdf_table is: float64 [size, size], the bend at
 n.v = (i + 0.5) / size (column i) and roughness j / (size - 1) (row j). ValueError for size outside

@@ -60,7 +60,7 @@ _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> (GPUTexture, scale)
 _BASIS_BLOCK = 16384          # directions per SH basis evaluated at once for that texture
 _prefiltered_textures = {}    # source key -> GPUTexture
-_brdf_table = []              # the GPUTexture of environment_brdf_table, once made
+_brdf_table = []              # the GPUTexture of environment_brdf_table and glossy_bend_table, once made
 _background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
 
 

@@ -1,11 +1,11 @@
 // Glossy light without SH truncation (issue 28): the split sum of Karis ("Real Shading in Unreal
 // Engine 4", SIGGRAPH 2013 course notes). The light a GGX lobe reflects towards v is approximated by
 //     ∫ L(l) f(l, v) (n·l) dl  ≈  [∫ L(l) D(h) (n·l) dl / ∫ D(h) (n·l) dl] · ∫ f(l, v) (n·l) dl,
-// the first factor a map of the environment prefiltered by the lobe with n = v = r (looked up in
-// the mirrored view r, per roughness: prefilter_ggx), the second the lobe's directional albedo
-// F0·A + B over n·v and roughness (environment_brdf, tabulated for the shader by
-// environment_brdf_table). The first factor's n = v = r holds at normal incidence only: at grazing
-// views it is looked up where the BRDF's lobe lies (glossy_bend). Baked
+// the first factor a map of the environment prefiltered by the lobe with n = v = r, per roughness
+// (prefilter_ggx), the second the lobe's directional albedo F0·A + B over n·v and roughness
+// (environment_brdf, tabulated for the shader by environment_brdf_table). Karis reads the first
+// factor at the mirrored view r, as n = v = r has it; that holds at normal incidence only, and the
+// map is read where the lobe a view reflects lies instead (glossy_bend). Baked
 // visibility is applied to the first factor separately (the shader's visibility ratio, msd-notes
 // "Glossy light").
 //

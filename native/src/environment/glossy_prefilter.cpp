@@ -28,6 +28,9 @@ constexpr double kMinAlpha = 1e-4;
 constexpr double kConvolutionRoughness = 0.5;
 constexpr int kConvolutionWidth = 64;
 
+/// GGX α of a Principled roughness r: r², kept off 0 so that D stays finite.
+double ggx_alpha(double roughness) { return std::max(roughness * roughness, kMinAlpha); }
+
 /// Hammersley point i of n: ((i + ½) / n, the radical inverse of i in base 2).
 std::array<double, 2> hammersley(int i, int n) {
   uint32_t bits = static_cast<uint32_t>(i);
@@ -68,7 +71,7 @@ struct LobeSample {
 /// texels are about that large (without Křivánek and Colbert's +1 towards the smoother map, which
 /// spread a bright source over the lobe's tails: texels 11 % off instead of 7 %).
 std::vector<LobeSample> lobe_samples(double roughness, int samples, double finest_texel_solid_angle, int coarsest) {
-  const double alpha = std::max(roughness * roughness, kMinAlpha);
+  const double alpha = ggx_alpha(roughness);
   std::vector<LobeSample> out;
   for (int i = 0; i < samples; ++i) {
     const glm::dvec3 h = ggx_half_vector(hammersley(i, samples), alpha);
@@ -259,7 +262,7 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
         if (k == 0) {
           sum = pyramid_radiance(pyramid, r, level0_source);
         } else if (!sampled) {
-          sum = convolved(coarse_texels, r, std::max(std::pow(layout.roughness(k), 2), kMinAlpha));
+          sum = convolved(coarse_texels, r, ggx_alpha(layout.roughness(k)));
         } else {
           glm::dvec3 t1, t2;
           if (!equirect) azimuthal_frame(r, t1, t2);
@@ -297,21 +300,23 @@ double dielectric_fresnel(double c, double n) {
   return 0.5 * a * a * (1.0 + b * b);
 }
 
+void check_samples(const char* caller, int samples) {
+  if (samples < 1 || samples > 1 << 20)
+    throw std::invalid_argument(std::string(caller) + ": samples must be in [1, 2^20], got " + std::to_string(samples));
+}
 
 void check_lobe_point(const char* caller, double n_dot_v, double roughness, int samples) {
   if (!(n_dot_v > 0.0 && n_dot_v <= 1.0))
     throw std::invalid_argument(std::string(caller) + ": n_dot_v must be in (0, 1], got " + std::to_string(n_dot_v));
   if (!(roughness >= 0.0 && roughness <= 1.0))
     throw std::invalid_argument(std::string(caller) + ": roughness must be in [0, 1], got " + std::to_string(roughness));
-  if (samples < 1 || samples > 1 << 20)
-    throw std::invalid_argument(std::string(caller) + ": samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_samples(caller, samples);
 }
 
 void check_table(const char* caller, int size, int samples) {
   if (size < 2 || size > 256)
     throw std::invalid_argument(std::string(caller) + ": size must be in [2, 256], got " + std::to_string(size));
-  if (samples < 1 || samples > 1 << 20)
-    throw std::invalid_argument(std::string(caller) + ": samples must be in [1, 2^20], got " + std::to_string(samples));
+  check_samples(caller, samples);
 }
 
 /// f(n·v, roughness) -> std::array<double, N> at n·v = (i + ½) / size and roughness j / (size − 1),
@@ -358,7 +363,7 @@ std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int sam
     return ior > 0.0 ? (dielectric_fresnel(c, ior) - normal_fresnel) / (1.0 - normal_fresnel) : std::pow(1.0 - c, 5.0);
   };
   double a = 0.0, b = 0.0;
-  for_each_reflection(n_dot_v, std::max(roughness * roughness, kMinAlpha), samples,
+  for_each_reflection(n_dot_v, ggx_alpha(roughness), samples,
                       [&](const glm::dvec3&, double v_dot_h, double weight) {
                         const double fresnel = shape(v_dot_h);
                         a += (1.0 - fresnel) * weight;
@@ -376,13 +381,14 @@ std::vector<float> environment_brdf_table(int size, int samples, double ior) {
 double glossy_bend(double n_dot_v, double roughness, int samples) {
   check_lobe_point("glossy_bend", n_dot_v, roughness, samples);
   glm::dvec3 mean(0.0);
-  for_each_reflection(n_dot_v, std::max(roughness * roughness, kMinAlpha), samples,
+  for_each_reflection(n_dot_v, ggx_alpha(roughness), samples,
                       [&](const glm::dvec3& l, double, double weight) { mean += weight * l; });
   // The mean direction's angle θ from n, towards r at θ_r = acos(n·v); mix(n, r, bend) makes
   // tan θ = bend sin θ_r / (1 − bend (1 − cos θ_r)).
-  const double tan_mean = -mean.x / mean.z;
+  // Within 0.06° of normal incidence r is n and the angle is sampling noise.
+  const double tan_mean = std::max(-mean.x / mean.z, 0.0);
   const double sin_r = std::sqrt(1.0 - n_dot_v * n_dot_v);
-  return sin_r > 1e-9 ? std::clamp(tan_mean / (sin_r + tan_mean * (1.0 - n_dot_v)), 0.0, 1.0) : 1.0;
+  return sin_r > 1e-3 ? std::clamp(tan_mean / (sin_r + tan_mean * (1.0 - n_dot_v)), 0.0, 1.0) : 1.0;
 }
 
 std::vector<float> glossy_bend_table(int size, int samples) {

@@ -115,11 +115,13 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 /* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe,
  * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
  * view reflects (sdnative.glossy_bend_table, rows SD_BRDF_TABLE_SIZE.. of the table: the lobe leans
- * from the mirrored view towards the normal at grazing views). The visibility ratio stays the
+ * from the mirrored view towards the normal at grazing views, a dielectric's less, its Fresnel
+ * weighing the grazing light more; mixed by metallic). The visibility ratio stays the
  * baked lobe's, around the mirrored view. */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
 {
-  float bend = sd_brdf_table(dot(normal, view), sd_lobe_weights.z, SD_BRDF_TABLE_SIZE).x;
+  vec2 bends = sd_brdf_table(dot(normal, view), sd_lobe_weights.z, SD_BRDF_TABLE_SIZE).xy;
+  float bend = mix(bends.y, bends.x, sd_lobe_weights.x);   /* the dielectric layer's, the metal's */
   axis = mix(normal, sd_mirrored_view(normal, view), bend);
   /* a back-facing shading normal (view = -normal) can cancel the mix */
   axis = dot(axis, axis) > 1e-12 ? normalize(axis) : normal;

@@ -75,17 +75,20 @@ dielectric layer). ValueError outside those ranges.)doc");
       R"doc(environment_brdf tabulated: float64 [size, size, 2], (A, B) at n.v = (i + 0.5) / size (column
 i) and roughness j / (size - 1) (row j), for `ior` as environment_brdf. ValueError for size outside
 [2, 256], samples outside [1, 2^20] or a bad ior.)doc");
-  m.def("glossy_bend", &sd::glossy_bend, py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024,
+  m.def("glossy_bend", &sd::glossy_bend, py::arg("n_dot_v"), py::arg("roughness"), py::arg("samples") = 1024, py::arg("ior") = 0.0,
         R"doc(Where the prefiltered light is read for a view at n.v in (0, 1] and Principled roughness
-in [0, 1]: at normalize(mix(n, r, bend)), the GGX lobe's mean direction (r the mirrored view).
-ValueError outside those ranges or for samples outside [1, 2^20].)doc");
+in [0, 1]: at normalize(mix(n, r, bend)), the GGX lobe's mean direction (r the mirrored view),
+its light weighted by the dielectric Fresnel of `ior` > 1 (a plastic's layer) or not (ior 0, a
+metal). ValueError outside those ranges, for samples outside [1, 2^20] or a bad ior.)doc");
   m.def(
       "glossy_bend_table",
-      [](int size, int samples) { return table_array({size, size}, [&] { return sd::glossy_bend_table(size, samples); }); },
-      py::arg("size") = 32, py::arg("samples") = 1024,
+      [](int size, int samples, double ior) {
+        return table_array({size, size}, [&] { return sd::glossy_bend_table(size, samples, ior); });
+      },
+      py::arg("size") = 32, py::arg("samples") = 1024, py::arg("ior") = 0.0,
       R"doc(glossy_bend tabulated as environment_brdf_table is: float64 [size, size], the bend at
-n.v = (i + 0.5) / size (column i) and roughness j / (size - 1) (row j). ValueError for size outside
-[2, 256] or samples outside [1, 2^20].)doc");
+n.v = (i + 0.5) / size (column i) and roughness j / (size - 1) (row j), for `ior` as glossy_bend.
+ValueError for size outside [2, 256], samples outside [1, 2^20] or a bad ior.)doc");
 }
 
 }  // namespace sdpy

@@ -387,6 +387,11 @@ def test_glossy_bend_and_its_table():
     assert (table[0] > 0.999).all() and sdnative.glossy_bend(1.0, 0.5) == 1.0
     assert table[-1].max() < 0.05
     assert 0.0 < table[5, 0] < table[4, 0] < table[4, -1] < 1.0
+    # a dielectric's Fresnel weighs the grazing light, nearer the mirrored view: it bends less
+    dielectric = sdnative.glossy_bend_table(8, 256, ior=1.5)
+    assert (dielectric[3:, :4] > table[3:, :4]).all() and dielectric[0, 0] > 0.999
+    with pytest.raises(ValueError, match="ior must be 0"):
+        sdnative.glossy_bend(0.5, 0.5, ior=0.5)
     with pytest.raises(ValueError, match="n_dot_v must be in"):
         sdnative.glossy_bend(0.0, 0.5)
     with pytest.raises(ValueError, match="size must be in"):

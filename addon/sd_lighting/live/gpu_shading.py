@@ -234,7 +234,8 @@ def brdf_table_texture():
     sd_brdf_table reads (made once), one above the other: the split-sum terms (A, B) of Schlick's
     Fresnel (sdnative.environment_brdf_table), each roughness row's E_avg (lobes.average_albedo)
     and B of the dielectric Fresnel of lobes.DIELECTRIC_SHAPE_IOR; then where the prefiltered
-    light is read (sdnative.glossy_bend_table)."""
+    light is read (sdnative.glossy_bend_table): for a metal, and for the dielectric layer of
+    lobes.DIELECTRIC_SHAPE_IOR."""
     if not _brdf_table:
         sd = native.get()
         table = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE))
@@ -243,6 +244,7 @@ def brdf_table_texture():
         texels[0, ..., 2] = lobes.average_albedo(table)[:, None]
         texels[0, ..., 3] = np.asarray(sd.environment_brdf_table(BRDF_TABLE_SIZE, ior=lobes.DIELECTRIC_SHAPE_IOR))[..., 1]
         texels[1, ..., 0] = np.asarray(sd.glossy_bend_table(BRDF_TABLE_SIZE))
+        texels[1, ..., 1] = np.asarray(sd.glossy_bend_table(BRDF_TABLE_SIZE, ior=lobes.DIELECTRIC_SHAPE_IOR))
         _brdf_table.append(_texture(BRDF_TABLE_SIZE, 2 * BRDF_TABLE_SIZE, texels))
     return _brdf_table[0]
 

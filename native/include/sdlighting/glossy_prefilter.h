@@ -77,17 +77,20 @@ std::array<double, 2> environment_brdf(double n_dot_v, double roughness, int sam
 std::vector<float> environment_brdf_table(int size = 32, int samples = 1024, double ior = 0.0);
 
 /// Where the prefiltered light is read for a view at n·v (issue 28: the split sum's dark rims). The
-/// lobe a view at n·v reflects, f₁ (n·l) with F = 1 (single scattering, Smith height-correlated),
-/// leans from the mirrored view r towards the normal as n·v falls, while a level of the prefiltered
-/// map is centred on its lookup direction. Returns the bend: the lobe's mean direction is
-/// normalize(mix(n, r, bend)) (it lies in the plane of n and v; 1 at n·v = 1). `samples` GGX half
-/// vectors (Hammersley). n_dot_v in (0, 1], roughness in [0, 1]; throws std::invalid_argument
-/// outside them or for samples outside [1, 2^20].
-double glossy_bend(double n_dot_v, double roughness, int samples = 1024);
+/// lobe a view at n·v reflects, F f₁ (n·l) (single scattering, Smith height-correlated), leans from
+/// the mirrored view r towards the normal as n·v falls, while a level of the prefiltered map is
+/// centred on its lookup direction. F is 1 for ior = 0 (a metal: its Fresnel hardly varies), else
+/// the dielectric Fresnel of that IOR at v·h, which weighs the grazing light more (a plastic's
+/// layer). Returns the bend: the lobe's mean direction is normalize(mix(n, r, bend)) (it lies in
+/// the plane of n and v; 1 at n·v = 1). `samples` GGX half vectors (Hammersley). n_dot_v in (0, 1],
+/// roughness in [0, 1]; throws std::invalid_argument outside them, for samples outside [1, 2^20]
+/// or an ior that is neither 0 nor in (1, 1e6].
+double glossy_bend(double n_dot_v, double roughness, int samples = 1024, double ior = 0.0);
 
 /// glossy_bend tabulated as environment_brdf_table is: at n·v = (i + ½) / size (column i) and
-/// roughness j / (size − 1) (row j); float, row-major, size × size. Both cores. Throws
-/// std::invalid_argument for size outside [2, 256] or samples outside [1, 2^20].
-std::vector<float> glossy_bend_table(int size = 32, int samples = 1024);
+/// roughness j / (size − 1) (row j), for `ior` as glossy_bend; float, row-major, size × size. Both
+/// cores. Throws std::invalid_argument for size outside [2, 256], samples outside [1, 2^20] or an
+/// ior glossy_bend refuses.
+std::vector<float> glossy_bend_table(int size = 32, int samples = 1024, double ior = 0.0);
 
 }  // namespace sd

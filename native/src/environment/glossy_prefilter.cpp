@@ -378,11 +378,13 @@ std::vector<float> environment_brdf_table(int size, int samples, double ior) {
   return tabulate<2>(size, [&](double n_dot_v, double roughness) { return environment_brdf(n_dot_v, roughness, samples, ior); });
 }
 
-double glossy_bend(double n_dot_v, double roughness, int samples) {
+double glossy_bend(double n_dot_v, double roughness, int samples, double ior) {
   check_lobe_point("glossy_bend", n_dot_v, roughness, samples);
+  check_ior("glossy_bend", ior);
   glm::dvec3 mean(0.0);
-  for_each_reflection(n_dot_v, ggx_alpha(roughness), samples,
-                      [&](const glm::dvec3& l, double, double weight) { mean += weight * l; });
+  for_each_reflection(n_dot_v, ggx_alpha(roughness), samples, [&](const glm::dvec3& l, double v_dot_h, double weight) {
+    mean += (ior > 0.0 ? dielectric_fresnel(v_dot_h, ior) : 1.0) * weight * l;
+  });
   // The mean direction's angle θ from n, towards r at θ_r = acos(n·v); mix(n, r, bend) makes
   // tan θ = bend sin θ_r / (1 − bend (1 − cos θ_r)).
   // Within 0.06° of normal incidence r is n and the angle is sampling noise.
@@ -391,10 +393,11 @@ double glossy_bend(double n_dot_v, double roughness, int samples) {
   return sin_r > 1e-3 ? std::clamp(tan_mean / (sin_r + tan_mean * (1.0 - n_dot_v)), 0.0, 1.0) : 1.0;
 }
 
-std::vector<float> glossy_bend_table(int size, int samples) {
+std::vector<float> glossy_bend_table(int size, int samples, double ior) {
   check_table("glossy_bend_table", size, samples);
+  check_ior("glossy_bend_table", ior);
   return tabulate<1>(size, [&](double n_dot_v, double roughness) {
-    return std::array<double, 1>{glossy_bend(n_dot_v, roughness, samples)};
+    return std::array<double, 1>{glossy_bend(n_dot_v, roughness, samples, ior)};
   });
 }
 

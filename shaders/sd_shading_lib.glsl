@@ -345,19 +345,29 @@ float sd_visibility_ratio(vec3 b0, vec3 a0, vec3 n)
 vec3 sd_prefiltered_level(vec3 e, int k)
 {
   int w0 = SD_PREFILTERED_WIDTH;
-  ivec2 origin = (k == 0) ? ivec2(0) : ivec2(w0 - (w0 >> (k - 1)), w0 / 2);
-  return sd_equirect_block(1, origin, ivec2(w0 >> k, w0 >> (k + 1)), e);
+  int width = (k == 0) ? w0 : (w0 >> min(k - 1, SD_PREFILTERED_LEVELS - 3));
+  ivec2 origin = (k < 2) ? ivec2(0, k * w0 / 2) : ivec2(w0 - (w0 >> (k - 2)), w0);
+  return sd_equirect_block(1, origin, ivec2(width, width / 2), e);
+}
+
+/* Perceptual roughness of the atlas's level k: 0, then sqrt(alpha_k), alpha_k = 2^(k - (levels - 1)). */
+float sd_prefiltered_roughness(int k)
+{
+  return (k == 0) ? 0.0 : exp2(0.5 * float(k - (SD_PREFILTERED_LEVELS - 1)));
 }
 
 /* The environment prefiltered by the GGX lobe of perceptual roughness r around the local direction
- * d (looked up at g R d): linear between the two levels around r (level k holds r = k / (levels -
- * 1)). */
+ * d (looked up at g R d): linear in r between the two levels around it. */
 vec3 sd_prefiltered_light(vec3 d, float roughness)
 {
   vec3 e = normalize(mat3(sd.local_to_environment) * d);
-  float level = clamp(roughness, 0.0, 1.0) * float(SD_PREFILTERED_LEVELS - 1);
-  int k = min(int(level), SD_PREFILTERED_LEVELS - 2);
-  return mix(sd_prefiltered_level(e, k), sd_prefiltered_level(e, k + 1), level - float(k));
+  float r = clamp(roughness, 0.0, 1.0);
+  /* the level at or below r: 0 below level 1's roughness, else k from r = 2^((k - levels + 1) / 2) */
+  float past_first = 2.0 * log2(max(r, 1e-6)) + float(SD_PREFILTERED_LEVELS - 1);
+  int k = (past_first < 1.0) ? 0 : min(int(past_first), SD_PREFILTERED_LEVELS - 2);
+  float below = sd_prefiltered_roughness(k);
+  float t = clamp((r - below) / (sd_prefiltered_roughness(k + 1) - below), 0.0, 1.0);
+  return mix(sd_prefiltered_level(e, k), sd_prefiltered_level(e, k + 1), t);
 }
 #endif
 

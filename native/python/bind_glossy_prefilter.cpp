@@ -47,14 +47,25 @@ void bind_glossy_prefilter(py::module_& m) {
         std::copy(atlas.begin(), atlas.end(), out.mutable_data());
         return out;
       },
-      py::arg("width0") = sd::PrefilterLayout().width0, py::arg("levels") = sd::PrefilterLayout().levels, py::arg("samples") = 128,
+      py::arg("width0") = sd::PrefilterLayout().width0, py::arg("levels") = sd::PrefilterLayout().levels, py::arg("samples") = 64,
       R"doc(The map prefiltered by the GGX lobe per roughness level (the split sum's first factor):
-the atlas, float64 [3 width0 / 4, width0, 3] with rows bottom-first as GPU textures hold them. Level k of `levels` holds perceptual roughness k / (levels - 1) as an equirect image
-width0 >> k wide (Blender's orientation); level 0 fills the bottom width0 / 2 rows, level k >= 1
-lies in the rows above it from column width0 - (width0 >> (k - 1)). The defaults are
-PREFILTER_WIDTH and PREFILTER_LEVELS. `samples` GGX directions per texel (filtered importance
-sampling). ValueError for a width0 that is not a power of two in [4, MAX_TEXTURE_SIDE], levels with
-width0 >> (levels - 1) < 4, samples outside [1, 4096].)doc");
+the atlas, float64 [width0 + width0 / 4, width0, 3] (width0 + width0 / 2 rows for 3 levels) with rows
+bottom-first as GPU textures hold them, laid out as sdlighting/glossy_prefilter.h's PrefilterLayout
+says: level 0 the map itself, level k >= 1 GGX alpha = 2^(k - (levels - 1)) (alpha doubles from
+level to level up to 1), equirect images of Blender's orientation. The defaults are PREFILTER_WIDTH
+and PREFILTER_LEVELS. `samples` GGX directions per texel on level 1, twice as many per level after
+it (filtered importance sampling). ValueError for a width0 that is not a power of two in [4,
+MAX_TEXTURE_SIDE], levels < 3 or with width0 >> (levels - 3) < 4, samples outside [1, 4096].)doc");
+  m.def(
+      "prefilter_atlas_shape",
+      [](int width0, int levels) {
+        const sd::PrefilterLayout layout{width0, levels};
+        layout.check();
+        return py::make_tuple(layout.atlas_height(), layout.atlas_width());
+      },
+      py::arg("width0") = sd::PrefilterLayout().width0, py::arg("levels") = sd::PrefilterLayout().levels,
+      R"doc((rows, columns) of Environment.prefiltered_ggx's atlas for that layout. ValueError where
+prefiltered_ggx refuses the layout.)doc");
   m.def(
       "environment_brdf",
       [](double n_dot_v, double roughness, int samples, double ior) {

@@ -48,7 +48,7 @@ Functions:
   gaunt_coefficients(a, b, c)           real Gaunt coefficients (sparse)
   zonal_design(...), zonal_design_tabulated(...), weighted_design(...)   -> (nodes, weights)
   zonal_design_report(...), weighted_design_report(...)   -> dict with residual and method
-  Environment.prefiltered_ggx(...)     the map prefiltered by the GGX lobe per roughness (split sum)
+  Environment.prefiltered_ggx(...)     the map prefiltered by the GGX lobe per roughness (split sum); prefilter_atlas_shape
   Environment.light_sources(order)     its compact bright sources split off, and the remainder
   environment_brdf(n_dot_v, roughness)  the GGX lobe's directional albedo (A, B); environment_brdf_table
   environment_from_pixels(rgb), load_environment(path), load_cube_environment(faces)

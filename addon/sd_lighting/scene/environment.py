@@ -302,11 +302,12 @@ def prefiltered_atlas(src, width0, levels, wait):
     """The environment prefiltered by the GGX lobe per roughness level, without the strength (the
     shader applies it: a changed strength needs no new prefilter), in the atlas layout of
     sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour is that colour at
-    every roughness. float32 [3 width0 / 4, width0, 3]. Computed in a worker thread (about 1.5 s
-    for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None until it is
+    every roughness. float32 [rows, width0, 3] (sdnative.prefilter_atlas_shape). Computed in a
+    worker thread (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None until it is
     there or when it failed; wait=True waits (raises background.Failed)."""
     if src.kind == "uniform":
-        return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (3 * width0 // 4, width0, 3)).copy()
+        shape = native.get().prefilter_atlas_shape(width0, levels)
+        return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (*shape, 3)).copy()
     env = environment(src)   # read here: the pixels come from bpy
 
     def compute():

@@ -16,32 +16,39 @@
 
 #include "sdlighting/environment.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace sd {
 
 /// Where the roughness levels of a prefiltered environment lie in one RGB atlas (rows bottom-first,
-/// as GPU textures hold them; the shader's sd_prefiltered_light reads the same layout). Level k of
-/// `levels` holds perceptual roughness r_k = k / (levels − 1) as an equirect image of Blender's
-/// orientation (environment.h), width0 >> k wide and width0 >> (k + 1) high, rows bottom-first
-/// (row 0 at the south pole): level 0 (r = 0, the map itself) fills rows [0, width0 / 2); level
-/// k >= 1 lies in the rows above it, [width0 / 2, width0 / 2 + width0 / 4), from column
-/// width0 − (width0 >> (k − 1)). The atlas is width0 × 3 width0 / 4.
+/// as GPU textures hold them; the shader's sd_prefiltered_light reads the same layout). Level 0
+/// holds the map itself (r = 0), level k >= 1 the GGX α_k = 2^(k − (levels − 1)): α doubles from
+/// level to level up to α = 1 on the last, so that the shader's blend of two neighbouring levels
+/// stays close to the lobe between them (linear steps in r blend a sharp level with one several
+/// times as wide: msd-notes, "Glossy light"). Each level is an equirect image of Blender's
+/// orientation (environment.h), rows bottom-first (row 0 at the south pole), half as high as it is
+/// wide: level 0 is width0 wide, level k >= 1 width0 >> (k − 1), its texels keeping pace with the
+/// lobe, down to width0 >> (levels − 3) for the last two. Level 0 fills rows [0, width0 / 2), level
+/// 1 rows [width0 / 2, width0), and levels k >= 2 lie side by side in the rows above from column
+/// width0 − (width0 >> (k − 2)), filling the atlas's width.
 struct PrefilterLayout {
   int width0 = 1024;  ///< width of level 0, a power of two <= kMaxTextureSide (limits.h)
-  int levels = 7;     ///< roughness levels, >= 2, with width0 >> (levels − 1) >= 4
+  int levels = 9;     ///< roughness levels, >= 3, with width0 >> (levels − 3) >= 4
 
-  int level_width(int k) const { return width0 >> k; }
-  int level_height(int k) const { return width0 >> (k + 1); }
+  int level_width(int k) const { return k == 0 ? width0 : width0 >> std::min(k - 1, levels - 3); }
+  int level_height(int k) const { return level_width(k) / 2; }
   /// Column and row of level k's first texel in the atlas.
   std::array<int, 2> level_origin(int k) const {
-    return k == 0 ? std::array<int, 2>{0, 0} : std::array<int, 2>{width0 - (width0 >> (k - 1)), width0 / 2};
+    if (k < 2) return {0, k * width0 / 2};
+    return {width0 - (width0 >> (k - 2)), width0};
   }
   int atlas_width() const { return width0; }
-  int atlas_height() const { return width0 / 2 + width0 / 4; }
-  /// Perceptual roughness r of level k.
-  double roughness(int k) const { return static_cast<double>(k) / (levels - 1); }
+  int atlas_height() const { return width0 + level_height(2); }
+  /// Perceptual roughness r of level k: 0, then √α_k.
+  double roughness(int k) const { return k == 0 ? 0.0 : std::exp2(0.5 * (k - (levels - 1))); }
   /// Throws std::invalid_argument naming the field for a layout outside the limits above.
   void check() const;
 };
@@ -49,14 +56,14 @@ struct PrefilterLayout {
 /// The environment prefiltered by the GGX lobe per roughness level, in the atlas `layout`
 /// describes: level k at direction r holds ∫ L(l) D(h) (r·l)⁺ dl / ∫ D(h) (r·l)⁺ dl with
 /// n = v = r and α = r_k² (level 0: the map itself at the level's size). Levels of roughness
-/// below 0.5 by GGX-distributed directions (Hammersley), `samples` per texel on level 1 and four
-/// times as many on each level after it (up to 4096), each read from the map averaged over about
-/// the sample's solid angle (filtered importance sampling: Křivánek and Colbert 2008: no visible
-/// noise); rougher levels by the exact sum over the texels of the map averaged to 64 texels wide.
-/// Both cores. float RGB, atlas_width ×
+/// below 0.5 by GGX-distributed directions (Hammersley), `samples` per texel on level 1 and twice
+/// as many on each level after it (a quarter of the texels, a lobe twice as wide; up to 4096),
+/// each read from the map averaged over about the sample's solid angle (filtered importance
+/// sampling: Křivánek and Colbert 2008: no visible noise); rougher levels by the exact sum over the
+/// texels of the map averaged to 64 texels wide. Both cores. float RGB, atlas_width ×
 /// atlas_height × 3, zero outside the levels. Throws std::invalid_argument for a bad layout or
 /// samples outside [1, 4096].
-std::vector<float> prefilter_ggx(const Environment& environment, const PrefilterLayout& layout, int samples = 128);
+std::vector<float> prefilter_ggx(const Environment& environment, const PrefilterLayout& layout, int samples = 64);
 
 /// The lobe's directional albedo E(n·v, r) = F0·A + B of the split sum for a Fresnel term
 /// F = F0 + (1 − F0) s(v·h): A = ∫ (1 − s) f₁ (n·l) dl, B = ∫ s f₁ (n·l) dl with f₁ the GGX BRDF of

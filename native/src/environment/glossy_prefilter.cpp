@@ -199,8 +199,8 @@ void PrefilterLayout::check() const {
   if (width0 < 4 || width0 > kMaxTextureSide || (width0 & (width0 - 1)) != 0)
     throw std::invalid_argument("prefilter layout: width0 must be a power of two in [4, " +
                                 std::to_string(kMaxTextureSide) + "], got " + std::to_string(width0));
-  if (levels < 2 || (width0 >> (levels - 1)) < 4)
-    throw std::invalid_argument("prefilter layout: levels must be >= 2 with width0 >> (levels - 1) >= 4, got " +
+  if (levels < 3 || levels > 30 || (width0 >> (levels - 3)) < 4)
+    throw std::invalid_argument("prefilter layout: levels must be >= 3 with width0 >> (levels - 3) >= 4, got " +
                                 std::to_string(levels) + " levels of width " + std::to_string(width0));
 }
 
@@ -224,10 +224,10 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
   std::vector<std::vector<LobeSample>> level_samples(layout.levels);
   for (int k = 0; k < layout.levels; ++k) {
     for (int j = 0; j < layout.level_height(k); ++j) rows.push_back({k, j});
-    // Each level a quarter of the texels of the one before and a wider lobe: four times the
-    // samples, for the same work per level.
+    // Each level a quarter of the texels of the one before and a lobe twice as wide: twice the
+    // samples, for half the work of the level before.
     if (k > 0 && layout.roughness(k) < kConvolutionRoughness)
-      level_samples[k] = lobe_samples(layout.roughness(k), std::min(samples << std::min(2 * (k - 1), 12), kMaxSamples),
+      level_samples[k] = lobe_samples(layout.roughness(k), std::min(samples << std::min(k - 1, 12), kMaxSamples),
                                       finest, coarsest);
   }
   size_t coarse = 0;   // the pyramid's map the rough levels are convolved over

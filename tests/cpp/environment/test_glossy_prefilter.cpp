@@ -64,21 +64,35 @@ Radiance soft_sun() {
 }
 
 TEST(GlossyPrefilter, LayoutTilesTheAtlasWithoutOverlap) {
-  const PrefilterLayout layout{256, 7};
-  std::vector<int> owner(static_cast<size_t>(layout.atlas_width()) * layout.atlas_height(), -1);
-  for (int k = 0; k < layout.levels; ++k) {
-    const auto origin = layout.level_origin(k);
-    for (int j = 0; j < layout.level_height(k); ++j)
-      for (int i = 0; i < layout.level_width(k); ++i) {
-        ASSERT_LT(origin[0] + i, layout.atlas_width());
-        ASSERT_LT(origin[1] + j, layout.atlas_height());
-        int& o = owner[static_cast<size_t>(origin[1] + j) * layout.atlas_width() + origin[0] + i];
-        ASSERT_EQ(o, -1) << "level " << k << " overlaps level " << o;
-        o = k;
-      }
+  for (const PrefilterLayout& layout : {PrefilterLayout{256, 7}, PrefilterLayout{1024, 9}, PrefilterLayout{64, 3},
+                                        PrefilterLayout{64, 4}}) {
+    std::vector<int> owner(static_cast<size_t>(layout.atlas_width()) * layout.atlas_height(), -1);
+    for (int k = 0; k < layout.levels; ++k) {
+      const auto origin = layout.level_origin(k);
+      ASSERT_EQ(layout.level_width(k), 2 * layout.level_height(k));
+      for (int j = 0; j < layout.level_height(k); ++j)
+        for (int i = 0; i < layout.level_width(k); ++i) {
+          ASSERT_LT(origin[0] + i, layout.atlas_width()) << layout.width0 << " x " << layout.levels << ", level " << k;
+          ASSERT_LT(origin[1] + j, layout.atlas_height()) << layout.width0 << " x " << layout.levels << ", level " << k;
+          int& o = owner[static_cast<size_t>(origin[1] + j) * layout.atlas_width() + origin[0] + i];
+          ASSERT_EQ(o, -1) << "level " << k << " overlaps level " << o;
+          o = k;
+        }
+    }
   }
+}
+
+TEST(GlossyPrefilter, AlphaDoublesFromLevelToLevelUpToOne) {
+  const PrefilterLayout layout{1024, 9};
   EXPECT_DOUBLE_EQ(layout.roughness(0), 0.0);
-  EXPECT_DOUBLE_EQ(layout.roughness(6), 1.0);
+  EXPECT_DOUBLE_EQ(layout.roughness(8), 1.0);
+  EXPECT_DOUBLE_EQ(layout.roughness(1), std::sqrt(1.0 / 128.0));
+  for (int k = 1; k + 1 < layout.levels; ++k) {
+    EXPECT_DOUBLE_EQ(std::pow(layout.roughness(k + 1), 4), 4.0 * std::pow(layout.roughness(k), 4)) << k;
+    EXPECT_GE(layout.level_width(k), layout.level_width(k + 1)) << k;
+  }
+  EXPECT_EQ(layout.level_width(1), 1024);
+  EXPECT_EQ(layout.level_width(8), 16);
 }
 
 TEST(GlossyPrefilter, ConstantMapStaysConstantAtEveryRoughness) {
@@ -131,8 +145,8 @@ TEST(GlossyPrefilter, RefusesBadLayoutsAndSampleCounts) {
   const Environment env = Environment::from_equirect_pixels(8, 4, std::vector<float>(96, 1.0f));
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{100, 3}, 16), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{1 << 30, 20}, 16), std::invalid_argument);
-  EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 6}, 16), std::invalid_argument);
-  EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 1}, 16), std::invalid_argument);
+  EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 8}, 16), std::invalid_argument);
+  EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 2}, 16), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 3}, 0), std::invalid_argument);
   EXPECT_THROW(prefilter_ggx(env, PrefilterLayout{64, 3}, 5000), std::invalid_argument);
 }

@@ -228,15 +228,19 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
     env, shading = package.scene.environment, package.live.gpu_shading
     if shading.prefiltered_texture(env.source(scene), True) is None:
         raise RuntimeError("the prefiltered environment was not made")
-    width, levels = shading.prefiltered_layout()
+    rows, width = package.native.get().prefilter_atlas_shape(*shading.prefiltered_layout())
     sigma = package.scene.lobes.exponent_from_roughness(0.3)
     lobes = {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True, "lobe_weights": True, "diffuse_share": 0.9}
     settings = scene.sd_lighting
+    taps = package.live.shader_variant.GLOSSY_TAPS
     print("\nThe prefiltered glossy light, %d vertices, Lambert + Phong (roughness 0.3), frame ms "
-          "(atlas %d x %d RGBA32F, %.1f MB, and two %d x %d BRDF tables):" % (
-              len(mesh[0]), width, 3 * width // 4, width * 3 * width // 4 * 16 / 1e6,
-              package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE))
-    print("%-28s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex", "prefiltered / pixel"))
+          "(atlas %d x %d RGBA32F, %.1f MB, and two %d x %d BRDF tables); last column: the lobe of a "
+          "metal of roughness 0.5, sampled by %d taps per pixel:" % (
+              len(mesh[0]), width, rows, width * rows * 16 / 1e6,
+              package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE, taps))
+    print("%-28s %20s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex", "prefiltered / pixel",
+                                         "sampled metal"))
+    metal = sdtest.principled_material("Metal", (0.9, 0.9, 0.9, 1.0), 0.5, 1.0)
     for method, s, sv in (("prt_gaunt", 8, 2), ("msd_visibility", 4, 2)):
         obj = baked_object(package, scene, *mesh, real_counts, method, lobes, s, sv)
         cells = []
@@ -245,6 +249,9 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
             cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel),
                                      frames if not per_pixel else 1))
         settings.prefiltered_glossy = True
+        obj.data.materials.append(metal)
+        package.live.drawing.clear_cache()
+        cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, False), frames))
         remove_object(package, obj)
         print("%-28s" % ("%s, s = %d" % (package.methods.get(method).label, s)) +
               "".join("%20s" % ("%.2f (%.2fx)" % (1e3 * t, t / cells[0])) for t in cells), flush=True)

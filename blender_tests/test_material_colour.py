@@ -22,6 +22,8 @@ also with the world turned and tilted (the prefilter, run in a worker thread, ke
 interactive draw waiting for nothing: the truncated lobe is drawn meanwhile); the gold shown with the seed's truncated Phong lobe instead
 is further off, the plastic shown as one Phong lobe of its colour (the add-on before the split)
 far off, and the rough plastic with its layer folded into Lambert (no prefiltered light) further off.
+The gold's lobe is sampled (live/shader_variant.SAMPLED_ROUGHNESS), the half metal's half of it:
+with one prefiltered lookup alone they were 6.1 and 2.3 % off, over these limits.
 --quick (the quick tier): of GLOSSY the plastic and the gold only (4 of 8 glossy Cycles references).
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_material_colour.py -- --zip Z --out DIR [--quick]
 """
@@ -45,8 +47,8 @@ SAMPLES = 256
 RED = (0.8, 0.15, 0.05, 1.0)
 GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, largest |bias| per channel
     ("plastic", RED, 0.3, 0.0, 0.03, 0.04),
-    ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.08, 0.05),
-    ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.045, 0.03),
+    ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.045, 0.03),
+    ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.02, 0.03),
     ("rough plastic", (0.3, 0.45, 0.8, 1.0), 0.6, 0.0, 0.03, 0.04)]
 
 

@@ -112,20 +112,89 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 }
 
 #ifdef SD_PREFILTERED
+/* Smith's Lambda of GGX (alpha^2 = a2) at a direction of cosine c to the normal. */
+float sd_smith_lambda(float c, float a2)
+{
+  c = clamp(c, 1e-4, 1.0);
+  return 0.5 * (sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)) - 1.0);
+}
+
+/* The mean light of the GGX lobe the view reflects (F = 1), from SD_GLOSSY_TAPS of its directions:
+ * filtered importance sampling (Krivanek and Colbert 2008) of the lobe's visible normals (Heitz
+ * 2018), each direction read from the prefiltered level whose lobe covers about its solid angle
+ * 1 / (N pdf), weighed by G2 / G1(v), the estimator's weight of that sampling. Where the split
+ * sum's lobe about one direction misses the real one (a rough metal: the lobe stretched along the
+ * plane of n and v, cut at the horizon, its tails towards the view heavier; msd-notes, "Glossy
+ * light"). The points are one Hammersley set for every pixel, so the estimate is smooth over the
+ * surface, without noise. */
+vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, float roughness)
+{
+  float alpha = max(roughness * roughness, 1e-4);
+  float a2 = alpha * alpha;
+  vec3 t1, t2;
+  sd_orthonormal_basis(normal, t1, t2);
+  vec3 v = vec3(dot(view, t1), dot(view, t2), clamp(dot(view, normal), 1e-4, 1.0));
+  /* the hemisphere of visible normals, stretched to alpha = 1 */
+  vec3 vh = normalize(vec3(alpha * v.xy, v.z));
+  float across = dot(vh.xy, vh.xy);
+  vec3 b1 = (across > 1e-12) ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(across) : vec3(1.0, 0.0, 0.0);
+  vec3 b2 = cross(vh, b1);
+  float lambda_v = sd_smith_lambda(v.z, a2);
+  vec3 sum = vec3(0.0);
+  float weights = 0.0;
+  for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
+    /* Hammersley point i: ((i + 1/2) / N, the radical inverse of i in base 2) */
+    float u2 = 0.0;
+    float digit = 0.5;
+    for (int bits = i; bits > 0; bits /= 2) {
+      u2 += digit * float(bits % 2);
+      digit *= 0.5;
+    }
+    float radius = sqrt((float(i) + 0.5) / float(SD_GLOSSY_TAPS));
+    float phi = 6.283185307179586 * u2;
+    float p1 = radius * cos(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * radius * sin(phi);
+    vec3 m = p1 * b1 + p2 * b2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    vec3 h = normalize(vec3(alpha * m.xy, max(m.z, 1e-6)));
+    vec3 l = 2.0 * dot(v, h) * h - v;
+    if (l.z > 0.0) {
+      float w = (1.0 + lambda_v) / (1.0 + lambda_v + sd_smith_lambda(l.z, a2));
+      float q = (a2 - 1.0) * h.z * h.z + 1.0;
+      float d = a2 / (3.141592653589793 * q * q);
+      float solid_angle = 4.0 * v.z * (1.0 + lambda_v) / (float(SD_GLOSSY_TAPS) * d);
+      /* the level of alpha^2 = solid angle / 4 pi: its lobe's solid angle about that */
+      float r = sqrt(sqrt(solid_angle / 12.566370614359172));
+      sum += w * sd_prefiltered_light(l.x * t1 + l.y * t2 + l.z * normal, r);
+      weights += w;
+    }
+  }
+  return (weights > 0.0) ? sum / weights : vec3(0.0);
+}
+
 /* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe,
  * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
  * view reflects (sdnative.glossy_bend_table, rows SD_BRDF_TABLE_SIZE.. of the table: the lobe leans
  * from the mirrored view towards the normal at grazing views, a dielectric's less, its Fresnel
- * weighing the grazing light more; mixed by metallic). The visibility ratio stays the
- * baked lobe's, around the mirrored view. */
+ * weighing the grazing light more; mixed by metallic). A metal's lobe rougher than
+ * SD_SAMPLED_ROUGHNESS (blended in over the 0.1 below it) is sampled instead (sd_sampled_glossy_light),
+ * where one lookup is too far off; a dielectric's layer keeps the one lookup, its share of the light
+ * too small to pay for the taps. The visibility ratio stays the baked lobe's, around the mirrored
+ * view. */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
 {
-  vec2 bends = sd_brdf_table(dot(normal, view), sd_lobe_weights.z, SD_BRDF_TABLE_SIZE).xy;
+  float roughness = sd_lobe_weights.z;
+  vec2 bends = sd_brdf_table(dot(normal, view), roughness, SD_BRDF_TABLE_SIZE).xy;
   float bend = mix(bends.y, bends.x, sd_lobe_weights.x);   /* the dielectric layer's, the metal's */
   axis = mix(normal, sd_mirrored_view(normal, view), bend);
   /* a back-facing shading normal (view = -normal) can cancel the mix */
   axis = dot(axis, axis) > 1e-12 ? normalize(axis) : normal;
-  return sd.prefiltered_scale.x * sd_prefiltered_light(axis, sd_lobe_weights.z);
+  vec3 open = sd_prefiltered_light(axis, roughness);
+  float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
+  if (sampled > 0.0) {
+    open = mix(open, sd_sampled_glossy_light(normal, view, roughness), sampled);
+  }
+  return sd.prefiltered_scale.x * open;
 }
 #endif
 

@@ -255,10 +255,10 @@ float sd_vertex_coefficient(int p, int first, int i)
 }
 #endif
 
-#ifdef SD_METHOD_MSD_LOBE
+#if defined(SD_METHOD_MSD_LOBE) || defined(SD_PREFILTERED)
 /* Two tangents completing a to an orthonormal basis: any rotation g_a taking e3 to a (Duff et
  * al. 2017; the CPU evaluator's orthonormal_basis has another twist, which does not matter for a
- * zonal lobe: Theorem 2.1). */
+ * zonal lobe: Theorem 2.1, nor for the sampled glossy lobe, whose frame v fixes). */
 void sd_orthonormal_basis(vec3 a, out vec3 t1, out vec3 t2)
 {
   float sign_z = (a.z >= 0.0) ? 1.0 : -1.0;

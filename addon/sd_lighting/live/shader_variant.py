@@ -26,6 +26,11 @@ PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment pr
 BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's tables over n.v, roughness
 BRDF_TABLE_SIZE = 32   # each table's side (sdnative.environment_brdf_table, glossy_bend_table)
 SHADOW_MAP_SAMPLER = (7, "sd_shadow_map")                   # the sources' shadow maps, side by side
+# A metal's glossy light from this roughness on (blended in over the 0.1 below) is sampled by
+# GLOSSY_TAPS directions of its lobe instead of one prefiltered lookup (sd_sampled_glossy_light;
+# msd-notes, "Glossy light", measures both).
+SAMPLED_ROUGHNESS = 0.3
+GLOSSY_TAPS = 64
 
 
 
@@ -221,6 +226,8 @@ class Variant:
             d["SD_PREFILTERED_MAP"] = PREFILTERED_SAMPLER[1]
             d["SD_PREFILTERED_WIDTH"] = str(self.prefiltered[0])
             d["SD_PREFILTERED_LEVELS"] = str(self.prefiltered[1])
+            d["SD_SAMPLED_ROUGHNESS"] = "%.3f" % SAMPLED_ROUGHNESS
+            d["SD_GLOSSY_TAPS"] = str(GLOSSY_TAPS)
             d["SD_OPEN_ORDER"] = str(self.open_order)
             d["SD_HORIZON_LOBE"] = str(self.shaded_lobes)
             d["SD_HORIZON_ORDER"] = str(self.horizon_order)

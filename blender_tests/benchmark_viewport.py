@@ -25,7 +25,9 @@ as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) 
 material can ask for - Lambert, Phong (sigma 61, a roughness of 0.3) and both, weighted per pixel as
 from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth times that
 Principled pair with the glossy lobe truncated per vertex against the prefiltered glossy light,
-per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4.
+per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4, and the same mesh as a metal
+of roughness 0.5, whose glossy light is sampled by GLOSSY_TAPS lookups per pixel
+(live/shader_variant.SAMPLED_ROUGHNESS).
 
 A last table (--model PATH) bakes a real model for real, twice, with MSD (13) and PRT (8) at s = 4,
 s' = 2, 256 rays, and times both in interleaved rounds, L~ of MSD (13) as an SH sum and from the

@@ -199,20 +199,71 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
 #endif
 
 #if defined(SD_SOURCES) && defined(SD_PREFILTERED)
-/* The sources' light on the Lambert lobe (sd_source_light), and the glossy light's visibility
- * ratio made to see their shadows too: the prefiltered light `open` holds the sources, while the
- * ratio is of the remainder's lobe alone; mixed by the sources' share of `open` (their part of the
- * prefilter's GGX kernel around `axis`, where `open` was read; sd_source_glossy), so that a
- * highlight of the sun goes dark in the sun's shadow and the sky's reflection beside it keeps the
- * baked ratio. `stored`: 1, or 0 where no data is (a lightmap pixel without a texel: no light at
- * all). Called where every pixel does (sd_source_light takes screen-space derivatives). */
-vec3 sd_sources_on_glossy(vec3 normal, vec3 axis, vec3 open, float stored, inout float visibility)
+#define SD_HIGHLIGHT_POINTS 16   /* over a highlight source's disc (sd_source_highlight) */
+
+/* Source i's highlight (one the atlas is without, source_irradiance.w = 1;
+ * light_sources.HIGHLIGHT_RADIUS) as the prefiltered light is (what sd_surface multiplies by the
+ * layer's albedo E, the strength in): its power L Omega = pi x its irradiance times the GGX lobe
+ * D G2 / (4 n.v) averaged over its disc (SD_HIGHLIGHT_POINTS directions spread evenly over it,
+ * those below the horizon dark), over the lobe's albedo - a metal's with F = 1 (its Fresnel hardly
+ * varies), a dielectric's as its Fresnel at the disc's centre weighs it, Schlick's
+ * F(v.h) / (F0 A + B) (a sun at a grazing reflection is stronger than the layer's mean albedo
+ * says). Averaged, not with alpha widened by the disc: a widened GGX's tails are the wide lobe's,
+ * several times a narrow lobe's around a sun's reflection. On its own, a sun is neither blurred by
+ * the atlas's level nor seen by the sampled lobe's taps as spots (msd-notes, "Bright sources"). */
+vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
 {
-  vec2 glossy;
-  vec3 lit = sd_source_light(normal, axis, sd_lobe_weights.z, glossy);
-  float share = clamp(glossy.x / max(dot(open, SD_LUMINANCE), 1e-8), 0.0, 1.0);
-  float visible = glossy.x > 0.0 ? glossy.y / glossy.x : 1.0;
-  visibility = mix(visibility, visible, stored * share);
+  vec3 centre = sd.source_direction[i].xyz;
+  float alpha = max(roughness * roughness, 1e-3);
+  float a2 = alpha * alpha;
+  float n_dot_v = clamp(dot(normal, view), 1e-4, 1.0);
+  float lambda_v = sd_smith_lambda(n_dot_v, a2);
+  float sin2_sigma = sd.source_direction[i].w;
+  float tan_sigma = sqrt(sin2_sigma / max(1.0 - sin2_sigma, 1e-6));
+  vec3 t1, t2;
+  sd_orthonormal_basis(centre, t1, t2);
+  float lobe = 0.0;
+  for (int k = 0; k < SD_HIGHLIGHT_POINTS; k++) {
+    vec2 disc = tan_sigma * sd_disc_point(k, SD_HIGHLIGHT_POINTS);
+    vec3 l = normalize(centre + disc.x * t1 + disc.y * t2);
+    float n_dot_l = dot(normal, l);
+    if (n_dot_l > 0.0) {
+      float n_dot_h = dot(normal, normalize(view + l));
+      float q = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+      lobe += a2 / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2));
+    }
+  }
+  vec2 ab = sd_environment_brdf(n_dot_v, roughness).xy;
+  float f0 = sd_lobe_weights.y;
+  float fresnel = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(view, normalize(view + centre)), 0.0, 1.0), 5.0);
+  float albedo = mix(fresnel / max(f0 * ab.x + ab.y, 1e-4), 1.0 / max(ab.x + ab.y, 1e-4), sd_lobe_weights.x);
+  return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v * float(SD_HIGHLIGHT_POINTS))) * sd.source_irradiance[i].rgb;
+}
+
+/* The sources' light at the pixel: on the Lambert lobe (sd_source_light), returned; on the glossy
+ * one, each small source's highlight added to `highlights`, shadowed (sd_source_highlight), and the
+ * visibility ratio of the prefiltered light `open` (read around `axis`) made to see the shadows of
+ * the sources it holds: the ratio is of the remainder's lobe alone, mixed by those sources' share
+ * of `open` (sd_source_in_atlas), so that a softbox's reflection goes dark in its shadow and the
+ * sky's beside it keeps the baked ratio. `stored`: 1, or 0 where no data is (a lightmap pixel
+ * without a texel: no light at all). Called where every pixel does (sd_source_light takes
+ * screen-space derivatives). */
+vec3 sd_sources_on_lobes(vec3 normal, vec3 view, vec3 axis, vec3 open, float stored, inout float visibility,
+                         inout vec3 highlights)
+{
+  float roughness = sd_lobe_weights.z;
+  float visible[SD_SOURCES];
+  vec3 lit = sd_source_light(normal, visible);
+  vec2 held = vec2(0.0);   /* the atlas's sources' part of `open`: unshadowed, shadowed */
+  for (int i = 0; i < SD_SOURCES; i++) {
+    if (sd.source_irradiance[i].w > 0.5) {
+      highlights += (stored * visible[i]) * sd_source_highlight(i, normal, view, roughness);
+    } else {
+      held += sd_source_in_atlas(i, axis, roughness) * vec2(1.0, visible[i]);
+    }
+  }
+  float share = clamp(held.x / max(dot(open, SD_LUMINANCE), 1e-8), 0.0, 1.0);
+  visibility = mix(visibility, held.x > 0.0 ? held.y / held.x : 1.0, stored * share);
   return stored * lit;
 }
 #endif
@@ -284,14 +335,15 @@ void main()
 #    endif
   vec3 axis;
   vec3 open = sd_open_glossy_light(normal, view, axis);
+  vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
-  diffuse += sd_sources_on_glossy(normal, axis, open, stored, visibility);
+  diffuse += sd_sources_on_lobes(normal, view, axis, open, stored, visibility, highlights);
 #    endif
-  rgb = (sd.params.x * visibility) * open;
+  rgb = sd.params.x * (visibility * open + highlights);
 #  else
 #    ifdef SD_SOURCES
-  vec2 glossy;
-  rgb += stored * sd_source_light(normal, normal, 1.0, glossy);
+  float visible[SD_SOURCES];
+  rgb += stored * sd_source_light(normal, visible);
 #    endif
   rgb *= sd.params.x;
 #  endif
@@ -306,10 +358,11 @@ void main()
   float visibility = sd_visibility;
   vec3 axis;
   vec3 open = sd_open_glossy_light(normal, view, axis);
+  vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
-  diffuse += sd.params.x * sd_sources_on_glossy(normal, axis, open, 1.0, visibility);
+  diffuse += sd.params.x * sd_sources_on_lobes(normal, view, axis, open, 1.0, visibility, highlights);
 #    endif
-  fragColor = vec4(sd_surface((sd.params.x * visibility) * open, diffuse, dot(normal, view)), 1.0);
+  fragColor = vec4(sd_surface(sd.params.x * (visibility * open + highlights), diffuse, dot(normal, view)), 1.0);
 #  else
   float n_dot_v = 1.0;
 #    ifdef SD_LOBE_WEIGHTS
@@ -318,8 +371,8 @@ void main()
   vec3 color = sd_color;
 #    ifdef SD_SOURCES
   vec3 normal = normalize(sd_normal);
-  vec2 glossy;
-  color += sd.params.x * sd_source_light(normal, normal, 1.0, glossy);
+  float visible[SD_SOURCES];
+  color += sd.params.x * sd_source_light(normal, visible);
 #    endif
   fragColor = vec4(sd_surface(color, diffuse, n_dot_v), 1.0);
 #  endif

@@ -1,5 +1,5 @@
 /* sd-lighting: the environment's bright sources (SD_SOURCES: how many), each lighting the Lambert
- * lobe on its own and shadowing its part of the prefiltered glossy light, per pixel
+ * lobe and the prefiltered glossy one on its own, shadowed per pixel
  * (scene/light_sources.py, live/source_shadows.py; docs/msd-notes.md, "Bright sources").
  *
  * Source i's shadow map is tile i of sd_shadow_map (SD_SHADOW_MAP_SIZE square, side by side along
@@ -126,13 +126,14 @@ float sd_source_cosine(float cos_theta, float sin2_sigma)
   return max(e, 0.0) / (3.14159265 * sin2_sigma);
 }
 
-/* The GGX lobe of the prefiltered atlas at source i: of the map's light P_r(axis) the prefilter
- * averages around the direction it is read at (glossy_prefilter.h, n = v = r: l drawn with density D(h) / 4,
- * weighted by n . l, over their sum), the part the source gives - its power times that kernel at its
- * direction, D with alpha^2 widened by the disc's half angle squared (the lobe over a disc, not a
- * point; h turns half as far as l), over the kernel's integral Z(alpha) (1 for a sharp lobe, 1/4 at
- * alpha = 1; 1 / (1 + 0.708 alpha + 2.292 alpha^2) within 2 %). Times E_i / 4 = strength x power. */
-float sd_source_glossy(int i, vec3 axis, float roughness)
+/* The GGX lobe of the prefiltered atlas at source i (one the atlas holds: its highlight is not
+ * shaded on its own): of the map's light P_r(axis) the prefilter averages around the direction it
+ * is read at (glossy_prefilter.h, n = v = r: l drawn with density D(h) / 4, weighted by n . l, over
+ * their sum), the part the source gives - its power times that kernel at its direction, D with
+ * alpha^2 widened by the disc's half angle squared (the lobe over a disc, not a point; h turns
+ * half as far as l), over the kernel's integral Z(alpha) (1 for a sharp lobe, 1/4 at alpha = 1;
+ * 1 / (1 + 0.708 alpha + 2.292 alpha^2) within 2 %). Times E_i / 4 = strength x power. */
+float sd_source_in_atlas(int i, vec3 axis, float roughness)
 {
   vec3 l = sd.source_direction[i].xyz;
   float n_dot_l = dot(axis, l);
@@ -149,10 +150,9 @@ float sd_source_glossy(int i, vec3 axis, float roughness)
 
 /* The sources' light on the Lambert lobe at the pixel (position sd_origin_offset from the
  * object's origin, bake-space normal `normal`, unit): the sum of each source's irradiance times
- * its cosine (sd_source_cosine) and its visibility. glossy: (unshadowed, shadowed) luminance of
- * the sources' part of the prefiltered light of roughness `roughness` around `axis` (where it is
- * read; sd_source_glossy), a source below the surface's horizon shadowed. */
-vec3 sd_source_light(vec3 normal, vec3 axis, float roughness, out vec2 glossy)
+ * its cosine (sd_source_cosine) and its visibility; `visible`: each source's visibility, 0 below the
+ * surface's horizon (the glossy lobe's too). */
+vec3 sd_source_light(vec3 normal, out float visible[SD_SOURCES])
 {
   vec3 world = sd_origin_offset;   /* world, relative to the object's origin */
   /* the triangle's own plane (the shading normal of a smooth mesh tilts away from it), on the
@@ -162,13 +162,10 @@ vec3 sd_source_light(vec3 normal, vec3 axis, float roughness, out vec2 glossy)
   vec3 world_normal = dot(face, face) > 0.0 ? normalize(face) : normalize(shading_normal);
   world_normal *= (dot(world_normal, shading_normal) < 0.0) ? -1.0 : 1.0;
   vec3 lit = vec3(0.0);
-  glossy = vec2(0.0);
   for (int i = 0; i < SD_SOURCES; i++) {
     float c = sd_source_cosine(dot(normal, sd.source_direction[i].xyz), sd.source_direction[i].w);
-    float g = sd_source_glossy(i, axis, roughness);
-    float v = (c > 0.0) ? sd_source_visibility(i, world, world_normal) : 0.0;
-    lit += (c * v) * sd.source_irradiance[i].rgb;
-    glossy += g * vec2(1.0, v);
+    visible[i] = (c > 0.0) ? sd_source_visibility(i, world, world_normal) : 0.0;
+    lit += (c * visible[i]) * sd.source_irradiance[i].rgb;
   }
   return lit;
 }

@@ -134,7 +134,7 @@ def test_shading_rows_turn_each_source_into_the_objects_bake_space():
     directions, irradiance = light_sources.shading_rows([source, source], gr, 2.0)
     assert directions[:, :3] == pytest.approx(np.tile(gr.T @ [0.0, 0.0, 1.0], (2, 1)))
     assert directions[:, 3] == pytest.approx(math.sin(0.01) ** 2)   # sin^2 of the disc's radius
-    assert irradiance[0] == pytest.approx([0.8, 1.6, 2.4, 0.0])   # 4 x strength x power
+    assert irradiance[0] == pytest.approx([0.8, 1.6, 2.4, 1.0])   # 4 x strength x power; a highlight
 
 
 def test_rows_from_an_origin_place_points_given_relative_to_it_as_the_world_rows_place_them():
@@ -147,3 +147,31 @@ def test_rows_from_an_origin_place_points_given_relative_to_it_as_the_world_rows
         assert relative[k] @ np.append(p, 1.0) == pytest.approx(rows[k] @ np.append(origin + p, 1.0), abs=1e-9)
     assert np.array_equal(relative[[3, 4, 8, 9]], rows[[3, 4, 8, 9]])   # the extent and sizes stay
     assert np.abs(relative[:3, 3]).max() < 10.0   # small constants: float32 keeps the pixel's place
+
+
+def test_a_sun_is_a_highlight_and_a_softbox_stays_in_the_atlas(sdnative):
+    """Source.highlight: a sun (1.2 degrees wide) is shaded on its own, a softbox (16 degrees) is not;
+    without_highlights takes the sun's texels from the remainder and keeps the softbox's, and
+    nothing else changes."""
+    rgb = sun_map(30.0, 0.6, 5000.0, height=256, width=512)
+    theta = (np.arange(256) + 0.5) * np.pi / 256
+    phi = np.pi * (512 - 2 * np.arange(512) - 1) / 512
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    d = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    box = np.array([-math.cos(math.radians(20.0)), 0.0, math.sin(math.radians(20.0))])
+    rgb[d @ box > math.cos(math.radians(8.0))] = 40.0
+    env = sdnative.environment_from_pixels(rgb)
+    split = env.light_sources(light_sources.SPLIT_ORDER)
+    sources = sorted((light_sources.Source.from_split(s) for s in split["sources"]), key=lambda s: s.major_radius)
+    assert len(sources) == 2
+    sun, softbox = sources
+    assert sun.highlight and not softbox.highlight
+    assert sun.direction @ box < 0.0 < softbox.direction @ box
+    whole, remainder = np.asarray(env.pixels()), np.asarray(split["remainder"].pixels())
+    shown = light_sources.without_highlights(whole, remainder, sources)
+    near_sun = d @ np.asarray(sun.direction) > math.cos(math.radians(3.0))
+    assert np.array_equal(shown[near_sun], remainder[near_sun])
+    assert shown[near_sun].max() < 0.01 * whole[near_sun].max()   # the sun is gone from the atlas
+    assert np.array_equal(shown[~near_sun], whole[~near_sun])      # the softbox and the sky stay
+    directions, irradiance = light_sources.shading_rows(sources, np.eye(3), 1.0)
+    assert list(irradiance[:, 3]) == [1.0, 0.0]

@@ -156,10 +156,12 @@ def ringing_choice(scene, obj, wait=False):
         return None
     source = environment.source(scene)
     try:   # the remainder's window where the sources light the lobes on their own, once found
+        split = _shading_split(scene, source, wait=False)
+        atlas_of_remainder = split is not None and gpu_shading.takes_sources(record, False, True)
         prefiltered = record.lobe != "lambert" and record.lobes.weighted and use_prefiltered_glossy(scene) and \
-            environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False) is not None
-        remainder = gpu_shading.takes_sources(record, False, prefiltered) and \
-            _shading_split(scene, source, wait=False) is not None
+            environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False,
+                                          remainder=atlas_of_remainder) is not None
+        remainder = split is not None and gpu_shading.takes_sources(record, False, prefiltered)
     except background.Failed:
         remainder = False
     return environment.ringing_window(source, record.lobe, record.exponent, record.light_order,
@@ -209,7 +211,9 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     shader has the pixel's position relative to it)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
-    prefiltered = gpu_shading.prefiltered_texture(source, wait) if data.prefiltered else None
+    # the remainder's atlas where the sources would light the glossy lobe on their own
+    atlas_of_remainder = sources is not None and data.takes_sources(True)
+    prefiltered = gpu_shading.prefiltered_texture(source, wait, atlas_of_remainder) if data.prefiltered else None
     sources = sources if data.takes_sources(prefiltered is not None) else None
     remainder = sources is not None
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix, remainder)

@@ -59,7 +59,7 @@ _gaunt_textures = {}          # (s, s') -> (GPUTexture, count)
 _lobe_designs = None          # LobeDesigns, made on first use
 _band_limited_textures = {}   # (source key, coefficients bytes, width, height) -> (GPUTexture, scale)
 _BASIS_BLOCK = 16384          # directions per SH basis evaluated at once for that texture
-_prefiltered_textures = {}    # source key -> GPUTexture
+_prefiltered_textures = {}    # (source key, remainder) -> GPUTexture
 _brdf_table = []              # the GPUTexture of environment_brdf_table and glossy_bend_table, once made
 _background = {}              # "shader": (GPUShader, interface, info, batch); source key -> GPUTexture
 
@@ -199,9 +199,9 @@ def takes_sources(record, vertex_target, prefiltered):
     """Whether the map's bright sources light the data of a bake (its store/record.BakeRecord) on
     their own, the rest of the map in its SH light: drawn, unless the automatic mode found they do
     not pay (record.sources False), with a Lambert lobe 0, or with a glossy one whose light is looked
-    up in the prefiltered atlas (prefiltered: it is, for these data); the sources' shadows then
-    darken their part of that light. A glossy lobe lit through SH alone keeps the whole map (its
-    highlight of a source would need the lobe's SH to hold it)."""
+    up in the prefiltered atlas (prefiltered: it is, for these data; the atlas is then the
+    remainder's, and the shader adds each source's highlight, shadowed). A glossy lobe lit through
+    SH alone keeps the whole map (its highlight of a source would need the lobe's SH to hold it)."""
     lobes = record.lobes
     return not vertex_target and record.sources is not False and \
         (lobes.lobe == "lambert" or (lobes.weighted and prefiltered))
@@ -212,20 +212,22 @@ def prefiltered_layout():
     return native.get().PREFILTER_WIDTH, native.get().PREFILTER_LEVELS
 
 
-def prefiltered_texture(source, wait):
+def prefiltered_texture(source, wait, remainder=False):
     """The environment of `source` prefiltered by the GGX lobe per roughness level, without its
     strength (scene/environment.prefiltered_atlas; the block's `prefiltered_scale` applies it), as
-    the RGBA32F atlas texture the shader's sd_prefiltered_light reads (cached per source); wait=False:
+    the RGBA32F atlas texture the shader's sd_prefiltered_light reads (cached per source);
+    remainder: of the map without the bright sources that light the data on their own; wait=False:
     None while it is computed."""
-    texture = _prefiltered_textures.get(source.key)
+    key = (source.key, remainder)
+    texture = _prefiltered_textures.get(key)
     if texture is None:
-        atlas = environment.prefiltered_atlas(source, *prefiltered_layout(), wait)
+        atlas = environment.prefiltered_atlas(source, *prefiltered_layout(), wait, remainder=remainder)
         if atlas is None:
             return None
         height, width, _ = atlas.shape
         texels = np.ones((height, width, 4), dtype=np.float32)
         texels[..., :3] = atlas
-        texture = _prefiltered_textures[source.key] = _texture(width, height, texels)
+        texture = _prefiltered_textures[key] = _texture(width, height, texels)
     return texture
 
 

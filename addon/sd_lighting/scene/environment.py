@@ -298,22 +298,30 @@ def prefilter_status():
             + ["Prefiltering the environment failed: %s" % why for why in work.failures().values()])
 
 
-def prefiltered_atlas(src, width0, levels, wait):
+def prefiltered_atlas(src, width0, levels, wait, remainder=False):
     """The environment prefiltered by the GGX lobe per roughness level, without the strength (the
     shader applies it: a changed strength needs no new prefilter), in the atlas layout of
     sdnative's Environment.prefiltered_ggx (rows bottom-first); a uniform colour is that colour at
-    every roughness. float32 [rows, width0, 3] (sdnative.prefilter_atlas_shape). Computed in a
-    worker thread (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None until it is
-    there or when it failed; wait=True waits (raises background.Failed)."""
+    every roughness. float32 [rows, width0, 3] (sdnative.prefilter_atlas_shape). remainder: of the
+    map without the bright sources whose highlights the shader adds on their own
+    (light_sources.without_highlights; source_split must be there). Computed in a worker thread
+    (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None
+    until it is there or when it failed; wait=True waits (raises background.Failed)."""
+    sd = native.get()
     if src.kind == "uniform":
-        shape = native.get().prefilter_atlas_shape(width0, levels)
+        shape = sd.prefilter_atlas_shape(width0, levels)
         return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (*shape, 3)).copy()
     env = environment(src)   # read here: the pixels come from bpy
+    split = source_split(src, wait=True) if remainder else None
+    if split is not None and not any(source.highlight for source in split["sources"]):
+        split, remainder = None, False   # the atlas holds them all: the whole map's
 
     def compute():
-        return np.asarray(env.prefiltered_ggx(width0, levels), dtype=np.float32)
+        shown = env if split is None else sd.environment_from_pixels(light_sources.without_highlights(
+            env.pixels(), split["remainder"].pixels(), split["sources"]))
+        return np.asarray(shown.prefiltered_ggx(width0, levels), dtype=np.float32)
 
-    key = (src.key, width0, levels)
+    key = (src.key, remainder, width0, levels)
     work = prefiltered_atlases()
     return work.result(key, compute) if wait else work.get(key, compute)
 

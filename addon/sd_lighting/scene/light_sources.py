@@ -3,8 +3,9 @@ Environment.light_sources splits off the map (native light_sources.h says how th
 the panel names them and as the live shading lights them.
 
 With Sharp Source Shadows on, a surface is lit by the remainder of the map through SH and by each
-source on its own (diffuse light, and its share of the prefiltered glossy light), shadowed per
-pixel through a shadow map rendered from the source's direction (live/source_shadows.py). The
+source on its own (diffuse light, and glossy light: a small one's highlight on its own, a wider
+one's share of the prefiltered light), shadowed per pixel through a shadow map rendered from the
+source's direction (live/source_shadows.py). The
 maps are orthographic over the bounding sphere of what casts shadows; this module computes their
 frames and the shader's rows of each source.
 
@@ -16,11 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import transforms
 from .lobes import LUMINANCE
 
 SPLIT_ORDER = 8          # the SH order the sources are split off for (the panel's default order)
 SHADOW_MAP_SIZE = 2048   # texels along each side of a source's shadow map
 SOURCE_ROWS = 5          # vec4 rows per source in the shader's block (shadow_rows)
+# The widest source (its ellipse's major semi-axis) whose glossy highlight is shaded on its own, as a
+# uniform disc of GGX (a sun, a lamp): wider ones (softboxes, windows) stay in the prefiltered
+# atlas, where a sharp lobe sees their own shape (msd-notes, "Bright sources").
+HIGHLIGHT_RADIUS = math.radians(1.0)
 
 
 def found(split, mass):
@@ -57,12 +63,18 @@ class Source:
     major_radius: float   # radians: the semi-axes of the uniform ellipse of its second moments
     minor_radius: float
     power: tuple          # RGB: integral of its radiance over the sphere's measure (the sphere: 1)
+    extent: float = 0.0   # radians from its direction to its farthest texel's centre
 
     @classmethod
     def from_split(cls, source):
         """From one of Environment.light_sources' "sources" dicts."""
         return cls(tuple(source["direction"]), tuple(source["major_axis"]), float(source["major_radius"]),
-                   float(source["minor_radius"]), tuple(source["power"]))
+                   float(source["minor_radius"]), tuple(source["power"]), float(source["extent"]))
+
+    @property
+    def highlight(self):
+        """Whether the glossy lobe takes it on its own (HIGHLIGHT_RADIUS), not from the atlas."""
+        return self.major_radius <= HIGHLIGHT_RADIUS
 
     def irradiance(self, strength):
         """RGB: the Lambert lobe's B (w(t) = 4 max(0, t) over the sphere's measure) that the
@@ -134,12 +146,29 @@ def shading_rows(sources, local_to_environment, strength):
     """The shader's per-source rows for one object: the direction towards each source in the
     object's bake space, (g R)^T times its direction, with sin^2 of the radius of the disc of its
     ellipse's area (sqrt(major minor): what the horizon clips, shaders/sd_source_shadows.glsl's
-    sd_source_cosine); and its irradiance (Source.irradiance). float64 [N, 4] each."""
+    sd_source_cosine); and its irradiance (Source.irradiance), with 1 where its highlight is shaded
+    on its own (Source.highlight), else 0. float64 [N, 4] each."""
     gr = np.asarray(local_to_environment, dtype=np.float64)
     directions = np.zeros((len(sources), 4))
     irradiance = np.zeros((len(sources), 4))
     for i, source in enumerate(sources):
         directions[i, :3] = gr.T @ np.asarray(source.direction, dtype=np.float64)
         directions[i, 3] = math.sin(math.sqrt(source.major_radius * source.minor_radius)) ** 2
-        irradiance[i, :3] = source.irradiance(strength)
+        irradiance[i] = (*source.irradiance(strength), float(source.highlight))
     return directions, irradiance
+
+
+def without_highlights(whole, remainder, sources):
+    """The map for the prefiltered atlas where the glossy lobe takes the highlight sources on their
+    own (Source.highlight): the remainder's texels within each one's extent (and a texel more),
+    the whole map's elsewhere - so a wider source stays in the atlas. whole, remainder: the maps'
+    RGB, [H, W, 3], rows top-first (sdnative's environment_from_pixels); float32 [H, W, 3]."""
+    whole = np.asarray(whole, dtype=np.float32)
+    height, width, _ = whole.shape
+    directions = transforms.equirect_directions(width, height)[::-1]
+    texel = math.pi / height
+    taken = np.zeros((height, width), dtype=bool)
+    for source in sources:
+        if source.highlight:
+            taken |= directions @ np.asarray(source.direction) >= math.cos(min(source.extent + texel, math.pi))
+    return np.where(taken[..., None], np.asarray(remainder, dtype=np.float32), whole)

@@ -205,12 +205,14 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
  * light_sources.HIGHLIGHT_RADIUS) as the prefiltered light is (what sd_surface multiplies by the
  * layer's albedo E, the strength in): its power L Omega = pi x its irradiance times the GGX lobe
  * D G2 / (4 n.v) averaged over its disc (SD_HIGHLIGHT_POINTS directions spread evenly over it,
- * those below the horizon dark), over the lobe's albedo - a metal's with F = 1 (its Fresnel hardly
- * varies), a dielectric's as its Fresnel at the disc's centre weighs it, Schlick's
- * F(v.h) / (F0 A + B) (a sun at a grazing reflection is stronger than the layer's mean albedo
- * says). Averaged, not with alpha widened by the disc: a widened GGX's tails are the wide lobe's,
- * several times a narrow lobe's around a sun's reflection. On its own, a sun is neither blurred by
- * the atlas's level nor seen by the sampled lobe's taps as spots (msd-notes, "Bright sources"). */
+ * those below the horizon dark; each D's alpha^2 widened by a quarter of its point's share of the
+ * disc, so that a mirror-like lobe sees a disc, not the points), over the lobe's albedo - a metal's
+ * with F = 1 (its Fresnel hardly varies), a dielectric's as its Fresnel at the disc's centre
+ * weighs it, Schlick's F(v.h) over the layer's (sd_surface's dielectric shape; a sun at a grazing
+ * reflection is stronger than the layer's mean albedo says). Averaged, not with alpha widened by
+ * the whole disc: a widened GGX's tails are the wide lobe's, several times a narrow lobe's around
+ * a sun's reflection. On its own, a sun is neither blurred by the atlas's level nor seen by the
+ * sampled lobe's taps as spots (msd-notes, "Bright sources"). */
 vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
 {
   vec3 centre = sd.source_direction[i].xyz;
@@ -220,6 +222,7 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
   float lambda_v = sd_smith_lambda(n_dot_v, a2);
   float sin2_sigma = sd.source_direction[i].w;
   float tan_sigma = sqrt(sin2_sigma / max(1.0 - sin2_sigma, 1e-6));
+  float widened = a2 + 0.25 * tan_sigma * tan_sigma / float(SD_HIGHLIGHT_POINTS);
   vec3 t1, t2;
   sd_orthonormal_basis(centre, t1, t2);
   float lobe = 0.0;
@@ -229,14 +232,15 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
     float n_dot_l = dot(normal, l);
     if (n_dot_l > 0.0) {
       float n_dot_h = dot(normal, normalize(view + l));
-      float q = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
-      lobe += a2 / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2));
+      float q = n_dot_h * n_dot_h * (widened - 1.0) + 1.0;
+      lobe += widened / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2));
     }
   }
-  vec2 ab = sd_environment_brdf(n_dot_v, roughness).xy;
+  vec4 brdf = sd_environment_brdf(n_dot_v, roughness);
   float f0 = sd_lobe_weights.y;
   float fresnel = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(view, normalize(view + centre)), 0.0, 1.0), 5.0);
-  float albedo = mix(fresnel / max(f0 * ab.x + ab.y, 1e-4), 1.0 / max(ab.x + ab.y, 1e-4), sd_lobe_weights.x);
+  float layer = f0 * (brdf.x + brdf.y - brdf.w) + brdf.w;
+  float albedo = mix(fresnel / max(layer, 1e-4), 1.0 / max(brdf.x + brdf.y, 1e-4), sd_lobe_weights.x);
   return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v * float(SD_HIGHLIGHT_POINTS))) * sd.source_irradiance[i].rgb;
 }
 

@@ -152,24 +152,29 @@ def test_rows_from_an_origin_place_points_given_relative_to_it_as_the_world_rows
 def test_a_sun_is_a_highlight_and_a_softbox_stays_in_the_atlas(sdnative):
     """Source.highlight: a sun (1.2 degrees wide) is shaded on its own, a softbox (16 degrees) is not;
     without_highlights takes the sun's texels from the remainder and keeps the softbox's, and
-    nothing else changes."""
-    rgb = sun_map(30.0, 0.6, 5000.0, height=256, width=512)
-    theta = (np.arange(256) + 0.5) * np.pi / 256
-    phi = np.pi * (512 - 2 * np.arange(512) - 1) / 512
+    nothing else changes. The sun lies off the x-z plane, so a mirrored azimuth would miss it."""
+    height, width = 256, 512
+    theta = (np.arange(height) + 0.5) * np.pi / height
+    phi = np.pi * (width - 2 * np.arange(width) - 1) / width
     t, p = np.meshgrid(theta, phi, indexing="ij")
     d = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    elevation, azimuth = math.radians(30.0), math.radians(50.0)
+    sun = np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
+                    math.sin(elevation)])
     box = np.array([-math.cos(math.radians(20.0)), 0.0, math.sin(math.radians(20.0))])
+    rgb = np.full((height, width, 3), 0.5, np.float32)
+    rgb[d @ sun > math.cos(math.radians(0.6))] = 5000.0
     rgb[d @ box > math.cos(math.radians(8.0))] = 40.0
     env = sdnative.environment_from_pixels(rgb)
     split = env.light_sources(light_sources.SPLIT_ORDER)
     sources = sorted((light_sources.Source.from_split(s) for s in split["sources"]), key=lambda s: s.major_radius)
     assert len(sources) == 2
-    sun, softbox = sources
-    assert sun.highlight and not softbox.highlight
-    assert sun.direction @ box < 0.0 < softbox.direction @ box
+    found_sun, softbox = sources
+    assert found_sun.highlight and not softbox.highlight
+    assert np.asarray(found_sun.direction) @ sun > math.cos(math.radians(1.0))
     whole, remainder = np.asarray(env.pixels()), np.asarray(split["remainder"].pixels())
     shown = light_sources.without_highlights(whole, remainder, sources)
-    near_sun = d @ np.asarray(sun.direction) > math.cos(math.radians(3.0))
+    near_sun = d @ sun > math.cos(math.radians(3.0))
     assert np.array_equal(shown[near_sun], remainder[near_sun])
     assert shown[near_sun].max() < 0.01 * whole[near_sun].max()   # the sun is gone from the atlas
     assert np.array_equal(shown[~near_sun], whole[~near_sun])      # the softbox and the sky stay

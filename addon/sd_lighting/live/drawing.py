@@ -157,10 +157,10 @@ def ringing_choice(scene, obj, wait=False):
     source = environment.source(scene)
     try:   # the remainder's window where the sources light the lobes on their own, once found
         split = _shading_split(scene, source, wait=False)
-        atlas_of_remainder = split is not None and gpu_shading.takes_sources(record, False, True)
-        prefiltered = record.lobe != "lambert" and record.lobes.weighted and use_prefiltered_glossy(scene) and \
+        prefiltered = split is not None and record.lobe != "lambert" and record.lobes.weighted and \
+            use_prefiltered_glossy(scene) and gpu_shading.takes_sources(record, False, True) and \
             environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False,
-                                          remainder=atlas_of_remainder) is not None
+                                          remainder=True) is not None
         remainder = split is not None and gpu_shading.takes_sources(record, False, prefiltered)
     except background.Failed:
         remainder = False
@@ -211,9 +211,13 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     shader has the pixel's position relative to it)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
     source = source or environment.source(scene)
-    # the remainder's atlas where the sources would light the glossy lobe on their own
-    atlas_of_remainder = sources is not None and data.takes_sources(True)
-    prefiltered = gpu_shading.prefiltered_texture(source, wait, atlas_of_remainder) if data.prefiltered else None
+    prefiltered = None
+    if data.prefiltered:
+        # the remainder's atlas where the sources light the glossy lobe on their own; while it is
+        # made, the whole map's without them
+        prefiltered = gpu_shading.prefiltered_texture(source, wait, sources is not None and data.takes_sources(True))
+        if prefiltered is None and sources is not None:
+            prefiltered, sources = gpu_shading.prefiltered_texture(source, wait), None
     sources = sources if data.takes_sources(prefiltered is not None) else None
     remainder = sources is not None
     light, gr = local_light(scene, obj, data, wait, source, rotation, matrix, remainder)

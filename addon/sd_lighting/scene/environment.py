@@ -312,9 +312,10 @@ def prefiltered_atlas(src, width0, levels, wait, remainder=False):
         shape = sd.prefilter_atlas_shape(width0, levels)
         return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (*shape, 3)).copy()
     env = environment(src)   # read here: the pixels come from bpy
-    split = source_split(src, wait=True) if remainder else None
-    if split is not None and not any(source.highlight for source in split["sources"]):
-        split, remainder = None, False   # the atlas holds them all: the whole map's
+    remainder = remainder and without_highlights(src, wait)
+    if remainder is None:
+        return None
+    split = source_split(src, wait) if remainder else None
 
     def compute():
         shown = env if split is None else sd.environment_from_pixels(light_sources.without_highlights(
@@ -356,6 +357,14 @@ def source_split(src, wait):
     if failed is not None:
         raise background.Failed("finding the map's bright sources failed: %s" % failed)
     return split
+
+
+def without_highlights(src, wait):
+    """Whether the prefiltered atlas of the map's remainder (prefiltered_atlas) differs from the
+    whole map's: some source is a highlight the shader adds on its own (light_sources.Source.highlight).
+    None while the split is found (wait=False)."""
+    split = source_split(src, wait)
+    return None if split is None else any(source.highlight for source in split["sources"])
 
 
 def bright_sources(src, wait):

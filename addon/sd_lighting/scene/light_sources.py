@@ -17,7 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import transforms
 from .lobes import LUMINANCE
 
 SPLIT_ORDER = 8          # the SH order the sources are split off for (the panel's default order)
@@ -161,14 +160,32 @@ def shading_rows(sources, local_to_environment, strength):
 def without_highlights(whole, remainder, sources):
     """The map for the prefiltered atlas where the glossy lobe takes the highlight sources on their
     own (Source.highlight): the remainder's texels within each one's extent (and a texel more),
-    the whole map's elsewhere - so a wider source stays in the atlas. whole, remainder: the maps'
-    RGB, [H, W, 3], rows top-first (sdnative's environment_from_pixels); float32 [H, W, 3]."""
-    whole = np.asarray(whole, dtype=np.float32)
-    height, width, _ = whole.shape
-    directions = transforms.equirect_directions(width, height)[::-1]
+    the whole map's elsewhere and within a wider source's extent - so a wider source stays in the
+    atlas whole. whole, remainder: the maps' RGB, [H, W, 3], rows top-first (sdnative's
+    environment_from_pixels); float32 [H, W, 3]. Only the rows a cap crosses are looked at."""
+    out = np.array(whole, dtype=np.float32)
+    height, width, _ = out.shape
     texel = math.pi / height
-    taken = np.zeros((height, width), dtype=bool)
+    phi = ((0.5 - (np.arange(width) + 0.5) / width) * 2.0 * np.pi).astype(np.float32)
+
+    def cap(source, rows):
+        """Which texels of `rows` (top-first) lie within the source's extent and a texel more."""
+        theta = ((rows + 0.5) * texel).astype(np.float32)[:, None]
+        d = np.asarray(source.direction, dtype=np.float32)
+        cosine = np.sin(theta) * (np.cos(phi) * d[0] + np.sin(phi) * d[1]) + np.cos(theta) * d[2]
+        return cosine >= math.cos(min(source.extent + texel, math.pi))
+
     for source in sources:
-        if source.highlight:
-            taken |= directions @ np.asarray(source.direction) >= math.cos(min(source.extent + texel, math.pi))
-    return np.where(taken[..., None], np.asarray(remainder, dtype=np.float32), whole)
+        if not source.highlight:
+            continue
+        polar = math.acos(max(-1.0, min(1.0, source.direction[2])))
+        reach = source.extent + 2.0 * texel
+        rows = np.arange(max(0, int((polar - reach) / texel)), min(height, int((polar + reach) / texel) + 1))
+        taken = cap(source, rows)
+        for other in sources:
+            if not other.highlight:
+                taken &= ~cap(other, rows)
+        band = out[rows]
+        band[taken] = np.asarray(remainder[rows[0]:rows[-1] + 1], dtype=np.float32)[taken]
+        out[rows] = band
+    return out

@@ -198,8 +198,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Light surfaces by the environment's bright compact sources (a sun, lamps, "
                     "windows: the Environment panel names them) on their own, each shadowed per "
                     "pixel through a shadow map from its direction with a penumbra as wide as the "
-                    "source - their diffuse light, and their share of the prefiltered glossy light "
-                    "-, and by the rest of the map through SH; off: the whole map through SH, which "
+                    "source - their diffuse light, and their glossy light (a sun's highlight on its own, "
+                    "a softbox's share of the prefiltered light) -, and by the rest of the map through SH; off: the whole map through SH, which "
                     "blurs their shadows. The automatic mode takes them per object where they lower "
                     "its error and then chooses the SH for the rest alone: bake again after turning "
                     "this off")

@@ -9,8 +9,9 @@ at s = 8, s' = 4 (256 rays, no refinement) and previewed per vertex; Cycles rend
 light, pixel filter off, from two seeds (its noise printed).
 
 --models: also Debian's assimp test models (MODELS: a smooth and a faceted Wuson, the low-poly
-spider) in gold, red plastic and polished steel under three HDRIs, and the smooth Wuson in
-Blender's default material under three, baked at the panel's defaults
+spider) in gold, red plastic and polished steel under three HDRIs and again under the suns of
+sunrise.exr and city.exr, and the smooth Wuson in Blender's default material under three, baked
+at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
 Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
@@ -49,7 +50,12 @@ MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness
     ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "studio.exr"),
     ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "forest.exr"),
     ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "studio.exr"),
-    ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "courtyard.exr")]
+    ("OBJ/WusonOBJ.obj", "default material", (0.8, 0.8, 0.8, 1.0), 0.5, 0.0, "courtyard.exr"),
+    # under a sun, whose highlight is shaded on its own
+    ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.3, 1.0, "sunrise.exr"),
+    ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.05, 1.0, "city.exr"),
+    ("PLY/Wuson.ply", "red plastic", RED, 0.2, 0.0, "city.exr"),
+    ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "city.exr")]
 ASSIMP = "/usr/share/assimp/models/"
 
 

@@ -242,7 +242,7 @@ def main():
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))
     sdtest.camera(scene, location=(0.0, -4.2, 0.6), target=(0.0, 0.0, 0.0), lens=55.0)
-    gold = sdtest.ico_sphere(scene, "Gold", subdivisions=4, location=(0.0, 0.0, 0.0))
+    gold = sdtest.ico_sphere(scene, "Gold", subdivisions=3, location=(0.0, 0.0, 0.0))
     gold.data.materials.append(sdtest.principled_material("Gold", (1.0, 0.7, 0.3, 1.0), 0.3, 1.0))
     sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=[gold])
     result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake, go_ahead=True)

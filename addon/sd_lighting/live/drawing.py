@@ -156,11 +156,10 @@ def ringing_choice(scene, obj, wait=False):
         return None
     source = environment.source(scene)
     try:   # the remainder's window where the sources light the lobes on their own, once found
-        split = _shading_split(scene, source, wait=False)
-        prefiltered = split is not None and record.lobe != "lambert" and record.lobes.weighted and \
-            use_prefiltered_glossy(scene) and gpu_shading.takes_sources(record, False, True) and \
-            environment.prefiltered_atlas(source, *gpu_shading.prefiltered_layout(), wait=False,
-                                          remainder=True) is not None
+        glossy = record.lobe != "lambert" and record.lobes.weighted and use_prefiltered_glossy(scene)
+        split = _shading_split(scene, source, wait=False) if gpu_shading.takes_sources(record, False, glossy) else None
+        prefiltered = split is not None and glossy and environment.prefiltered_atlas(
+            source, *gpu_shading.prefiltered_layout(), wait=False, remainder=True) is not None
         remainder = split is not None and gpu_shading.takes_sources(record, False, prefiltered)
     except background.Failed:
         remainder = False

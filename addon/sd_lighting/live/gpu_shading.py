@@ -218,7 +218,7 @@ def prefiltered_texture(source, wait, remainder=False):
     the RGBA32F atlas texture the shader's sd_prefiltered_light reads (cached per source);
     remainder: of the map without the bright sources that light the data on their own; wait=False:
     None while it is computed."""
-    remainder = bool(remainder and environment.without_highlights(source, wait))   # else the same atlas
+    remainder = bool(remainder and environment.has_highlights(source, wait))   # else the same atlas
     key = (source.key, remainder)
     texture = _prefiltered_textures.get(key)
     if texture is None:

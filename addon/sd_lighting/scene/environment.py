@@ -312,7 +312,7 @@ def prefiltered_atlas(src, width0, levels, wait, remainder=False):
         shape = sd.prefilter_atlas_shape(width0, levels)
         return np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (*shape, 3)).copy()
     env = environment(src)   # read here: the pixels come from bpy
-    remainder = remainder and without_highlights(src, wait)
+    remainder = remainder and has_highlights(src, wait)
     if remainder is None:
         return None
     split = source_split(src, wait) if remainder else None
@@ -359,7 +359,7 @@ def source_split(src, wait):
     return split
 
 
-def without_highlights(src, wait):
+def has_highlights(src, wait):
     """Whether the prefiltered atlas of the map's remainder (prefiltered_atlas) differs from the
     whole map's: some source is a highlight the shader adds on its own (light_sources.Source.highlight).
     None while the split is found (wait=False)."""

@@ -230,15 +230,18 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
     vec2 disc = tan_sigma * sd_disc_point(k, SD_HIGHLIGHT_POINTS);
     vec3 l = normalize(centre + disc.x * t1 + disc.y * t2);
     float n_dot_l = dot(normal, l);
-    if (n_dot_l > 0.0) {
-      float n_dot_h = dot(normal, normalize(view + l));
+    vec3 h = view + l;   /* zero only where a back-facing shading normal has the view behind it */
+    if (n_dot_l > 0.0 && dot(h, h) > 1e-12) {
+      float n_dot_h = dot(normal, h) * inversesqrt(dot(h, h));
       float q = n_dot_h * n_dot_h * (widened - 1.0) + 1.0;
       lobe += widened / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2));
     }
   }
   vec4 brdf = sd_environment_brdf(n_dot_v, roughness);
   float f0 = sd_lobe_weights.y;
-  float fresnel = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(view, normalize(view + centre)), 0.0, 1.0), 5.0);
+  vec3 h = view + centre;
+  float v_dot_h = dot(h, h) > 1e-12 ? dot(view, h) * inversesqrt(dot(h, h)) : 0.0;
+  float fresnel = f0 + (1.0 - f0) * pow(1.0 - clamp(v_dot_h, 0.0, 1.0), 5.0);
   float layer = f0 * (brdf.x + brdf.y - brdf.w) + brdf.w;
   float albedo = mix(fresnel / max(layer, 1e-4), 1.0 / max(brdf.x + brdf.y, 1e-4), sd_lobe_weights.x);
   return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v * float(SD_HIGHLIGHT_POINTS))) * sd.source_irradiance[i].rgb;

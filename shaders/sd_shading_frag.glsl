@@ -260,7 +260,7 @@ vec3 sd_sources_on_lobes(vec3 normal, vec3 view, vec3 axis, vec3 open, float sto
 {
   float roughness = sd_lobe_weights.z;
   float visible[SD_SOURCES];
-  vec3 lit = sd_source_light(normal, visible);
+  vec3 lit = sd_source_light(normal, view, visible);
   vec2 held = vec2(0.0);   /* the atlas's sources' part of `open`: unshadowed, shadowed */
   for (int i = 0; i < SD_SOURCES; i++) {
     if (sd.source_irradiance[i].w > 0.5) {
@@ -350,7 +350,7 @@ void main()
 #  else
 #    ifdef SD_SOURCES
   float visible[SD_SOURCES];
-  rgb += stored * sd_source_light(normal, visible);
+  rgb += stored * sd_source_light(normal, view, visible);
 #    endif
   rgb *= sd.params.x;
 #  endif
@@ -379,7 +379,7 @@ void main()
 #    ifdef SD_SOURCES
   vec3 normal = normalize(sd_normal);
   float visible[SD_SOURCES];
-  color += sd.params.x * sd_source_light(normal, visible);
+  color += sd.params.x * sd_source_light(normal, sd_view_direction(sd_origin_offset), visible);
 #    endif
   fragColor = vec4(sd_surface(color, diffuse, n_dot_v), 1.0);
 #  endif

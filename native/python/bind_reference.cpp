@@ -27,7 +27,7 @@ py::tuple reference(const sd::Environment& environment, const DoubleArray& verti
                     const py::object& triangles, const std::optional<DoubleArray>& views,
                     const std::optional<DoubleArray>& rotation, const std::string& lobe, double exponent, int samples,
                     std::uint64_t seed, const std::optional<DoubleArray>& occluder_vertices,
-                    const py::object& occluder_triangles, int threads, const py::object& progress) {
+                    const py::object& occluder_triangles, int threads, const py::object& progress, bool horizon) {
   const std::vector<glm::dvec3> points = read_points("vertices", vertices);
   const std::vector<glm::dvec3> normal_rows = read_points("normals", normals);
   const sd::Material material = sd::Material::from_name(lobe, exponent);
@@ -44,6 +44,7 @@ py::tuple reference(const sd::Environment& environment, const DoubleArray& verti
   options.samples = samples;
   options.seed = seed;
   options.threads = threads;
+  options.horizon = horizon;
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) value_error("progress must be callable or None");
   options.progress = progress_function(&progress);
   sd::ReferenceResult result;
@@ -65,7 +66,7 @@ void bind_reference(py::module_& m) {
         py::arg("triangles"), py::arg("views") = py::none(), py::arg("rotation") = py::none(),
         py::arg("lobe") = "lambert", py::arg("exponent") = 1.0, py::arg("samples") = 4096, py::arg("seed") = 0,
         py::arg("occluder_vertices") = py::none(), py::arg("occluder_triangles") = py::none(),
-        py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("horizon") = false,
         R"doc(The reference: eq. (1) by Monte Carlo with the full-resolution environment, ray-traced V and the
 exact lobe — what every method is measured against.
 
@@ -76,7 +77,9 @@ samples: sample pairs per vertex, one from the environment (∝ luminance) and o
 combined by the balance heuristic; seed makes it deterministic (independent of threads).
 Returns (radiance, standard_error), both (N, 3): the estimate and its Monte Carlo standard
 error. Rays start at the bake's ray origins. progress(done, total) over the vertices, as bake_transfer's
-(False cancels: BakeCancelled). Releases the GIL.)doc");
+(False cancels: BakeCancelled). horizon: V is also 0 below each vertex's tangent plane (with no triangles:
+the lobe over the hemisphere the surface faces, what the prefiltered glossy light stands for).
+Releases the GIL.)doc");
 }
 
 }  // namespace sdpy

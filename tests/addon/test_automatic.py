@@ -36,12 +36,20 @@ FLOOR = {"occluder_vertices": np.array([[-9.0, -9, 0], [9, -9, 0], [9, 9, 0], [-
          "occluder_triangles": np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)}
 
 
+EYE = np.array([0.0, -6.0, 3.0])
+
+
+def towards_the_eye(points):
+    towards = EYE - points
+    return towards / np.linalg.norm(towards, axis=1, keepdims=True)
+
+
 def table(sdnative, environment, occluders=None, lobe="lambert", exponent=1.0, ids=ALL, max_order=6,
-          rays=256, diffuse_share=0.0):
+          rays=256, diffuse_share=0.0, prefiltered=False, views=None):
     light = lambda s: np.asarray(environment.sh(s)).reshape(-1, 3)  # noqa: E731
-    sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=occluders, count=48)
+    sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=occluders, count=48, views=views)
     return accuracy.ErrorTable(sdnative, sample, environment, light, lobe, exponent, np.eye(3), ids,
-                               max_order, rays, diffuse_share=diffuse_share)
+                               max_order, rays, diffuse_share=diffuse_share, prefiltered=prefiltered)
 
 
 def choose(sdnative, errors, target=0.02):
@@ -164,6 +172,32 @@ def test_a_plastic_needs_the_order_of_its_mix_not_of_its_glossy_lobe(sdnative, f
                        atol=0.02 * np.abs(lambert.reference).max())
 
 
+def test_a_prefiltered_glossy_lobe_is_measured_as_it_is_drawn(sdnative, forest):
+    """With Prefiltered Glossy a sharp lobe is drawn as its exact unshadowed light times the
+    visibility ratio: alone, a convex sphere is as exact as its ratio is 1 and stores nothing; on
+    a floor the unshadowed light is what the floor makes wrong and a shadowed method is chosen.
+    Measured by the truncated lobe instead, every setting is far off and the cheapest, no
+    shadows at all, was chosen."""
+    sharp = dict(lobe="phong", exponent=300.0, views=towards_the_eye, max_order=6)
+    alone = table(sdnative, forest, prefiltered=True, **sharp)
+    choice = choose(sdnative, alone, target=0.05)
+    assert choice.met_target and choice.setting.method == "unshadowed" and choice.error < 0.01
+    # a shadowed method's ratio sees only the surface's own plane there (the horizon factor)
+    assert alone.error(accuracy.Setting("prt_gaunt", 4, 4, 256)) < 0.01
+    on_floor = table(sdnative, forest, FLOOR, prefiltered=True, **sharp)
+    unshadowed = on_floor.error(accuracy.Setting("unshadowed", 6, 0, 256))
+    choice = choose(sdnative, on_floor)
+    assert methods.get(choice.setting.method).data is not None and choice.error < 0.5 * unshadowed
+    # ratio 1: the unshadowed setting is the open lobe's light against the shadowed one, over the
+    # vertices that face the eye
+    seen = np.einsum("ij,ij->i", on_floor._sample.normals, on_floor._sample.views) > 0.0
+    direct = accuracy.relative_error(on_floor._open_reference[seen], on_floor.reference[seen],
+                                     on_floor.reference_variance[seen])
+    assert unshadowed == pytest.approx(direct, rel=1e-9)
+    truncated = table(sdnative, forest, FLOOR, **sharp)
+    assert min(truncated.error(accuracy.Setting(*key, 256)) for key in truncated.measured) > 2 * choice.error
+
+
 def sky(sdnative, sun):
     """A soft sky (a vertical gradient) and, with `sun`, the same with a small bright sun."""
     height, width = 64, 128
@@ -216,8 +250,8 @@ class Table:
     the sources."""
     methods, max_order, measured = ("unshadowed",), 2, None
 
-    def __init__(self, errors, gain):
-        self.errors, self.gain = errors, gain
+    def __init__(self, errors, gain, prefiltered=False):
+        self.errors, self.gain, self.prefiltered = errors, gain, prefiltered
         self.measured_sources = {}
 
     def error(self, setting, sources=False):
@@ -233,6 +267,10 @@ def test_sources_that_do_not_lower_the_error_by_a_tenth_are_left_in_the_sh(sdnat
     assert kept.reasons[1].startswith("Sources: through SH - predicted 1.4 %") and "not worth" in kept.reasons[1]
     # 1.6 times lower: taken, at the order where the 2 % target is met with them
     assert paid.sources is True and paid.setting.light_order == 1 and paid.error == pytest.approx(0.01875)
+    # a glossy lobe's prefiltered light: the scene's option decides, the setting is chosen with them
+    glossy = choose(sdnative, Table([0.05, 0.03, 0.015], 1.6, prefiltered=True))
+    assert glossy.sources is None and glossy.setting.light_order == 1 and glossy.error == pytest.approx(0.01875)
+    assert glossy.reasons[1].startswith("Sources: as Sharp Source Shadows says")
 
 
 def test_an_unreachable_target_takes_the_cheapest_setting_near_the_most_accurate(sdnative, forest):

@@ -97,6 +97,21 @@ def test_reference_of_a_constant_sky_is_its_radiance(sd):
         sd.reference(sky, np.zeros((2, 3)), normals, np.zeros((0, 3), dtype=int), lobe="phong", exponent=8.0)
 
 
+def test_reference_with_a_horizon_cuts_the_lobe_at_the_tangent_plane(sd):
+    """horizon=True: V is 0 below each vertex's tangent plane - the prefiltered glossy light's open lobe."""
+    sky = sd.environment_from_pixels(np.tile([1.0, 2.0, 3.0], (8, 16, 1)))
+    normals = np.array([[0.0, 0.0, 1.0]])
+    args = (sky, np.zeros((1, 3)), normals, np.zeros((0, 3), dtype=int))
+    lambert = [sd.reference(*args, samples=256, horizon=h)[0] for h in (False, True)]
+    assert np.array_equal(lambert[0], lambert[1])   # a cosine lobe has nothing below the plane
+    # a Phong lobe whose axis lies in the plane (the view at grazing): half of it is above
+    grazing = dict(views=np.array([[1.0, 0.0, 0.0]]), lobe="phong", exponent=8.0, samples=4096)
+    whole, _ = sd.reference(*args, **grazing)
+    half, error = sd.reference(*args, horizon=True, **grazing)
+    assert np.all(np.abs(whole - [1.0, 2.0, 3.0]) < 1e-9 + 4.0 * error)
+    assert np.all(np.abs(half - [0.5, 1.0, 1.5]) < 4.0 * error)
+
+
 def test_reference_of_no_vertex_is_empty(sd):
     sky = sd.environment_from_pixels(np.tile([1.0, 2.0, 3.0], (8, 16, 1)))
     radiance, error = sd.reference(sky, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), dtype=int))

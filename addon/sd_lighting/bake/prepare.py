@@ -8,7 +8,7 @@ import numpy as np
 from .. import methods, native
 from ..errors import BakeError
 from ..plan import analysis, automatic, budget
-from ..scene import environment, materials, transforms
+from ..scene import environment, lobes, materials, transforms
 from ..scene.view import View
 from ..store import baked
 from ..store.record import RecordError
@@ -74,9 +74,10 @@ def _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, 
     fixed = obj.sd_lighting.fixed() if hasattr(obj, "sd_lighting") else {}
     fixed.pop("method", None)
     panel = scene.sd_lighting
-    return analysis.gather(env_source, settings["lobe"], settings["exponent"], rotation, eye,
+    return analysis.gather(env_source, lobes.Lobes.of_bake(settings), rotation, eye,
                            panel.target_error, panel.max_automatic_order, fixed,
-                           panel.ringing_window.lower(), triangle_pixels, panel.source_shadows)
+                           panel.ringing_window.lower(), triangle_pixels, panel.source_shadows,
+                           panel.prefiltered_glossy)
 
 
 def recorded_settings(scene, obj, env_source):

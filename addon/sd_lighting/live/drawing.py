@@ -139,12 +139,14 @@ def ringing_setting(scene):
     return settings.ringing_window.lower() if settings is not None else "automatic"
 
 
-def shading_light(scene, source, lobe, exponent, order, wait, remainder=False):
-    """The unrotated L of order s the live shading uses for a bake's lobe: windowed against
-    ringing with the scene's setting (environment.windowed_light; wait=False: without a window
-    until it is chosen); remainder: of the map without the bright sources that light the object on
-    their own (source_lighting). [(s+1)^2, 3] float64."""
-    return environment.windowed_light(source, lobe, exponent, order, ringing_setting(scene), wait, remainder)
+def shading_light(scene, source, lobe_set, order, wait, remainder=False):
+    """The unrotated L of order s the live shading uses for a bake's lobes (scene/lobes.Lobes):
+    windowed against ringing with the scene's setting for the lobe its SH shows
+    (Lobes.window_lobe; environment.windowed_light; wait=False: without a window until it is
+    chosen); remainder: of the map without the bright sources that light the object on their own
+    (source_lighting). [(s+1)^2, 3] float64."""
+    return environment.windowed_light(source, *lobe_set.window_lobe(use_prefiltered_glossy(scene)), order,
+                                      ringing_setting(scene), wait, remainder)
 
 
 def ringing_choice(scene, obj, wait=False):
@@ -156,14 +158,15 @@ def ringing_choice(scene, obj, wait=False):
         return None
     source = environment.source(scene)
     try:   # the remainder's window where the sources light the lobes on their own, once found
-        glossy = record.lobe != "lambert" and record.lobes.weighted and use_prefiltered_glossy(scene)
+        glossy = record.lobes.prefiltered_glossy(use_prefiltered_glossy(scene))
         split = _shading_split(scene, source, wait=False) if gpu_shading.takes_sources(record, False, glossy) else None
         prefiltered = split is not None and glossy and environment.prefiltered_atlas(
             source, *gpu_shading.prefiltered_layout(), wait=False, remainder=True) is not None
         remainder = split is not None and gpu_shading.takes_sources(record, False, prefiltered)
     except background.Failed:
         remainder = False
-    return environment.ringing_window(source, record.lobe, record.exponent, record.light_order,
+    lobe, exponent = record.lobes.window_lobe(use_prefiltered_glossy(scene))
+    return environment.ringing_window(source, lobe, exponent, record.light_order,
                                       ringing_setting(scene), wait, remainder=remainder)
 
 
@@ -185,7 +188,7 @@ def local_light(scene, obj, data, wait, source=None, rotation=None, matrix=None,
     source = source or environment.source(scene)
     g = environment.rotation_matrix(scene) if rotation is None else rotation
     gr = g @ transforms.rotation_part(np.array(obj.matrix_world if matrix is None else matrix))
-    light = shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait, remainder)
+    light = shading_light(scene, source, data.lobes, data.light_order, wait, remainder)
     return native.get().rotated_environment_sh(light, gr), gr
 
 
@@ -223,7 +226,7 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     textures = {}
     if data.uses_band_limited_texture:
         textures[BAND_LIMITED_TEXTURE_SAMPLER[1]], kwargs["band_limited_scale"] = gpu_shading.band_limited_texture(
-            source, shading_light(scene, source, data.lobe, data.exponent, data.light_order, wait, remainder))
+            source, shading_light(scene, source, data.lobes, data.light_order, wait, remainder))
     if sources is not None:
         kwargs["sources"] = (sources[0], light_sources.rows_from(sources[2], matrix[:3, 3]))
         textures[SHADOW_MAP_SAMPLER[1]] = sources[1]
@@ -379,7 +382,7 @@ def cpu_reference(scene, obj, view, texels=False):
     matrix = np.array(obj.matrix_world, dtype=np.float64)
     world = transforms.transform_points(matrix, attributes.read_positions(mesh))
     source = environment.source(scene)
-    light = shading_light(scene, source, record.lobe, record.exponent, record.light_order, True)
+    light = shading_light(scene, source, record.lobes, record.light_order, True)
     g = environment.rotation_matrix(scene)
     r = transforms.rotation_part(matrix)
     kwargs = {key: data[key] for key in method.shade_inputs}

@@ -18,12 +18,20 @@ reference noisier than the target still measures it without bias.
 MSD (13) equals PRT (8) and MSD (12) equals PRT (10) for the same rays and orders (Theorems 2.2
 and 2.1), so their errors are those of the PRT forms, which need no designs (methods.Method.equal_to).
 
+A glossy lobe the live shading lights by the prefiltered environment (*Prefiltered Glossy*) is
+measured as it is drawn: the lobe's unshadowed light, exact (the reference with nothing in the
+way but the surface's own tangent plane, the same samples), times the setting's visibility ratio
+(msd-notes, "Glossy light"), over the sampled vertices that face the eye. Its
+truncated B alone would put every setting near 100 % off for a sharp lobe, and the cheapest -
+no shadows at all - would be chosen.
+
 Nothing here needs Blender; the sdnative module is passed in.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.polynomial import legendre
 
 from .. import methods as method_table
 from ..scene import lobes
@@ -135,12 +143,17 @@ class ErrorTable:
     result, whose error is then the remainder's against its own reference, relative to the whole
     map's B (the sources' shadow maps and disc model taken as exact); or None. With a remainder,
     both are measured over the whole sample and over the vertices in the sources' shade
-    (SHADE_SHARE), relative to their own B, the larger counting: a view of that side shows it."""
+    (SHADE_SHARE), relative to their own B, the larger counting: a view of that side shows it.
+    prefiltered: a Phong lobe is drawn by the prefiltered light times the visibility ratio (see
+    the module's doc), with a remainder the remainder's prefiltered light (the sources' highlights
+    taken as exact too)."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
-                 max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None, remainder=None):
+                 max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None, remainder=None,
+                 prefiltered=False):
         self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
         self.max_order = int(max_order)
+        self.prefiltered = bool(prefiltered) and lobe != "lambert"
         self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
         if diffuse_share > 0.0:
             self._lobes.append(("lambert", 1.0, float(diffuse_share)))
@@ -148,10 +161,15 @@ class ErrorTable:
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._rotation = sdnative, sample, rotation
         self._views = sample.views if sample.views is not None else sample.normals
-        references = 2 if remainder is not None else 1
+        references = (1 + (remainder is not None)) * (1 + self.prefiltered)
         self._progress = [_reporter(0.5 * k / references, 0.5 / references, progress, stop)
                           for k in range(references)] + [_reporter(0.5, 0.5, progress, stop)]
         self.reference, error = self._reference(environment, seed, stop, self._progress[0])
+
+        def open_reference(env, part):   # lobe 0 where V = 1: what the prefiltered light stands for
+            return self._reference(env, seed, stop, self._progress[part], [(lobe, self.exponent, 1.0)],
+                                   occluded=False)[0] if self.prefiltered else None
+        self._open_reference = open_reference(environment, references - 1)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
@@ -167,6 +185,11 @@ class ErrorTable:
             parts = [np.ones(len(shade), dtype=bool)]
             if MIN_SHADE_VERTICES <= shade.sum() < len(shade):
                 parts.append(shade)
+        if self.prefiltered and sample.views is not None:
+            # a glossy vertex turned from the eye is not drawn, and its lobe lies below its plane
+            seen = np.einsum("ij,ij->i", sample.normals, sample.views) > 0.0
+            if seen.any():
+                parts = [part & seen for part in parts or [np.ones(len(seen), dtype=bool)]]
         measured = [method_table.get(m) for m in sorted({method_table.get(m).measured_as for m in self.methods})]
         bakes = self._bakes(measured, seed, stop)
         # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
@@ -174,14 +197,16 @@ class ErrorTable:
         free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
                                       rays=self.rays, seed=seed, transfer_order=0)
         self.lit_fraction = np.asarray(bakes[0]["transfer"])[:, 0] / np.asarray(free["transfer"])[:, 0]
-        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop, parts)
+        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop, parts,
+                                      self._open_reference)
         self.measured_sources = None if remainder is None else self._measure(
-            measured, bakes, remainder.light, remainder_reference, remainder_error ** 2, stop, parts)
+            measured, bakes, remainder.light, remainder_reference, remainder_error ** 2, stop, parts,
+            open_reference(remainder.environment, 2))
 
-    def _measure(self, measured, bakes, light, reference, variance, stop, parts=None):
+    def _measure(self, measured, bakes, light, reference, variance, stop, parts=None, open_reference=None):
         """{(method, s, s'): [Measured per part]} of the two bakes shaded with `light` against
         `reference`, relative to the whole map's B, over each of `parts` (masks of the sample;
-        default: all of it)."""
+        default: all of it); open_reference: lobe 0's unshadowed light of the same map (prefiltered)."""
         parts = [slice(None)] if parts is None else parts
         out = {}
         for method in measured:
@@ -189,7 +214,7 @@ class ErrorTable:
                 for sv in range(MAX_VISIBILITY_ORDER + 1) if method.uses_visibility_order else (0,):
                     if stop is not None and stop():
                         raise InterruptedError("cancelled")
-                    first, second = (self._shade(method, s, sv, bake, light) for bake in bakes)
+                    first, second = (self._shade(method, s, sv, bake, light, open_reference) for bake in bakes)
                     out[(method.id, s, sv)] = []
                     for rows in parts:
                         noise = relative_error(first[rows], second[rows], whole=self.reference[rows]) / np.sqrt(2.0)
@@ -198,15 +223,19 @@ class ErrorTable:
                             Measured(float(np.sqrt(max(total ** 2 - noise ** 2, 0.0))), noise, self.rays))
         return out
 
-    def _reference(self, environment, seed, stop, progress):
+    def _reference(self, environment, seed, stop, progress, lobe_weights=None, occluded=True):
         """sdnative.reference on the sample (one scene: against a large mesh its build is most of
-        the time), cancelled within a few vertices by stop."""
+        the time), cancelled within a few vertices by stop: of `lobe_weights` (default: the
+        table's lobes), the weighted sum; occluded False: with nothing in the way. A prefiltered
+        lobe is cut at each vertex's tangent plane, as the split sum's and Cycles' are."""
         sample = self._sample
+        triangles = sample.triangles if occluded else np.zeros((0, 3), dtype=np.int32)
         try:
             parts = [(weight, self._sd.reference(
-                environment, sample.vertices, sample.normals, sample.triangles, views=self._lobe_views(lobe),
+                environment, sample.vertices, sample.normals, triangles, views=self._lobe_views(lobe),
                 rotation=self._rotation, lobe=lobe, exponent=exponent, samples=REFERENCE_SAMPLES,
-                seed=seed, progress=progress, **sample.occluders)) for lobe, exponent, weight in self._lobes]
+                seed=seed, progress=progress, horizon=self.prefiltered, **(sample.occluders if occluded else {})))
+                for lobe, exponent, weight in (lobe_weights or self._lobes)]
         except self._sd.BakeCancelled as exc:
             raise InterruptedError("cancelled") from exc
         radiance = sum(weight * np.asarray(value) for weight, (value, _) in parts)
@@ -234,7 +263,7 @@ class ErrorTable:
                  for key, value in twice.items() if isinstance(value, np.ndarray) and len(value) == 2 * count}
                 for half in (0, 1)]
 
-    def _shade(self, method, s, sv, bake, light):
+    def _shade(self, method, s, sv, bake, light, open_reference=None):
         data = {}
         if method.data is not None:   # the arrays of order s, s': prefixes of the baked ones
             shape = method.data.shape(s, sv) if method.data.shape else ()
@@ -242,11 +271,34 @@ class ErrorTable:
                 data[key] = np.ascontiguousarray(bake[key][(slice(None),) + tuple(slice(0, n) for n in shape)])
         if method.uses_visibility_order:
             data["visibility_order"] = sv
-        # displayed radiance is never negative, lobe by lobe (the shader's sd_surface)
-        return sum(weight * np.maximum(self._sd.shade(
-            method.id, light(s), self._sample.normals, views=self._lobe_views(lobe),
-            rotation=self._rotation, lobe=lobe, exponent=exponent, **data), 0.0)
-            for lobe, exponent, weight in self._lobes)
+        out = 0.0
+        for k, (lobe, exponent, weight) in enumerate(self._lobes):
+            b = self._sd.shade(method.id, light(s), self._sample.normals, views=self._lobe_views(lobe),
+                               rotation=self._rotation, lobe=lobe, exponent=exponent, **data)
+            if k == 0 and self.prefiltered:
+                b = self._visibility_ratio(method, s, sv, b, light(s))[:, None] * open_reference
+            out = out + weight * np.maximum(b, 0.0)   # displayed radiance is never negative (sd_surface)
+        return out
+
+    def _visibility_ratio(self, method, s, sv, b, light):
+        """The visibility ratio of lobe 0 of raw B `b` at order s, s' with the light L of order s
+        (shaders/sd_shading_lib.glsl, sd_visibility_ratio; live/shader_variant.py, open_order and
+        horizon_order), per sampled vertex."""
+        luminance = np.asarray(lobes.LUMINANCE)
+        lobe, exponent, _ = self._lobes[0]
+        normals, views = self._sample.normals, self._lobe_views(lobe)
+        order = method.open_order(s, sv)
+        open_light = self._sd.shade("unshadowed", np.ascontiguousarray(light[:(order + 1) ** 2]), normals,
+                                    views=views, rotation=self._rotation, lobe=lobe, exponent=exponent)
+        horizon = np.ones(len(normals))
+        if method.uses_visibility_order:   # the mirrored view's cosine to the normal is the view's
+            factors = lobes.horizon_factors(sv) * np.asarray(self._sd.zonal_coefficients(lobe, exponent, sv))
+            cosine = np.einsum("ij,ij->i", normals, views) / np.linalg.norm(normals, axis=1)
+            horizon = np.minimum(legendre.legval(np.clip(cosine, -1.0, 1.0),
+                                                 (2 * np.arange(sv + 1) + 1) * factors), 1.0)
+        offset = max(0.1 * float(np.asarray(light)[0] @ luminance), 1e-8)
+        open_part = np.maximum(horizon * (open_light @ luminance), 0.0)
+        return np.clip((np.maximum(b @ luminance, 0.0) + offset) / (open_part + offset), 0.0, 1.0)
 
     def error(self, setting, sources=False):
         """The predicted relative RMS error of a setting (KeyError for one not measured); sources:

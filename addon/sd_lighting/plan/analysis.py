@@ -29,14 +29,17 @@ class Inputs:
     triangle_pixels: object = None   # its triangles' mean area on screen (None: no camera)
     remainder: object = None     # accuracy.Remainder where the map's bright sources may be shaded
                                  # on their own, else None
+    prefiltered: bool = False    # the scene's Prefiltered Glossy (glossy lobes measured as drawn)
 
 
-def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, ringing_setting,
-           triangle_pixels, sources=False):
-    """Inputs for an object: src an environment.Source, rotation g R, eye in the bake space;
+def gather(src, lobe_set, rotation, eye, target_error, max_order, fixed, ringing_setting,
+           triangle_pixels, sources=False, prefiltered=False):
+    """Inputs for an object: src an environment.Source, lobe_set its scene/lobes.Lobes (L is
+    windowed as the live shading windows it, Lobes.window_lobe), rotation g R, eye in the bake space;
     sources: whether the map's bright sources may be shaded on their own (the scene's Sharp Source
-    Shadows): for a Lambert lobe with sources in the map, the measurement then weighs them
-    (accuracy.Remainder; found here, on the main thread, when not yet)."""
+    Shadows): for a Lambert lobe, or a glossy one the prefiltered light draws, with sources in the
+    map, the measurement then weighs them (accuracy.Remainder; found here, on the main thread,
+    when not yet); prefiltered: the scene's Prefiltered Glossy."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
         env = native.get().environment_from_pixels(pixels)
@@ -48,9 +51,10 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
         scale = 1.0 / src.strength if src.strength > 0.0 else 0.0
 
         def light(order, remainder=False):   # the reference reads the map without the strength: so does this
-            return scale * environment.windowed_light(src, lobe, exponent, order, ringing_setting, True, remainder)
+            return scale * environment.windowed_light(src, *lobe_set.window_lobe(prefiltered), order,
+                                                      ringing_setting, True, remainder)
     remainder = None
-    if sources and lobe == "lambert" and src.kind != "uniform":
+    if sources and src.kind != "uniform" and (lobe_set.lobe == "lambert" or lobe_set.prefiltered_glossy(prefiltered)):
         try:
             split = environment.source_split(src, wait=True)
         except background.Failed:   # the draw shades them through SH then (and the panel says why)
@@ -59,7 +63,7 @@ def gather(src, lobe, exponent, rotation, eye, target_error, max_order, fixed, r
             remainder = accuracy.Remainder(split["remainder"], lambda order: light(order, remainder=True))
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
     return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
-                  triangle_pixels, remainder)
+                  triangle_pixels, remainder, bool(prefiltered))
 
 
 def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None):
@@ -78,7 +82,8 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
     return accuracy.ErrorTable(native.get(), sample, inputs.environment, inputs.light, lobe_set.lobe,
                                lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
                                stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress,
-                               remainder=inputs.remainder)
+                               remainder=inputs.remainder,
+                               prefiltered=lobe_set.prefiltered_glossy(inputs.prefiltered))
 
 
 def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None,

@@ -8,10 +8,11 @@ budget (plan/cost.bake_seconds); the one chosen has the fewest frame terms, then
 floats, then the shortest bake. So a convex object, whose unshadowed result already meets the
 target, stores no visibility; a diffuse one gets PRT (2), exact in V, when it is cheapest; and a
 soft environment gets a lower s than one with a sun, whose truncation error is larger - unless the
-sun is shaded on its own (Sharp Source Shadows): a Lambert lobe's table then measures every setting
-also with the map's bright sources taken out (accuracy.Remainder), the target holding for the whole
-B, and they are taken where they pay (the setting chosen with them would be more than NEAR_BEST
-worse through SH alone), usually at a lower s and fewer rays. When no
+sun is shaded on its own (Sharp Source Shadows): a Lambert lobe's table (and a glossy one's that
+the prefiltered light draws) then measures every setting also with the map's bright sources taken
+out (accuracy.Remainder), the target holding for the whole B, and for a Lambert lobe they are
+taken where they pay (the setting chosen with them would be more than NEAR_BEST worse through SH
+alone), usually at a lower s and fewer rays. When no
 setting qualifies, the cheapest within NEAR_BEST of the most accurate one's error (within the
 budget) is chosen and the reason says so: a last few percent of accuracy at many times the frame
 cost is not worth it (the report's bowl under forest: PRT (8) at s = 7, s' = 4, 5022 ns per vertex
@@ -49,7 +50,8 @@ class Choice:
     met_target: bool
     reasons: tuple = field(default=())   # one line per choice, for the panel and the bake's record
     sources: object = None     # whether the map's bright sources are shaded on their own (None:
-                               # not measured - none in the map, or a glossy lobe: the scene's option)
+                               # not measured - none in the map, or a glossy lobe lit through SH
+                               # alone: the scene's option)
 
 
 @dataclass(frozen=True)
@@ -104,15 +106,21 @@ def choose(table, target_error, gaunt, vertices, threads, bake_budget, fixed=Non
     if table.measured_sources is not None:
         # The sources pay where the setting chosen with them would be more than NEAR_BEST worse
         # through SH alone; otherwise the SH alone does as well and their shadow maps cost frames.
+        # A glossy lobe's prefiltered light is measured as exact with the sources in it, which the
+        # atlas is not (a sun's highlight as the sampled lobe's spots): there the scene's option
+        # decides, and the setting is chosen for what is drawn then.
         with_sources = list(_candidates(table, gaunt, vertices, threads, fixed, fitted_points, sources=True))
         best_with, qualified_with = _best(with_sources, target_error, bake_budget)
         alone = table.error(best_with.setting)
-        sources = alone > NEAR_BEST * best_with.error
-        if sources:
+        sources = None if table.prefiltered else alone > NEAR_BEST * best_with.error
+        if sources is not False:
             best, qualified, candidates = best_with, qualified_with, with_sources
-    reasons = _reasons(table, best, candidates, target_error, qualified, fixed, sources)
-    if sources is not None:
+    measured_with = table.measured_sources is not None and sources is not False
+    reasons = _reasons(table, best, candidates, target_error, qualified, fixed, measured_with)
+    if table.measured_sources is not None:
         reasons.insert(2 if fixed else 1, (   # after the visibility's line
+            "Sources: as Sharp Source Shadows says (a glossy lobe's prefiltered light) - predicted "
+            "%.1f %% with them on their own, %.1f %% through SH alone" if sources is None else
             "Sources: shaded on their own - predicted %.1f %% with them, %.1f %% through SH alone"
             if sources else "Sources: through SH - predicted %.1f %% with them on their own, %.1f %% "
             "through SH alone: not worth their shadow maps") % (100 * best_with.error, 100 * alone))

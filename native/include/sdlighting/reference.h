@@ -22,6 +22,9 @@ struct ReferenceOptions {
   int samples = 4096;       ///< sample pairs per vertex (each pair traces up to two rays)
   std::uint64_t seed = 0;   ///< the estimate depends on (seed, vertex) only, not on threads
   int threads = 0;          ///< 0: every hardware thread
+  /// V is also 0 below each vertex's own tangent plane (n·x <= 0): with no triangles, the lobe over
+  /// the hemisphere the surface faces - what the split sum's glossy light stands for.
+  bool horizon = false;
   /// As TransferOptions::progress, over the vertices ((0, 0) while the scene is built; the calling
   /// thread then only reports); returning false cancels (BakeCancelled).
   std::function<bool(std::size_t done, std::size_t total)> progress;

@@ -75,7 +75,10 @@ ReferenceResult shade_reference(const Environment& environment, const glm::dmat3
         const double w = lobe.value(glm::dot(a, x));
         const glm::dvec3 y = g * x;
         const double pdf = sampler.pdf(y) + w;
-        if (w <= 0.0 || pdf <= 0.0 || traced.scene().occluded(origin, x)) return glm::dvec3(0.0);
+        if (w <= 0.0 || pdf <= 0.0 || (options.horizon && glm::dot(n, x) <= 0.0) ||
+            traced.scene().occluded(origin, x)) {
+          return glm::dvec3(0.0);
+        }
         return environment.radiance(y) * (w / pdf);
       };
       glm::dvec3 sum(0.0), sum_squares(0.0);

@@ -21,7 +21,9 @@ and 2.1), so their errors are those of the PRT forms, which need no designs (met
 A glossy lobe the live shading lights by the prefiltered environment (*Prefiltered Glossy*) is
 measured as it is drawn: the lobe's unshadowed light, exact (the reference with nothing in the
 way but the surface's own tangent plane, the same samples), times the setting's visibility ratio
-(msd-notes, "Glossy light"), over the sampled vertices that face the eye. Its
+(msd-notes, "Glossy light"), over the sampled vertices that face the eye (the two references'
+noise largely cancels where V = 1, so removing the reference's variance puts these errors low by
+at most its own error). Its
 truncated B alone would put every setting near 100 % off for a sharp lobe, and the cheapest -
 no shadows at all - would be chosen.
 
@@ -161,35 +163,40 @@ class ErrorTable:
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._rotation = sdnative, sample, rotation
         self._views = sample.views if sample.views is not None else sample.normals
-        references = (1 + (remainder is not None)) * (1 + self.prefiltered)
-        self._progress = [_reporter(0.5 * k / references, 0.5 / references, progress, stop)
-                          for k in range(references)] + [_reporter(0.5, 0.5, progress, stop)]
-        self.reference, error = self._reference(environment, seed, stop, self._progress[0])
+        count = (1 + (remainder is not None)) * (1 + self.prefiltered)
+        references = iter(range(count))
+        self._progress = [_reporter(0.5 * k / count, 0.5 / count, progress, stop)
+                          for k in range(count)] + [_reporter(0.5, 0.5, progress, stop)]
 
-        def open_reference(env, part):   # lobe 0 where V = 1: what the prefiltered light stands for
-            return self._reference(env, seed, stop, self._progress[part], [(lobe, self.exponent, 1.0)],
-                                   occluded=False)[0] if self.prefiltered else None
-        self._open_reference = open_reference(environment, references - 1)
+        def measured_reference(env, occluded=True):
+            """(B, its standard error) of the table's lobes (occluded), or lobe 0's where V = 1 -
+            what the prefiltered light stands for (None without it); progress in the order made."""
+            if not occluded and not self.prefiltered:
+                return None, None
+            lobe_weights = None if occluded else [(self.lobe, self.exponent, 1.0)]
+            return self._reference(env, seed, stop, self._progress[next(references)], lobe_weights, occluded)
+        self.reference, error = measured_reference(environment)
+        self._open_reference = measured_reference(environment, occluded=False)[0]
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
-        parts = remainder_reference = None
+        # a glossy vertex turned from the eye is not drawn, and its lobe lies below its plane
+        seen = np.ones(len(sample.vertices), dtype=bool)
+        if self.prefiltered and sample.views is not None:
+            facing = np.einsum("ij,ij->i", sample.normals, sample.views) > 0.0
+            seen = facing if facing.any() else seen
+        parts = [seen]
         if remainder is not None:
-            remainder_reference, remainder_error = self._reference(remainder.environment, seed, stop, self._progress[1])
+            remainder_reference, remainder_error = measured_reference(remainder.environment)
+            remainder_open = measured_reference(remainder.environment, occluded=False)[0]
             # the vertices the sources give under half their light: a view of that side shows the
             # error against their own B, which the whole sample's B would hide
             luminance = np.asarray(lobes.LUMINANCE)
             whole = self.reference @ luminance
-            shade = (remainder_reference @ luminance >= (1.0 - SHADE_SHARE) * whole) & \
+            shade = seen & (remainder_reference @ luminance >= (1.0 - SHADE_SHARE) * whole) & \
                 (whole > SHADE_FLOOR * np.mean(whole))   # not the unlit, whose error nobody sees
-            parts = [np.ones(len(shade), dtype=bool)]
-            if MIN_SHADE_VERTICES <= shade.sum() < len(shade):
+            if MIN_SHADE_VERTICES <= shade.sum() < seen.sum():
                 parts.append(shade)
-        if self.prefiltered and sample.views is not None:
-            # a glossy vertex turned from the eye is not drawn, and its lobe lies below its plane
-            seen = np.einsum("ij,ij->i", sample.normals, sample.views) > 0.0
-            if seen.any():
-                parts = [part & seen for part in parts or [np.ones(len(seen), dtype=bool)]]
         measured = [method_table.get(m) for m in sorted({method_table.get(m).measured_as for m in self.methods})]
         bakes = self._bakes(measured, seed, stop)
         # The cosine-weighted fraction of the hemisphere the rays escape through: T_00 against
@@ -201,7 +208,7 @@ class ErrorTable:
                                       self._open_reference)
         self.measured_sources = None if remainder is None else self._measure(
             measured, bakes, remainder.light, remainder_reference, remainder_error ** 2, stop, parts,
-            open_reference(remainder.environment, 2))
+            remainder_open)
 
     def _measure(self, measured, bakes, light, reference, variance, stop, parts=None, open_reference=None):
         """{(method, s, s'): [Measured per part]} of the two bakes shaded with `light` against
@@ -271,12 +278,12 @@ class ErrorTable:
                 data[key] = np.ascontiguousarray(bake[key][(slice(None),) + tuple(slice(0, n) for n in shape)])
         if method.uses_visibility_order:
             data["visibility_order"] = sv
-        out = 0.0
+        out, coefficients = 0.0, light(s)
         for k, (lobe, exponent, weight) in enumerate(self._lobes):
-            b = self._sd.shade(method.id, light(s), self._sample.normals, views=self._lobe_views(lobe),
+            b = self._sd.shade(method.id, coefficients, self._sample.normals, views=self._lobe_views(lobe),
                                rotation=self._rotation, lobe=lobe, exponent=exponent, **data)
             if k == 0 and self.prefiltered:
-                b = self._visibility_ratio(method, s, sv, b, light(s))[:, None] * open_reference
+                b = self._visibility_ratio(method, s, sv, b, coefficients)[:, None] * open_reference
             out = out + weight * np.maximum(b, 0.0)   # displayed radiance is never negative (sd_surface)
         return out
 
@@ -285,7 +292,7 @@ class ErrorTable:
         (shaders/sd_shading_lib.glsl, sd_visibility_ratio; live/shader_variant.py, open_order and
         horizon_order), per sampled vertex."""
         luminance = np.asarray(lobes.LUMINANCE)
-        lobe, exponent, _ = self._lobes[0]
+        lobe, exponent = self.lobe, self.exponent
         normals, views = self._sample.normals, self._lobe_views(lobe)
         order = method.open_order(s, sv)
         open_light = self._sd.shade("unshadowed", np.ascontiguousarray(light[:(order + 1) ** 2]), normals,

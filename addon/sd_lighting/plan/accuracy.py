@@ -24,8 +24,8 @@ way but the surface's own tangent plane, the same samples), times the setting's 
 (msd-notes, "Glossy light"), over the sampled vertices that face the eye (the two references'
 noise largely cancels where V = 1, so removing the reference's variance puts these errors low by
 at most its own error). Its
-truncated B alone would put every setting near 100 % off for a sharp lobe, and the cheapest -
-no shadows at all - would be chosen.
+truncated B alone would put every setting near 100 % off for a sharp lobe, and the cheapest,
+with little or no shadowing, was often chosen.
 
 Nothing here needs Blender; the sdnative module is passed in.
 """

@@ -54,7 +54,7 @@ bottom-first as GPU textures hold them, laid out as sdlighting/glossy_prefilter.
 says: level 0 the map itself, level k >= 1 GGX alpha = 2^(k - (levels - 1)) (alpha doubles from
 level to level up to 1), equirect images of Blender's orientation. The defaults are PREFILTER_WIDTH
 and PREFILTER_LEVELS. `samples` GGX directions per texel on level 1, twice as many per level after
-it (filtered importance sampling). ValueError for a width0 that is not a power of two in [4,
+it, near each texel's direction (filtered importance sampling); the lobe's tail beyond, exactly. ValueError for a width0 that is not a power of two in [4,
 MAX_TEXTURE_SIDE], levels < 3 or with width0 >> (levels - 3) < 4, samples outside [1, 4096].)doc");
   m.def(
       "prefilter_atlas_shape",

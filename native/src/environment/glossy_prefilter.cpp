@@ -8,9 +8,11 @@
 #include "util/parallel_for.h"
 
 #include <glm/geometric.hpp>
+#include <unsupported/Eigen/FFT>
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -22,11 +24,11 @@ namespace {
 constexpr int kMaxSamples = 4096;
 constexpr int kMinSourceWidth = 8;   // the coarsest map of the source pyramid
 constexpr double kMinAlpha = 1e-4;
-// Levels this rough are the exact convolution of a map kConvolutionWidth wide (texels under a fifth
-// of the lobe's width): sampled, a wide lobe's long tails picking a bright source's coarse texels
-// put whole texels 10-40 % off. Narrower lobes are sampled, their tails short.
-constexpr double kConvolutionRoughness = 0.5;
-constexpr int kConvolutionWidth = 64;
+// Each level samples its lobe within these angles of r and sums the rest exactly over a map
+// kTailWidth wide (sampled_lobe, convolved_map): its texels (1.4 degrees) are under half the window's
+// width, so the tail's weight varies little across one.
+constexpr double kCoreInnerDegrees = 3.0, kCoreOuterDegrees = 6.0;
+constexpr int kTailWidth = 256;
 
 /// GGX α of a Principled roughness r: r², kept off 0 so that D stays finite.
 double ggx_alpha(double roughness) { return std::max(roughness * roughness, kMinAlpha); }
@@ -58,30 +60,67 @@ double ggx_distribution(double n_dot_h, double alpha) {
   return a2 / (kPi * d * d);
 }
 
-/// One sample of a level: the direction l in the frame of r (r = +z), its weight r·l, and the
-/// source map it is read from (a fractional level of the pyramid).
+/// The lobe's weight D(h) (r·l) at c = r·l > 0 with n = v = r: (r·h)² = (1 + c) / 2 for the half
+/// vector of two unit vectors.
+double lobe_weight(double c, double alpha) { return ggx_distribution(std::sqrt(0.5 * (1.0 + c)), alpha) * c; }
+
+/// The share of the lobe a level samples at c = r·l: 1 within kCoreInnerDegrees of r, 0
+/// beyond kCoreOuterDegrees, smooth between (smoothstep in c), so that the tail's sum, 1 − the
+/// share, varies no faster than the window as r moves.
+double core_share(double c) {
+  static const double inner = std::cos(kCoreInnerDegrees * kPi / 180.0), outer = std::cos(kCoreOuterDegrees * kPi / 180.0);
+  const double t = std::clamp((c - outer) / (inner - outer), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+/// One sample of a level: the direction l in the frame of r (r = +z), its weight (r·l) core_share,
+/// and the source map it is read from (a fractional level of the pyramid).
 struct LobeSample {
   glm::dvec3 direction;
   double weight;
   double source_level;
 };
 
-/// The samples of a level of roughness r: GGX half vectors h, l = 2 (v·h) h − v with v = n = +z;
-/// each one's solid angle 1 / (n pdf(l)), pdf(l) = D(h) / 4 where v = n, chooses the source map whose
-/// texels are about that large (without Křivánek and Colbert's +1 towards the smoother map, which
-/// spread a bright source over the lobe's tails: texels 11 % off instead of 7 %).
-std::vector<LobeSample> lobe_samples(double roughness, int samples, double finest_texel_solid_angle, int coarsest) {
-  const double alpha = ggx_alpha(roughness);
-  std::vector<LobeSample> out;
+/// A level's lobe: its core's samples, and the core's part of the lobe's weight
+/// ∫ D(h) (r·l)⁺ core_share dl / ∫ D(h) (r·l)⁺ dl (the tail has the rest).
+struct SampledLobe {
+  std::vector<LobeSample> samples;
+  double core_part;
+};
+
+/// The core of a level of roughness r: GGX half vectors h within half of kCoreOuterDegrees of n
+/// (the inverse CDF of D (n·h) over that cap), l = 2 (v·h) h − v with v = n = +z. Each one's solid
+/// angle 1 / (n pdf(l)), pdf(l) = D(h) / 4 / P(cap) where v = n, chooses the source map whose texels
+/// are about that large (filtered importance sampling, Křivánek and Colbert 2008, without their +1
+/// towards the smoother map, which spread a bright source over the lobe). Only the core is
+/// sampled: samples far from r are few, each read from a coarse map, and put a bright source's
+/// light into the dark map around it (msd-notes, "Glossy light").
+SampledLobe sampled_lobe(double roughness, int samples, double finest_texel_solid_angle, int coarsest) {
+  const double alpha = ggx_alpha(roughness), a2 = alpha * alpha;
+  // P(tan² θ_h < t) = t / (α² + t) for GGX half vectors
+  const double tan2 = std::pow(std::tan(0.5 * kCoreOuterDegrees * kPi / 180.0), 2.0);
+  const double cap = tan2 / (a2 + tan2);
+  SampledLobe lobe;
   for (int i = 0; i < samples; ++i) {
-    const glm::dvec3 h = ggx_half_vector(hammersley(i, samples), alpha);
+    std::array<double, 2> u = hammersley(i, samples);
+    u[0] *= cap;
+    const glm::dvec3 h = ggx_half_vector(u, alpha);
     const glm::dvec3 l(2.0 * h.z * h.x, 2.0 * h.z * h.y, 2.0 * h.z * h.z - 1.0);
-    if (l.z <= 0.0) continue;
-    const double solid_angle = 4.0 / (samples * ggx_distribution(h.z, alpha));
+    const double solid_angle = 4.0 * cap / (samples * ggx_distribution(h.z, alpha));
     const double level = 0.5 * std::log2(solid_angle / finest_texel_solid_angle);
-    out.push_back({l, l.z, std::clamp(level, 0.0, static_cast<double>(coarsest))});
+    lobe.samples.push_back({l, l.z * core_share(l.z), std::clamp(level, 0.0, static_cast<double>(coarsest))});
   }
-  return out;
+  // The two parts by a midpoint rule in θ_l (steps of 0.0014 degrees).
+  constexpr int kSteps = 1 << 16;
+  double core = 0.0, whole = 0.0;
+  for (int i = 0; i < kSteps; ++i) {
+    const double theta = 0.5 * kPi * (i + 0.5) / kSteps;
+    const double w = lobe_weight(std::cos(theta), alpha) * std::sin(theta);
+    core += w * core_share(std::cos(theta));
+    whole += w;
+  }
+  lobe.core_part = core / whole;
+  return lobe;
 }
 
 /// Area-averaged copies of the map, each half the size of the one before, down to kMinSourceWidth.
@@ -157,35 +196,87 @@ void azimuthal_frame(const glm::dvec3& r, glm::dvec3& t1, glm::dvec3& t2) {
   t2 = glm::cross(r, t1);
 }
 
-/// A map's texels as the exact convolution reads them: direction, solid angle and radiance.
-struct Texels {
-  std::vector<glm::dvec3> direction, radiance;
-  std::vector<double> solid_angle;
-};
-
-Texels texels_of(const Environment& map) {
-  Texels t;
-  for (int64_t i = 0; i < map.texel_count(); ++i) {
-    t.direction.push_back(map.texel_direction(i));
-    t.radiance.push_back(map.texel_radiance(i));
-    t.solid_angle.push_back(map.texel_solid_angle(i));
+/// The equirect map the tails are summed over: the map box-filtered to kTailWidth wide, or itself
+/// where it is narrower; a cube map is resampled (4 x 4 directions per texel).
+Environment tail_map(const std::vector<Environment>& pyramid) {
+  const Environment& map = pyramid.front();
+  if (map.layout() == EnvironmentLayout::Equirect) {
+    if (map.width() <= kTailWidth) return map;
+    size_t i = 0;
+    while (i + 1 < pyramid.size() && pyramid[i + 1].width() >= kTailWidth) ++i;
+    return pyramid[i].area_averaged(kTailWidth, kTailWidth / 2);
   }
-  return t;
+  const int width = std::min(kTailWidth, 4 * map.width()), height = width / 2;
+  constexpr int kSub = 4;
+  std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      glm::dvec3 sum(0.0);
+      for (int b = 0; b < kSub; ++b)
+        for (int a = 0; a < kSub; ++a)
+          sum += map.radiance(spherical_direction(kPi * (j + (b + 0.5) / kSub) / height,
+                                                  kPi - 2.0 * kPi * (i + (a + 0.5) / kSub) / width));
+      for (int c = 0; c < 3; ++c) rgb[3 * (static_cast<size_t>(j) * width + i) + c] = static_cast<float>(sum[c] / (kSub * kSub));
+    }
+  return Environment::from_equirect_pixels(width, height, std::move(rgb));
 }
 
-/// ∫ L(l) D(h) (r·l)⁺ dl / ∫ D(h) (r·l)⁺ dl over the texels (n = v = r, h = (r + l) / |r + l|).
-glm::dvec3 convolved(const Texels& texels, const glm::dvec3& r, double alpha) {
-  glm::dvec3 sum(0.0);
-  double weight = 0.0;
-  for (size_t t = 0; t < texels.direction.size(); ++t) {
-    const double r_dot_l = glm::dot(r, texels.direction[t]);
-    if (r_dot_l <= 0.0) continue;
-    // (r·h)² = (1 + r·l) / 2 for the half vector of two unit vectors
-    const double w = ggx_distribution(std::sqrt(0.5 * (1.0 + r_dot_l)), alpha) * r_dot_l * texels.solid_angle[t];
-    sum += w * texels.radiance[t];
-    weight += w;
+/// ∫ L(l) k(r·l) dl / ∫ k(r·l) dl at the centre r of every texel of an equirect map, for a kernel
+/// k(c) >= 0 that is 0 for c <= 0 and positive somewhere on the hemisphere. Between a row of r and a
+/// row of l the weight depends only on their columns' difference, so each output row is a sum of
+/// circular convolutions along the input rows: by FFT (Eigen's), O(H² W log W) for H rows of W.
+/// Both cores.
+template <typename Kernel>
+Environment convolved_map(const Environment& map, Kernel kernel) {
+  const int width = map.width(), height = map.height(), spectrum = width / 2 + 1;
+  using Spectrum = std::vector<std::complex<double>>;
+  std::vector<std::array<Spectrum, 3>> rows(height);   // the input rows' spectra per channel
+  {
+    Eigen::FFT<double> fft;
+    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    std::vector<double> row(width);
+    for (int j = 0; j < height; ++j)
+      for (int c = 0; c < 3; ++c) {
+        for (int i = 0; i < width; ++i) row[i] = map.pixels()[3 * (static_cast<size_t>(j) * width + i) + c];
+        fft.fwd(rows[j][c], row);
+      }
   }
-  return sum / weight;
+  std::vector<float> out(static_cast<size_t>(width) * height * 3);
+  parallel_for(static_cast<size_t>(height), 1, [&](size_t begin, size_t end) {
+    Eigen::FFT<double> fft;
+    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    std::vector<double> weights(width), channel(width);
+    Spectrum weight_spectrum;
+    for (size_t j = begin; j < end; ++j) {
+      const double theta = equirect_theta(static_cast<int>(j), height);
+      std::array<Spectrum, 3> sum;
+      sum.fill(Spectrum(spectrum));
+      double total = 0.0;
+      for (int jj = 0; jj < height; ++jj) {
+        const double theta_l = equirect_theta(jj, height);
+        const double cos_part = std::cos(theta) * std::cos(theta_l), sin_part = std::sin(theta) * std::sin(theta_l);
+        if (cos_part + sin_part <= 0.0) continue;   // the row lies below r's horizon
+        const double solid_angle = map.texel_solid_angle(static_cast<int64_t>(jj) * width);
+        double row_total = 0.0;
+        for (int d = 0; d < width; ++d) {
+          weights[d] = kernel(cos_part + sin_part * std::cos(2.0 * kPi * d / width)) * solid_angle;
+          row_total += weights[d];
+        }
+        if (row_total == 0.0) continue;
+        total += row_total;
+        // the weights are even in d (cos), so their spectrum is real and correlation is convolution
+        fft.fwd(weight_spectrum, weights);
+        for (int c = 0; c < 3; ++c)
+          for (int f = 0; f < spectrum; ++f) sum[c][f] += weight_spectrum[f] * rows[jj][c][f];
+      }
+      for (int c = 0; c < 3; ++c) {
+        fft.inv(channel, sum[c], width);
+        for (int i = 0; i < width; ++i)
+          out[3 * (j * width + i) + c] = static_cast<float>(std::max(channel[i] / total, 0.0));
+      }
+    }
+  });
+  return Environment::from_equirect_pixels(width, height, std::move(out));
 }
 
 /// Direction of texel (i, j) of an equirect level whose rows run bottom-first.
@@ -221,20 +312,20 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
     int level, j;
   };
   std::vector<Row> rows;
-  std::vector<std::vector<LobeSample>> level_samples(layout.levels);
+  std::vector<SampledLobe> lobes(layout.levels);
+  std::vector<Environment> tails;   // tails[k - 1]: level k's tail (sampled_lobe) at every direction
+  const Environment tail_source = tail_map(pyramid);
   for (int k = 0; k < layout.levels; ++k) {
     for (int j = 0; j < layout.level_height(k); ++j) rows.push_back({k, j});
+    if (k == 0) continue;
     // Each level a quarter of the texels of the one before and a lobe twice as wide: twice the
     // samples, for half the work of the level before.
-    if (k > 0 && layout.roughness(k) < kConvolutionRoughness)
-      level_samples[k] = lobe_samples(layout.roughness(k), std::min(samples << std::min(k - 1, 12), kMaxSamples),
-                                      finest, coarsest);
+    lobes[k] = sampled_lobe(layout.roughness(k), std::min(samples << std::min(k - 1, 12), kMaxSamples), finest, coarsest);
+    const double alpha = ggx_alpha(layout.roughness(k));
+    tails.push_back(convolved_map(tail_source, [alpha](double c) {
+      return c > 0.0 ? lobe_weight(c, alpha) * (1.0 - core_share(c)) : 0.0;
+    }));
   }
-  size_t coarse = 0;   // the pyramid's map the rough levels are convolved over
-  while (coarse + 1 < pyramid.size() &&
-         (pyramid[coarse + 1].layout() == EnvironmentLayout::Cube ? 4 : 1) * pyramid[coarse + 1].width() >= kConvolutionWidth)
-    ++coarse;
-  const Texels coarse_texels = texels_of(pyramid[coarse]);
   const double level0_source = std::clamp(
       0.5 * std::log2(4.0 * kPi / (static_cast<double>(layout.level_width(0)) * layout.level_height(0)) / finest), 0.0,
       static_cast<double>(coarsest));
@@ -245,11 +336,10 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
       const int width = layout.level_width(k), height = layout.level_height(k);
       const auto origin = layout.level_origin(k);
       float* out = &atlas[(static_cast<size_t>(origin[1] + j) * atlas_width + origin[0]) * 3];
-      const bool sampled = k > 0 && layout.roughness(k) < kConvolutionRoughness;
-      const std::vector<LobeSample>& samples_k = level_samples[k];
+      const std::vector<LobeSample>& samples_k = lobes[k].samples;
       // On an equirect map: the places of the row's first texel's samples (azimuthal_frame)
       std::vector<EquirectPoint> first;
-      if (sampled && equirect) {
+      if (k > 0 && equirect) {
         glm::dvec3 t1, t2;
         const glm::dvec3 r = level_direction(0, j, width, height);
         azimuthal_frame(r, t1, t2);
@@ -261,8 +351,6 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
         glm::dvec3 sum(0.0);
         if (k == 0) {
           sum = pyramid_radiance(pyramid, r, level0_source);
-        } else if (!sampled) {
-          sum = convolved(coarse_texels, r, ggx_alpha(layout.roughness(k)));
         } else {
           glm::dvec3 t1, t2;
           if (!equirect) azimuthal_frame(r, t1, t2);
@@ -275,7 +363,8 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
                                                            s.source_level));
             weight += s.weight;
           }
-          sum /= weight;
+          const double core = lobes[k].core_part;
+          sum = core * sum / weight + (1.0 - core) * bilinear_radiance(tails[k - 1], equirect_point(r));
         }
         for (int c = 0; c < 3; ++c) out[3 * i + c] = static_cast<float>(sum[c]);
       }

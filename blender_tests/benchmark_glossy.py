@@ -14,8 +14,9 @@ sunrise.exr and city.exr, and the smooth Wuson in Blender's default material und
 at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
-Printed per scene: relative RMS of block averages and bias per channel, truncated and prefiltered,
-and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
+Printed per scene: relative RMS of block averages, bias per channel and the mean HDR-FLIP per
+pixel (sdtest.perceptual_error: highlights are where RMS and the eye disagree most), truncated and
+prefiltered, and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
 the world's light and its probes as EEVEE makes them).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
@@ -83,7 +84,8 @@ def compare(name, scene, objects, out, size, block, defaults=False):
         a, b = (sdtest.block_averages(image, mask, block) for image in (ours, cycles))
         error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
         bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
-        cells.append("%s %5.1f %% (bias %s %%)" % (label, 100 * error, np.round(100 * bias, 1)))
+        cells.append("%s %5.1f %% (bias %s %%, FLIP %.3f)" % (label, 100 * error, np.round(100 * bias, 1),
+                                                              sdtest.perceptual_error(ours, cycles)))
     print("%-44s %s | Cycles' noise %.2f %%" % (name, " | ".join(cells), 100 * noise), flush=True)
 
 

@@ -2,7 +2,7 @@
 """Blender as a Python module: the pinned `bpy` wheels (blender_tests/bpy_versions.txt), each in a
 virtual environment of its own, cached outside the repository so that reruns cost nothing.
 
-    python3 blender_tests/bpy_modules.py install [VERSION ...]   # idempotent; default: all pinned
+    python3 blender_tests/bpy_modules.py install [VERSION ...]   # idempotent; default: all pinned, and the tools
     python3 blender_tests/bpy_modules.py python VERSION          # prints that version's interpreter
     python3 blender_tests/bpy_modules.py list                    # the pinned versions
     python3 blender_tests/bpy_modules.py find-python 3.13        # a CPython 3.13 on this machine
@@ -13,6 +13,10 @@ its marker file names the same version, Python and pinned dependencies
 (bpy_constraints-<python>.txt); otherwise it is built again. Each venv is made with the CPython the
 pin names (3.11: Debian's /usr/bin/python3, whose `venv` module is Debian's python3-venv; 3.13:
 python3.13 on PATH or pyenv's). A version whose CPython is not on the machine is skipped.
+
+The tools: the packages the tests use besides Blender's own (tools_requirements.txt: NVIDIA's
+FLIP), in venv/tools/, a venv of Debian's CPython 3.11 that sees its system packages (NumPy);
+`install` without versions makes it too, and sdtest.py puts its site-packages on the path.
 """
 
 import argparse
@@ -97,12 +101,22 @@ def _expected_marker(version):
     return "bpy==%s python=%s constraints=%s\n" % (version, python, constraints)
 
 
-def installed(version):
+def _marked(venv, expected):
+    """Whether the venv's marker file holds `expected` (what it was made with)."""
     try:
-        with open(os.path.join(venv_directory(version), MARKER), encoding="utf-8") as f:
-            return f.read() == _expected_marker(version)
+        with open(os.path.join(venv, MARKER), encoding="utf-8") as f:
+            return f.read() == expected
     except OSError:
         return False
+
+
+def _mark(venv, text):
+    with open(os.path.join(venv, MARKER), "w", encoding="utf-8") as f:
+        f.write(text)
+
+
+def installed(version):
+    return _marked(venv_directory(version), _expected_marker(version))
 
 
 def _run(command, **kwargs):
@@ -146,10 +160,44 @@ def install(version):
     if probe.returncode != 0 or not probe.stdout.strip().startswith(version):
         raise SystemExit("bpy_modules: bpy %s does not import in %s:\n%s%s" % (
             version, venv, probe.stdout, probe.stderr))
-    with open(os.path.join(venv, MARKER), "w", encoding="utf-8") as f:
-        f.write(_expected_marker(version))
+    _mark(venv, _expected_marker(version))
     seconds = time.perf_counter() - start
     print("bpy_modules: bpy %s ready in %.0f s" % (version, seconds), flush=True)
+    return seconds
+
+
+TOOLS_REQUIREMENTS = os.path.join(HERE, "tools_requirements.txt")
+
+
+def tools_directory():
+    return os.path.join(cache_directory(), "venv", "tools")
+
+
+def tools_site_packages():
+    """The tools venv's site-packages (for sys.path), whether installed or not."""
+    return os.path.join(tools_directory(), "lib", "python" + DEFAULT_PYTHON, "site-packages")
+
+
+def _tools_marker():
+    with open(TOOLS_REQUIREMENTS, "rb") as f:
+        return "tools python=%s requirements=%s\n" % (DEFAULT_PYTHON, hashlib.sha256(f.read()).hexdigest()[:16])
+
+
+def install_tools():
+    """Makes the tools venv (tools_requirements.txt) unless it holds the same pins. Returns the
+    seconds spent (0 when it was already there)."""
+    venv = tools_directory()
+    if _marked(venv, _tools_marker()):
+        return 0.0
+    start = time.perf_counter()
+    shutil.rmtree(venv, ignore_errors=True)
+    _run([find_python(DEFAULT_PYTHON) or sys.executable, "-m", "venv", "--system-site-packages", venv])
+    python = os.path.join(venv, "bin", "python")
+    print("bpy_modules: installing the tools into %s ..." % venv, flush=True)
+    _run(_quiet_pip(python, "install", "--no-deps", "--only-binary=:all:", "-r", TOOLS_REQUIREMENTS))
+    _mark(venv, _tools_marker())
+    seconds = time.perf_counter() - start
+    print("bpy_modules: the tools ready in %.0f s" % seconds, flush=True)
     return seconds
 
 
@@ -183,6 +231,8 @@ def main():
                 print("bpy_modules: bpy %s is installed (%s)" % (version, venv_directory(version)))
             else:
                 install(version)
+        if not args.versions:
+            install_tools()
     return 0
 
 

@@ -167,6 +167,8 @@ def blender_environment(user):
         # $XDG_CACHE_HOME (and the add-on's, always fresh): run_one links the shader caches to
         # the shared ones (FRESH_SHADER_CACHES).
         env["XDG_CACHE_HOME"] = os.path.join(user, "cache")
+        # ... but the venvs' cache stays the runner's (the tools venv: sdtest.perceptual_error)
+        env["SD_BPY_CACHE"] = bpy_modules.cache_directory()
     return env
 
 

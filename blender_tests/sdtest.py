@@ -480,6 +480,31 @@ def preview(path, **size):
     return load_exr(path)
 
 
+def perceptual_error(ours, theirs):
+    """Mean HDR-FLIP (NVIDIA's FLIP for linear images: Andersson et al. 2021, flip-evaluator, its
+    defaults: 67 pixels per degree, ACES tone mapping over the exposures the reference spans) of
+    `ours` against the reference `theirs`, RGBA images, over the pixels both cover (alpha > 0.99):
+    0 identical, 1 as different as can be. Per pixel, where relative RMS averages blocks: it sees
+    a highlight's shape and a shadow's edge. From the tools venv (blender_tests/bpy_modules.py
+    install), CPython 3.11 only: ImportError says so elsewhere."""
+    import numpy as np
+    import bpy_modules
+    if sys.version_info[:2] == (3, 11) and bpy_modules.tools_site_packages() not in sys.path:
+        sys.path.append(bpy_modules.tools_site_packages())
+    try:
+        import flip_evaluator
+    except ImportError:
+        raise ImportError("perceptual_error needs flip-evaluator (blender_tests/tools_requirements.txt) "
+                          "on CPython 3.11 in %s: `python3 blender_tests/bpy_modules.py install`; this is "
+                          "CPython %d.%d" % ((bpy_modules.tools_site_packages(),) + sys.version_info[:2])) from None
+    mask = (ours[..., 3] > 0.99) & (theirs[..., 3] > 0.99)
+    errors, _, _ = flip_evaluator.evaluate(
+        np.ascontiguousarray(np.maximum(theirs[..., :3], 0.0), dtype=np.float32),
+        np.ascontiguousarray(np.maximum(ours[..., :3], 0.0), dtype=np.float32), "HDR",
+        applyMagma=False, computeMeanError=False)
+    return float(np.asarray(errors)[mask].mean())
+
+
 def block_averages(image, mask, block):
     """RGB averages over the block x block tiles that lie wholly inside the mask: [K, 3]."""
     n, m = image.shape[0] // block, image.shape[1] // block

@@ -143,6 +143,21 @@ TEST(GlossyPrefilter, MatchesTheConvolutionOfTheMapsTexels) {
   }
 }
 
+TEST(GlossyPrefilter, AWideMapOfAnyWidthIsSummedOverItsAverage) {
+  // 600 x 300: wider than the tails' map (box-filtered down to it) and no power of two.
+  const Environment env = Environment::from_equirect_pixels(600, 300, equirect_pixels(600, 300, soft_sun()));
+  const PrefilterLayout layout{128, 6};
+  const std::vector<float> atlas = prefilter_ggx(env, layout, 64);
+  for (int k = 1; k < layout.levels; ++k)
+    for (const auto& [i, j] : {std::pair{3, 40}, std::pair{50, 20}, std::pair{90, 55}}) {
+      const int width = layout.level_width(k), height = layout.level_height(k);
+      const int column = i * width / 128, row = j * height / 64;
+      const glm::dvec3 expected = brute_force_prefilter(env, level_direction(layout, k, column, row), layout.roughness(k));
+      EXPECT_LT(glm::length(atlas_texel(atlas, layout, k, column, row) - expected), kFilteredSampling * glm::length(expected))
+          << "level " << k << " texel " << column << ", " << row;
+    }
+}
+
 TEST(GlossyPrefilter, KeepsASunsLightOutOfTheDarkSkyAroundIt) {
   // A 4-degree sun 2000x the sky: the texels away from it hold the sky and the lobe's far tail,
   // where sampling the whole lobe read the sun's coarse texels (several times the exact value).

@@ -185,13 +185,17 @@ def _tools_marker():
 
 def install_tools():
     """Makes the tools venv (tools_requirements.txt) unless it holds the same pins. Returns the
-    seconds spent (0 when it was already there)."""
+    seconds spent (0 when it was already there), or None without a CPython 3.11 here."""
     venv = tools_directory()
     if _marked(venv, _tools_marker()):
         return 0.0
+    base = find_python(DEFAULT_PYTHON)
+    if base is None:
+        print("bpy_modules: the tools need CPython %s, not found here: skipped" % DEFAULT_PYTHON)
+        return None
     start = time.perf_counter()
     shutil.rmtree(venv, ignore_errors=True)
-    _run([find_python(DEFAULT_PYTHON) or sys.executable, "-m", "venv", "--system-site-packages", venv])
+    _run([base, "-m", "venv", "--system-site-packages", venv])
     python = os.path.join(venv, "bin", "python")
     print("bpy_modules: installing the tools into %s ..." % venv, flush=True)
     _run(_quiet_pip(python, "install", "--no-deps", "--only-binary=:all:", "-r", TOOLS_REQUIREMENTS))

@@ -480,25 +480,32 @@ def preview(path, **size):
     return load_exr(path)
 
 
-def perceptual_error(ours, theirs):
-    """Mean HDR-FLIP (NVIDIA's FLIP for linear images: Andersson et al. 2021, flip-evaluator, its
-    defaults: 67 pixels per degree, ACES tone mapping over the exposures the reference spans) of
-    `ours` against the reference `theirs`, RGBA images, over the pixels both cover (alpha > 0.99):
-    0 identical, 1 as different as can be. Per pixel, where relative RMS averages blocks: it sees
-    a highlight's shape and a shadow's edge. From the tools venv (blender_tests/bpy_modules.py
-    install), CPython 3.11 only: ImportError says so elsewhere."""
-    import numpy as np
+def flip_module():
+    """NVIDIA's FLIP (flip-evaluator), from the tools venv (blender_tests/bpy_modules.py install):
+    CPython 3.11 only. Raises ImportError saying how to install it; a test that measures with it
+    calls this first, so that it fails before its renders."""
     import bpy_modules
     if sys.version_info[:2] == (3, 11) and bpy_modules.tools_site_packages() not in sys.path:
         sys.path.append(bpy_modules.tools_site_packages())
     try:
         import flip_evaluator
     except ImportError:
-        raise ImportError("perceptual_error needs flip-evaluator (blender_tests/tools_requirements.txt) "
-                          "on CPython 3.11 in %s: `python3 blender_tests/bpy_modules.py install`; this is "
-                          "CPython %d.%d" % ((bpy_modules.tools_site_packages(),) + sys.version_info[:2])) from None
+        raise ImportError("NVIDIA's FLIP: flip-evaluator (blender_tests/tools_requirements.txt) on CPython 3.11 "
+                          "in %s: `python3 blender_tests/bpy_modules.py install`; this is CPython %d.%d"
+                          % ((bpy_modules.tools_site_packages(),) + sys.version_info[:2])) from None
+    return flip_evaluator
+
+
+def perceptual_error(ours, theirs):
+    """Mean HDR-FLIP (NVIDIA's FLIP for linear images: Andersson et al. 2021; flip-evaluator's
+    defaults: 67 pixels per degree, ACES tone mapping over the exposures the reference spans) of
+    `ours` against the reference `theirs`, RGBA images, averaged over the pixels both cover (alpha >
+    0.99; FLIP itself sees the whole frame: its filters reach across an object's edge, and the
+    reference's background counts towards its exposures): 0 identical, 1 as different as can be.
+    Per pixel, where relative RMS averages blocks: it sees a highlight's shape and a shadow's edge."""
+    import numpy as np
     mask = (ours[..., 3] > 0.99) & (theirs[..., 3] > 0.99)
-    errors, _, _ = flip_evaluator.evaluate(
+    errors, _, _ = flip_module().evaluate(
         np.ascontiguousarray(np.maximum(theirs[..., :3], 0.0), dtype=np.float32),
         np.ascontiguousarray(np.maximum(ours[..., :3], 0.0), dtype=np.float32), "HDR",
         applyMagma=False, computeMeanError=False)

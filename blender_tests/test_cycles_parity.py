@@ -178,6 +178,7 @@ def error_image(path, theirs, images):
 
 def main():
     args = sdtest.arguments()
+    sdtest.flip_module()   # before the renders: it says how to install it
     package = sdtest.install_addon(args.zip)
     os.makedirs(args.out, exist_ok=True)
     checks = sdtest.Checks("test_cycles_parity")

@@ -305,7 +305,7 @@ def prefiltered_atlas(src, width0, levels, wait, remainder=False):
     every roughness. float32 [rows, width0, 3] (sdnative.prefilter_atlas_shape). remainder: of the
     map without the bright sources whose highlights the shader adds on their own
     (light_sources.without_highlights; source_split must be there). Computed in a worker thread
-    (about 1.5 s for a 1024 x 512 map) and cached: wait=False (the interactive draw) gives None
+    (seconds: README, *Prefiltered Glossy*) and cached: wait=False (the interactive draw) gives None
     until it is there or when it failed; wait=True waits (raises background.Failed)."""
     sd = native.get()
     if src.kind == "uniform":

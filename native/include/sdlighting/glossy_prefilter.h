@@ -57,7 +57,7 @@ struct PrefilterLayout {
 /// describes: level k at direction r holds ∫ L(l) D(h) (r·l)⁺ dl / ∫ D(h) (r·l)⁺ dl with
 /// n = v = r and α = r_k² (level 0: the map itself at the level's size). Within a few degrees of r
 /// by GGX-distributed directions (Hammersley), `samples` per texel on level 1 and twice as many on
-/// each level after it (a quarter of the texels, a lobe twice as wide; up to 4096), each read from
+/// each level after it (a quarter of the texels; up to 4096), each read from
 /// the map averaged over about the sample's solid angle (filtered importance sampling: Křivánek and
 /// Colbert 2008); beyond, the exact sum over the texels of the map averaged to 256 texels wide.
 /// Both cores. float RGB, atlas_width × atlas_height × 3, zero outside the levels. Throws

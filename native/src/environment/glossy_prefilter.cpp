@@ -29,6 +29,9 @@ constexpr double kMinAlpha = 1e-4;
 // width, so the tail's weight varies little across one.
 constexpr double kCoreInnerDegrees = 3.0, kCoreOuterDegrees = 6.0;
 constexpr int kTailWidth = 256;
+// Maps narrower than this are resampled to it for the tails: texels wider than the window can
+// leave a texel's whole hemisphere inside it, with no tail to sum.
+constexpr int kMinTailWidth = 64;
 
 /// GGX α of a Principled roughness r: r², kept off 0 so that D stays finite.
 double ggx_alpha(double roughness) { return std::max(roughness * roughness, kMinAlpha); }
@@ -197,16 +200,17 @@ void azimuthal_frame(const glm::dvec3& r, glm::dvec3& t1, glm::dvec3& t2) {
 }
 
 /// The equirect map the tails are summed over: the map box-filtered to kTailWidth wide, or itself
-/// where it is narrower; a cube map is resampled (4 x 4 directions per texel).
+/// where it is narrower down to kMinTailWidth; a cube map, or a narrower equirect one, is resampled
+/// to that width (4 x 4 directions per texel, read as filtered_radiance reads them from the
+/// pyramid's map of about that size).
 Environment tail_map(const std::vector<Environment>& pyramid) {
-  const Environment& map = pyramid.front();
-  if (map.layout() == EnvironmentLayout::Equirect) {
-    if (map.width() <= kTailWidth) return map;
-    size_t i = 0;
-    while (i + 1 < pyramid.size() && pyramid[i + 1].width() >= kTailWidth) ++i;
-    return pyramid[i].area_averaged(kTailWidth, kTailWidth / 2);
-  }
-  const int width = std::min(kTailWidth, 4 * map.width()), height = width / 2;
+  const auto wide = [](const Environment& m) { return (m.layout() == EnvironmentLayout::Cube ? 4 : 1) * m.width(); };
+  size_t i = 0;
+  while (i + 1 < pyramid.size() && wide(pyramid[i + 1]) >= kTailWidth) ++i;
+  const Environment& map = pyramid[i];
+  if (map.layout() == EnvironmentLayout::Equirect && map.width() >= kMinTailWidth)
+    return map.width() > kTailWidth ? map.area_averaged(kTailWidth, kTailWidth / 2) : map;
+  const int width = map.layout() == EnvironmentLayout::Cube ? kTailWidth : kMinTailWidth, height = width / 2;
   constexpr int kSub = 4;
   std::vector<float> rgb(static_cast<size_t>(width) * height * 3);
   for (int j = 0; j < height; ++j)
@@ -214,8 +218,8 @@ Environment tail_map(const std::vector<Environment>& pyramid) {
       glm::dvec3 sum(0.0);
       for (int b = 0; b < kSub; ++b)
         for (int a = 0; a < kSub; ++a)
-          sum += map.radiance(spherical_direction(kPi * (j + (b + 0.5) / kSub) / height,
-                                                  kPi - 2.0 * kPi * (i + (a + 0.5) / kSub) / width));
+          sum += filtered_radiance(map, spherical_direction(kPi * (j + (b + 0.5) / kSub) / height,
+                                                            kPi - 2.0 * kPi * (i + (a + 0.5) / kSub) / width));
       for (int c = 0; c < 3; ++c) rgb[3 * (static_cast<size_t>(j) * width + i) + c] = static_cast<float>(sum[c] / (kSub * kSub));
     }
   return Environment::from_equirect_pixels(width, height, std::move(rgb));
@@ -318,8 +322,8 @@ std::vector<float> prefilter_ggx(const Environment& environment, const Prefilter
   for (int k = 0; k < layout.levels; ++k) {
     for (int j = 0; j < layout.level_height(k); ++j) rows.push_back({k, j});
     if (k == 0) continue;
-    // Each level a quarter of the texels of the one before and a lobe twice as wide: twice the
-    // samples, for half the work of the level before.
+    // Each level a quarter of the texels of the one before: twice the samples, each read from a
+    // finer map, for half the work of the level before.
     lobes[k] = sampled_lobe(layout.roughness(k), std::min(samples << std::min(k - 1, 12), kMaxSamples), finest, coarsest);
     const double alpha = ggx_alpha(layout.roughness(k));
     tails.push_back(convolved_map(tail_source, [alpha](double c) {

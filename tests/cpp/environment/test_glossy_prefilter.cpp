@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace sd::test {
@@ -156,6 +157,32 @@ TEST(GlossyPrefilter, AWideMapOfAnyWidthIsSummedOverItsAverage) {
       EXPECT_LT(glm::length(atlas_texel(atlas, layout, k, column, row) - expected), kFilteredSampling * glm::length(expected))
           << "level " << k << " texel " << column << ", " << row;
     }
+}
+
+TEST(GlossyPrefilter, ANarrowMapOfAnyWidthIsSummedOverItself) {
+  // 90 x 45: narrower than the tails' map and no power of two (the row FFTs are 90 long).
+  const Environment env = Environment::from_equirect_pixels(90, 45, equirect_pixels(90, 45, soft_sun()));
+  const PrefilterLayout layout{64, 5};
+  const std::vector<float> atlas = prefilter_ggx(env, layout, 64);
+  for (int k = 1; k < layout.levels; ++k)
+    for (int j = 1; j < layout.level_height(k); j += 5)
+      for (int i = 0; i < layout.level_width(k); i += 7) {
+        const glm::dvec3 expected = brute_force_prefilter(env, level_direction(layout, k, i, j), layout.roughness(k));
+        EXPECT_LT(glm::length(atlas_texel(atlas, layout, k, i, j) - expected), kFilteredSampling * glm::length(expected))
+            << "level " << k << " texel " << i << ", " << j;
+      }
+}
+
+TEST(GlossyPrefilter, TinyMapsGiveFiniteLevels) {
+  // Texels of 90 degrees and more: the tails are summed over a resampled copy.
+  for (const auto& [width, height] : {std::pair{1, 1}, std::pair{2, 1}, std::pair{4, 2}, std::pair{3, 1}}) {
+    const Environment env = Environment::from_equirect_pixels(
+        width, height, equirect_pixels(width, height, [](const glm::dvec3& d) { return glm::dvec3(1.0 + d.z, 1.0, 0.5); }));
+    const std::vector<float> atlas = prefilter_ggx(env, PrefilterLayout{16, 4}, 16);
+    for (float v : atlas) ASSERT_TRUE(std::isfinite(v)) << width << " x " << height;
+    const glm::dvec3 any = atlas_texel(atlas, PrefilterLayout{16, 4}, 3, 3, 2);
+    EXPECT_NEAR(any.y, 1.0, 1e-5) << width << " x " << height;   // the constant channel stays so
+  }
 }
 
 TEST(GlossyPrefilter, KeepsASunsLightOutOfTheDarkSkyAroundIt) {

@@ -22,15 +22,15 @@ model under the HDRI with the hardest shadows; blender_tests/benchmark_refine.py
 ladder on every asset and HDRI. Over the 4 x 4 blocks both cover: relative RMS (over blocks and
 channels), the bias (mean over the mean of Cycles, per channel) and the share of blocks that are
 black where Cycles is lit; per pixel, the mean HDR-FLIP (sdtest.perceptual_error), which sees the
-shadow edges and shading detail that block averages smooth. Error images (Cycles, then each preview and its |difference| x 4) go
-to --out.
+shadow edges and shading detail that block averages smooth. Error images (Cycles, then each
+preview and its |difference| x 4) go to --out.
 
 Checks: Cycles' noise is under 1.5 %; on the ladder the least-squares fit lowers the plain
 bake's error and refinement lowers it further, and texture-space data is within the same goal as
 the defaults; no block is black where Cycles is lit; with the defaults each asset is within issue
 8's goal (5 % on the CAD models, 3 % on the smooth one), its FLIP under the asset's bound (the
-measured value and a margin: a regression in shading detail the RMS misses fails here), and its bake takes at most twice the
-panel's prediction; the coloured asset's mean colour follows Cycles' channel by channel; the panel
+measured value and a margin: a regression in shading detail the RMS misses fails here), and its
+bake takes at most twice the panel's prediction; the coloured asset's mean colour follows Cycles' channel by channel; the panel
 tells what the refinement did.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_cycles_parity.py -- --zip Z --out DIR
 """

@@ -245,6 +245,13 @@ Environment convolved_map(const Environment& map, Kernel kernel) {
         fft.fwd(rows[j][c], row);
       }
   }
+  // cos of the columns' azimuth differences, and of the rows' polar angles: the same for every pair
+  std::vector<double> cos_azimuth(width), cos_polar(height), sin_polar(height);
+  for (int d = 0; d < width; ++d) cos_azimuth[d] = std::cos(2.0 * kPi * d / width);
+  for (int j = 0; j < height; ++j) {
+    cos_polar[j] = std::cos(equirect_theta(j, height));
+    sin_polar[j] = std::sin(equirect_theta(j, height));
+  }
   std::vector<float> out(static_cast<size_t>(width) * height * 3);
   parallel_for(static_cast<size_t>(height), 1, [&](size_t begin, size_t end) {
     Eigen::FFT<double> fft;
@@ -252,18 +259,16 @@ Environment convolved_map(const Environment& map, Kernel kernel) {
     std::vector<double> weights(width), channel(width);
     Spectrum weight_spectrum;
     for (size_t j = begin; j < end; ++j) {
-      const double theta = equirect_theta(static_cast<int>(j), height);
       std::array<Spectrum, 3> sum;
       sum.fill(Spectrum(spectrum));
       double total = 0.0;
       for (int jj = 0; jj < height; ++jj) {
-        const double theta_l = equirect_theta(jj, height);
-        const double cos_part = std::cos(theta) * std::cos(theta_l), sin_part = std::sin(theta) * std::sin(theta_l);
+        const double cos_part = cos_polar[j] * cos_polar[jj], sin_part = sin_polar[j] * sin_polar[jj];
         if (cos_part + sin_part <= 0.0) continue;   // the row lies below r's horizon
         const double solid_angle = map.texel_solid_angle(static_cast<int64_t>(jj) * width);
         double row_total = 0.0;
         for (int d = 0; d < width; ++d) {
-          weights[d] = kernel(cos_part + sin_part * std::cos(2.0 * kPi * d / width)) * solid_angle;
+          weights[d] = kernel(cos_part + sin_part * cos_azimuth[d]) * solid_angle;
           row_total += weights[d];
         }
         if (row_total == 0.0) continue;

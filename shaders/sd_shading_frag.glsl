@@ -119,6 +119,57 @@ float sd_smith_lambda(float c, float a2)
   return 0.5 * (sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)) - 1.0);
 }
 
+/* The normal the GGX lobe sees, Cycles' (ensure_valid_specular_reflection, kernel/closure/
+ * bsdf_util.h): where the interpolated normal mirrors the view below the triangle's own plane - on
+ * a smooth, coarse mesh's rims - Cycles turns it towards the geometric normal, in the plane of the
+ * two, until the reflection lies just above the triangle (cosine min(0.9 v.ng, 0.01)). `ng`: the
+ * triangle's normal, from the screen-space derivatives of the pixel's position, turned to the view
+ * (the shading normal where they give none). A back face's normal (n.ng < 0) is left as it is. */
+vec3 sd_glossy_normal(vec3 normal, vec3 view, out vec3 ng)
+{
+  ng = mat3(sd.world_to_local) * cross(dFdx(sd_origin_offset), dFdy(sd_origin_offset));
+  if (dot(ng, ng) < 1e-30) {
+    ng = normal;
+    return normal;
+  }
+  ng = normalize(ng);
+  float iz = dot(view, ng);
+  if (iz < 0.0) {
+    ng = -ng;
+    iz = -iz;
+  }
+  float threshold = min(0.9 * iz, 0.01);
+  if (dot(normal, ng) <= 0.0 || dot(ng, 2.0 * dot(normal, view) * normal - view) >= threshold) {
+    return normal;
+  }
+  vec3 x = normal - dot(normal, ng) * ng;
+  x = dot(x, x) > 1e-12 ? normalize(x) : normal;
+  float ix = dot(view, x);
+  float a = ix * ix + iz * iz;
+  float b = 2.0 * (a + iz * threshold);
+  float c = (threshold + iz) * (threshold + iz);
+  float root = sqrt(max(b * b - 4.0 * a * c, 0.0));
+  float nz2 = 0.25 * ((ix < 0.0) ? b + root : b - root) / max(a, 1e-12);
+  return sqrt(max(1.0 - nz2, 0.0)) * x + sqrt(max(nz2, 0.0)) * ng;
+}
+
+/* The share of a GGX lobe (roughness alpha) about `axis` above a plane of normal n, at the axis's
+ * elevation e = axis.n: near the plane a reflected direction rises e plus twice its microfacet's
+ * slope towards n, a slope whose marginal GGX distribution has the CDF (1 + x / sqrt(alpha^2 + x^2)) / 2. */
+float sd_lobe_above(float e, float alpha)
+{
+  return 0.5 * (1.0 + e * inversesqrt(e * e + 4.0 * alpha * alpha + 1e-12));
+}
+
+/* The share of the prefiltered light that the triangle's own plane (ng) lets through beyond the
+ * shading normal's, which the split sum's albedo already cuts at: where the lobe grazes the
+ * triangle (a rim, and every bent normal above), the object itself hides its lower part, as in Cycles. */
+float sd_triangle_horizon(vec3 axis, vec3 normal, vec3 ng, float roughness)
+{
+  float alpha = max(roughness * roughness, 1e-4);
+  return min(sd_lobe_above(dot(axis, ng), alpha) / max(sd_lobe_above(dot(axis, normal), alpha), 1e-4), 1.0);
+}
+
 /* The mean light of the GGX lobe the view reflects (F = 1), from SD_GLOSSY_TAPS of its directions:
  * filtered importance sampling (Krivanek and Colbert 2008) of the lobe's visible normals (Heitz
  * 2018), each direction read from the prefiltered level whose lobe covers about its solid angle
@@ -127,7 +178,7 @@ float sd_smith_lambda(float c, float a2)
  * plane of n and v, cut at the horizon, its tails towards the view heavier; msd-notes, "Glossy
  * light"). The points are one Hammersley set for every pixel, so the estimate is smooth over the
  * surface, without noise. */
-vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, float roughness)
+vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
 {
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
@@ -165,7 +216,9 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, float roughness)
       float solid_angle = 4.0 * v.z * (1.0 + lambda_v) / (float(SD_GLOSSY_TAPS) * d);
       /* the level of alpha^2 = solid angle / 4 pi: its lobe's solid angle about that */
       float r = sqrt(sqrt(solid_angle / 12.566370614359172));
-      sum += w * sd_prefiltered_light(l.x * t1 + l.y * t2 + l.z * normal, r);
+      vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
+      /* a direction below the triangle is the object's own (sd_triangle_horizon) */
+      sum += (w * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, r);
       weights += w;
     }
   }
@@ -181,7 +234,7 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, float roughness)
  * where one lookup is too far off; a dielectric's layer keeps the one lookup, its share of the light
  * too small to pay for the taps. The visibility ratio stays the baked lobe's, around the mirrored
  * view. */
-vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
+vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
 {
   float roughness = sd_lobe_weights.z;
   vec2 bends = sd_brdf_table(dot(normal, view), roughness, SD_BRDF_TABLE_SIZE).xy;
@@ -189,10 +242,10 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, out vec3 axis)
   axis = mix(normal, sd_mirrored_view(normal, view), bend);
   /* a back-facing shading normal (view = -normal) can cancel the mix */
   axis = dot(axis, axis) > 1e-12 ? normalize(axis) : normal;
-  vec3 open = sd_prefiltered_light(axis, roughness);
+  vec3 open = sd_prefiltered_light(axis, roughness) * sd_triangle_horizon(axis, normal, ng, roughness);
   float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
   if (sampled > 0.0) {
-    open = mix(open, sd_sampled_glossy_light(normal, view, roughness), sampled);
+    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness), sampled);
   }
   return sd.prefiltered_scale.x * open;
 }
@@ -340,8 +393,10 @@ void main()
 #    ifdef SD_LAMBERT_LAYER
   diffuse = rgb;
 #    endif
+  vec3 ng;
+  normal = sd_glossy_normal(normal, view, ng);
   vec3 axis;
-  vec3 open = sd_open_glossy_light(normal, view, axis);
+  vec3 open = sd_open_glossy_light(normal, view, ng, axis);
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
   diffuse += sd_sources_on_lobes(normal, view, axis, open, stored, visibility, highlights);
@@ -360,11 +415,12 @@ void main()
   diffuse = sd_diffuse_color;
 #  endif
 #  ifdef SD_PREFILTERED
-  vec3 normal = normalize(sd_normal);
   vec3 view = sd_view_direction(sd_origin_offset);
+  vec3 ng;
+  vec3 normal = sd_glossy_normal(normalize(sd_normal), view, ng);
   float visibility = sd_visibility;
   vec3 axis;
-  vec3 open = sd_open_glossy_light(normal, view, axis);
+  vec3 open = sd_open_glossy_light(normal, view, ng, axis);
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
   diffuse += sd.params.x * sd_sources_on_lobes(normal, view, axis, open, 1.0, visibility, highlights);

@@ -17,7 +17,10 @@ Two references:
 (b) what the user sees: the add-on's bake and preview render (per vertex and per pixel, with the
     ringing window and the clamp of the live shading) against a Cycles render from the same camera
     (direct light, pixel filter off), on block averages of 4 x 4 pixels; Cycles' own noise is
-    measured from two renders with different seeds.
+    measured from two renders with different seeds. Glossy (issue 28): Principled BSDFs, gold
+    (metallic) and red plastic at roughness 0.05-0.5 on the sphere and on Suzanne (GGX_MATERIALS,
+    GGX_ROUGHNESS), baked at the panel's defaults, with the prefiltered glossy light and with the
+    seed's truncated Phong lobe, also with the mean HDR-FLIP (ggx_cases).
 
 Costs: the CPU evaluator's ns per vertex (sdnative.shade on all vertices, both cores, timed on
 one HDRI), the bakes' seconds (timed per kind of data), the floats per vertex the add-on stores,
@@ -62,7 +65,7 @@ FULL = {
     "cycles_hdris": ["forest.exr", "sunrise.exr", "interior.exr"], "cycles_size": 160,
     "cycles_samples": 128, "gpu_frames": 2, "gpu_scenes": ["suzanne", "house"],
     "predicted_hdris": ["forest.exr", "sunrise.exr"],
-    "predicted_rays": [256, 1024],
+    "predicted_rays": [256, 1024], "ggx_scenes": ["sphere", "suzanne"],
 }
 QUICK = {
     "scenes": ["sphere", "suzanne"], "hdris": ["forest.exr", "sunrise.exr"],
@@ -71,12 +74,16 @@ QUICK = {
     "rays": [64, 1024], "full_rays": 1024, "sweep_visibility_order": 2,
     "designs": [(4, 2)], "probes": 48, "samples": 16384, "phong_samples": 2048,
     "cycles_hdris": [], "gpu_frames": 0, "predicted_hdris": ["forest.exr"],
-    "predicted_rays": [64, 1024],
+    "predicted_rays": [64, 1024], "ggx_scenes": [],
 }
 BLOCK = 4
 RECOMMENDED = "MSD (13), s = 4, s' = 2, 256 rays"   # the seed's orders, the previous default
 LAMBERT_BEST = "PRT (2), s = 8, 1024 rays"          # the report's pick for Lambert
 AUTOMATIC = "Automatic, 2 % target"                 # the add-on's default: chosen per object
+DEFAULTS = "Panel defaults"                          # the GGX cases' bakes: every setting as a new scene has it
+GGX_ROUGHNESS = (0.05, 0.1, 0.2, 0.3, 0.5)
+TRUNCATED_BAKE = ("msd_visibility", 'MATERIAL', 8, 4, 256)   # the truncated lobe's: method, lobes, s, s', rays
+GGX_MATERIALS = (("gold", (1.0, 0.7, 0.3, 1.0), 1.0), ("red plastic", (0.8, 0.1, 0.05, 1.0), 0.0))  # name, base colour, metallic
 
 
 def options():
@@ -443,7 +450,7 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
             for shading, per_pixel, band_limited in variants:
                 tag = "%s_%s_%s_%s%s" % (name, hdri[:-4], method, shading, "_texture" if band_limited else "")
                 image = preview(package, scene, os.path.join(work, tag + ".exr"), size, per_pixel, band_limited)
-                mask = (image[..., 3] > 0.99) & (image_cycles[..., 3] > 0.99)
+                mask = sdtest.covered(image, image_cycles)
                 ours, theirs = (sdtest.block_averages(x, mask, BLOCK) for x in (image, image_cycles))
                 rms, p99 = relative_errors(ours, theirs)
                 rows.append({"reference": "cycles", "scene": name, "hdri": hdri, "material": "lambert",
@@ -461,37 +468,59 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
         progress.step("%s: %s, under %d HDRIs" % (name, label, len(cycles)), len(cycles))
 
 
-def glossy_case(package, name, scene, objects, config, work, progress, rows):
-    """The add-on's Principled -> Phong mapping (properties: From Material) against Cycles' GGX:
-    a metallic Principled BSDF of roughness 0.3 on the sphere under forest."""
-    material = bpy.data.materials.new("Metal")
-    sdtest.use_nodes(material)
-    principled = next(n for n in material.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')
-    principled.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    principled.inputs["Metallic"].default_value = 1.0
-    principled.inputs["Roughness"].default_value = 0.3
-    for obj in objects:
-        obj.data.materials.clear()
-        obj.data.materials.append(material)
+def ggx_cases(package, name, scene, objects, texture, config, work, progress, rows):
+    """Principled BSDFs (issue 28): each of GGX_MATERIALS at each of GGX_ROUGHNESS on the measured
+    object (the others stay white) under each Cycles HDRI, baked at the panel's defaults (the
+    automatic mode) and previewed with the prefiltered glossy light (the default), and baked with
+    the seed's Phong lobe truncated at s = 8 (TRUNCATED_BAKE, `prefiltered_glossy` off: the add-on
+    before issue 28, at the largest order it offers), against Cycles: relative
+    RMS and p99 of 4 x 4 blocks, bias per channel and the mean HDR-FLIP (sdtest.perceptual_error;
+    None where FLIP is missing)."""
+    try:
+        sdtest.flip_module()
+        flip = sdtest.perceptual_error
+    except ImportError as exc:
+        print("accuracy report: no FLIP column (%s)" % exc, flush=True)
+        flip = None
     size = config["cycles_size"]
-    cycles, noise = sdtest.cycles_pair(scene, os.path.join(work, name + "_glossy"), size,
-                                       4 * config["cycles_samples"], BLOCK)
-    sdtest.bake_settings(scene, "msd_visibility", 'MATERIAL', 4, 2, rays=256, select=objects)
-    if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
-        raise RuntimeError("the glossy bake failed")
-    info = dict(objects[0]["sd_bake"])
-    for shading, per_pixel in (("vertex", False), ("pixel", True)):
-        image = preview(package, scene, os.path.join(work, "%s_glossy_%s.exr" % (name, shading)), size, per_pixel)
-        mask = (image[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
-        rms, p99 = relative_errors(*(sdtest.block_averages(x, mask, BLOCK) for x in (image, cycles)))
-        rows.append({"reference": "cycles", "scene": name, "hdri": "forest.exr",
-                     "material": "principled metallic r = 0.3 (phong %g)" % info["exponent"],
-                     "method": "msd_visibility", "s": int(info["light_order"]), "s_v": 2, "rays": 256,
-                     "shading": shading, "light": "sh", "setting": RECOMMENDED, "rel_rms": rms, "p99": p99,
-                     "reference_se": noise, "points": int(mask.sum() // BLOCK ** 2),
-                     "bake_seconds": float(info["seconds"]), "bytes_per_vertex": float(info["bytes_per_vertex"]),
-                     "vertices": int(info["vertices"])})
-    progress.step("%s: Principled -> Phong against Cycles' GGX" % name, 4.0)
+    for label, colour, metallic in GGX_MATERIALS:
+        for roughness in GGX_ROUGHNESS:
+            objects[0].data.materials.clear()
+            objects[0].data.materials.append(sdtest.principled_material("%s %g" % (label, roughness), colour,
+                                                                        roughness, metallic))
+            for hdri in config["cycles_hdris"]:
+                accuracy_scenes.set_hdri(texture, sdtest.hdri(hdri))
+                stem = os.path.join(work, "%s_%s_%s_%g" % (name, hdri[:-4], label.replace(" ", "_"), roughness))
+                cycles, noise = sdtest.cycles_pair(scene, stem, size, 4 * config["cycles_samples"], BLOCK)
+                sdtest.default_settings(scene)
+                sdtest.select_only(objects)
+                if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
+                    raise RuntimeError("the bake of %s in %s %g failed" % (name, label, roughness))
+                for light in ("prefiltered", "truncated"):
+                    if light == "truncated":   # the lobe baked as benchmark_glossy.py bakes it
+                        sdtest.bake_settings(scene, *TRUNCATED_BAKE, select=objects)
+                        scene.sd_lighting.prefiltered_glossy = False
+                        if bpy.ops.sd_lighting.bake(go_ahead=True) != {'FINISHED'}:
+                            raise RuntimeError("the bake of %s in %s %g failed" % (name, label, roughness))
+                    info = dict(objects[0]["sd_bake"])
+                    image = preview(package, scene, "%s_%s.exr" % (stem, light), size)
+                    mask = sdtest.covered(image, cycles)
+                    ours, theirs = (sdtest.block_averages(x, mask, BLOCK) for x in (image, cycles))
+                    rms, p99 = relative_errors(ours, theirs)
+                    rows.append({"reference": "cycles", "scene": name, "hdri": hdri, "material": "ggx",
+                                 "base": label, "roughness": roughness, "metallic": metallic,
+                                 "method": info["method"], "s": int(info["light_order"]),
+                                 "s_v": int(info["visibility_order"]) if package.methods.get(info["method"]).uses_visibility_order else None,
+                                 "rays": int(info["rays"]) if info["method"] != "unshadowed" else None,
+                                 "shading": "vertex", "light": light, "rel_rms": rms, "p99": p99,
+                                 "setting": DEFAULTS if light == "prefiltered" else "MSD (13), s = 8, s' = 4, 256 rays",
+                                 "bias": (ours.mean(axis=0) / theirs.mean(axis=0) - 1.0).tolist(),
+                                 "flip": flip(image, cycles) if flip else None,
+                                 "reference_se": noise, "points": int(len(ours)),
+                                 "bake_seconds": float(info["seconds"]), "bytes_per_vertex": float(info["bytes_per_vertex"]),
+                                 "vertices": int(info["vertices"])})
+            progress.step("%s: %s, roughness %g, against Cycles" % (name, label, roughness), len(config["cycles_hdris"]))
+    sdtest.default_settings(scene)
     accuracy_scenes.white(objects)
 
 
@@ -797,7 +826,9 @@ def planned_work(config, hdris):
     per_scene = (2 * len(config["rays"]) + 2 * len(config["designs"]) + 2 + 3 * len(hdris)
                  + (4 + len(CYCLES_SETTINGS)) * len(config["cycles_hdris"]) + 2 * len(config["predicted_hdris"]))
     gpu = 3 * len([name for name in config["scenes"] if name in config.get("gpu_scenes", ())])
-    return per_scene * len(config["scenes"]) + gpu + (4 if config["cycles_hdris"] else 0)
+    ggx = len(GGX_MATERIALS) * len(GGX_ROUGHNESS) * len(config["cycles_hdris"]) * len(
+        [name for name in config["scenes"] if name in config.get("ggx_scenes", ())])
+    return per_scene * len(config["scenes"]) + gpu + ggx
 
 
 def main():
@@ -844,9 +875,8 @@ def main():
         if config["cycles_hdris"]:
             against_cycles(package, name, scene, objects, texture, config, work, progress, rows,
                            strip if name == STRIP["scene"] else None)
-            if name == "sphere":
-                accuracy_scenes.set_hdri(texture, sdtest.hdri("forest.exr"))
-                glossy_case(package, name, scene, objects, config, work, progress, rows)
+            if name in config["ggx_scenes"]:
+                ggx_cases(package, name, scene, objects, texture, config, work, progress, rows)
         for obj in objects:
             package.store.baked.clear(obj)
     model = attach_costs(package, sdnative, rows, costs, vertex_counts)

@@ -54,7 +54,7 @@ def eevee_casts_shadows(scene):
     image = eevee(scene, os.path.join(bpy.app.tempdir, "sd_eevee_probe.exr"))
     bpy.data.objects.remove(sun)
     scene.world = world
-    y = image[..., :3].mean(axis=-1)[image[..., 3] > 0.99]
+    y = image[..., :3].mean(axis=-1)[sdtest.covered(image)]
     low, median = np.percentile(y, [5.0, 50.0])
     return low < 0.5 * median
 
@@ -92,7 +92,7 @@ def main():
         sh = sdtest.preview(stem + "_sh.exr", width=shadows.SIZE, height=shadows.SIZE)
         scene.sd_lighting.source_shadows = True
         theirs = eevee(scene, stem + "_eevee.exr")
-        mask = (cycles[..., 3] > 0.99) & (ours[..., 3] > 0.99) & (theirs[..., 3] > 0.99)
+        mask = sdtest.covered(cycles, ours, theirs)
         errors = [shadows.relative_rms(image, cycles, mask) for image in (ours, theirs, sh)]
         print("| %s | %.2f %% | %.2f %% | %.2f %% | %.2f %% |" % ((hdri, 100 * noise) + tuple(100 * e for e in errors)),
               flush=True)

@@ -499,17 +499,26 @@ def flip_module():
 def perceptual_error(ours, theirs):
     """Mean HDR-FLIP (NVIDIA's FLIP for linear images: Andersson et al. 2021; flip-evaluator's
     defaults: 67 pixels per degree, ACES tone mapping over the exposures the reference spans) of
-    `ours` against the reference `theirs`, RGBA images, averaged over the pixels both cover (alpha >
-    0.99; FLIP itself sees the whole frame: its filters reach across an object's edge, and the
+    `ours` against the reference `theirs`, RGBA images, averaged over the pixels both cover
+    (covered; FLIP itself sees the whole frame: its filters reach across an object's edge, and the
     reference's background counts towards its exposures): 0 identical, 1 as different as can be.
     Per pixel, where relative RMS averages blocks: it sees a highlight's shape and a shadow's edge."""
     import numpy as np
-    mask = (ours[..., 3] > 0.99) & (theirs[..., 3] > 0.99)
+    mask = covered(ours, theirs)
     errors, _, _ = flip_module().evaluate(
         np.ascontiguousarray(np.maximum(theirs[..., :3], 0.0), dtype=np.float32),
         np.ascontiguousarray(np.maximum(ours[..., :3], 0.0), dtype=np.float32), "HDR",
         applyMagma=False, computeMeanError=False)
     return float(np.asarray(errors)[mask].mean())
+
+
+def covered(*images):
+    """The pixels every one of the RGBA `images` covers (alpha > 0.99: inside the object, not at
+    its antialiased or filtered edge): bool [H, W]."""
+    mask = images[0][..., 3] > 0.99
+    for image in images[1:]:
+        mask = mask & (image[..., 3] > 0.99)
+    return mask
 
 
 def block_averages(image, mask, block):
@@ -578,7 +587,7 @@ def cycles_pair(scene, path_stem, size, samples, block, importance_map=FAST_IMPO
     import numpy as np
     a = cycles_render(scene, path_stem + "_cycles_a.exr", size, samples // 2, seed=1, importance_map=importance_map)
     b = cycles_render(scene, path_stem + "_cycles_b.exr", size, samples // 2, seed=2, importance_map=importance_map)
-    mask = (a[..., 3] > 0.99) & (b[..., 3] > 0.99)
+    mask = covered(a, b)
     block_a, block_b = block_averages(a, mask, block), block_averages(b, mask, block)
     noise = 0.5 * math.sqrt(float(np.mean((block_a - block_b) ** 2))) / math.sqrt(
         float(np.mean((0.5 * (block_a + block_b)) ** 2)))

@@ -142,7 +142,7 @@ def main():
     red.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = (0.1, 0.7, 0.2, 1.0)
     green = preview("colour_preview_green.exr")
 
-    mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+    mask = sdtest.covered(ours, cycles)
     checks.check(mask.mean() > 0.3, "both images show the sphere", "%.0f %% of pixels" % (100 * mask.mean()))
     relative, wrong = sdtest.block_differences((ours, white), cycles, mask, BLOCK)
     a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
@@ -172,7 +172,7 @@ def main():
     facets.data.update()
     checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it shaded smooth")
     smooth = preview("facets_preview_smooth.exr")
-    mask = (flat[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+    mask = sdtest.covered(flat, cycles)
     relative, wrong = sdtest.block_differences((flat, smooth), cycles, mask, BLOCK)
     checks.check(np.median(relative) < 0.03 and np.percentile(relative, 90) < 0.10,
                  "flat faces: preview = Cycles (block averages)",
@@ -216,7 +216,7 @@ def bent_normals(checks, out):
         sdtest.bake_settings(scene, 'unshadowed', 'MATERIAL', 8, select=[slab])
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the slab (roughness %g)" % roughness)
         ours = sdtest.preview(stem + "_preview.exr", width=SIZE // 2, height=SIZE // 2)
-        mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+        mask = sdtest.covered(ours, cycles)
         a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
         error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
         bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
@@ -288,7 +288,7 @@ def glossy(checks, package, scene, preview, out, materials):
         sdtest.bake_settings(scene, 'unshadowed', 'MATERIAL', 12, select=[ball])
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the %s sphere" % name)
         ours = preview(name.replace(" ", "_") + "_preview.exr")
-        mask = (ours[..., 3] > 0.99) & (cycles[..., 3] > 0.99)
+        mask = sdtest.covered(ours, cycles)
         a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
         error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
         bias = a.mean(axis=0) / b.mean(axis=0) - 1.0

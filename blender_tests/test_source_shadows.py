@@ -125,7 +125,7 @@ def compare(package, checks, scene, out, tag, label):
                  "%.2f %%" % (100 * noise))
     # the blocks both cover, less the unbaked ball (the preview draws it flat grey)
     grey = np.all(np.abs(previews[True][..., :3] - package.live.preview.OTHER_MESH_GREY) < 1e-6, axis=-1)
-    mask = (cycles[..., 3] > 0.99) & (previews[True][..., 3] > 0.99) & ~grey
+    mask = sdtest.covered(cycles, previews[True]) & ~grey
     errors = [relative_rms(previews[on], cycles, mask) for on in (True, False)]
     print("%s: relative RMS against Cycles %.2f %% with the sources, %.2f %% through SH alone"
           % (label, 100 * errors[0], 100 * errors[1]), flush=True)
@@ -165,7 +165,7 @@ def main():
     hidden = sdtest.preview(os.path.join(args.out, "sunrise_cube_hidden.exr"), width=SIZE, height=SIZE)
     cube.hide_set(False)
     sdtest.select_only([ground, cube])   # hiding deselected it
-    shade = umbra(first, mask) & (hidden[..., 3] > 0.99)   # the shadow on the ground (the cube was above it)
+    shade = umbra(first, mask) & sdtest.covered(hidden)   # the shadow on the ground (the cube was above it)
     lit = [float(np.mean(image[shade][:, :3])) for image in (first, hidden)]
     checks.check(shade.any() and lit[1] > 1.5 * lit[0], "a hidden object casts no shadow",
                  "where its shadow was: %.3g with the cube, %.3g hidden" % tuple(lit))

@@ -60,7 +60,7 @@ def reverse_faces(obj, every=1):
 
 
 def worst_block(image, reference):
-    mask = (image[..., 3] > 0.99) & (reference[..., 3] > 0.99)
+    mask = sdtest.covered(image, reference)
     return float(sdtest.block_differences([image], reference, mask, BLOCK)[0].max())
 
 
@@ -116,10 +116,10 @@ def main():
     below_down = sdtest.preview(os.path.join(args.out, "ground_down_below.exr"), width=SIZE, height=SIZE)
     aim(camera, ABOVE)
     difference = worst_block(below_down, below_up)
-    lit = below_up[..., 3] > 0.99
+    lit = sdtest.covered(below_up)
     luminance = below_up[..., :3].mean(axis=2)[lit]
     spread = float(luminance.std() / luminance.mean()) if lit.any() else 1.0
-    above = up[..., :3].mean(axis=2)[up[..., 3] > 0.99]
+    above = up[..., :3].mean(axis=2)[sdtest.covered(up)]
     checks.check(lit.sum() > 100 and difference < NOISE and spread < 0.5 * float(above.std() / above.mean()),
                  "from below the ground shows its lower side, unshadowed, for either winding",
                  "%d pixels, worst block %.1f %% between windings, spread %.3f below and %.3f above"

@@ -18,7 +18,9 @@ rm -rf "$user"
 mkdir -p "$user" "$out"
 start=$(date +%s)
 status=0
-BLENDER_USER_SCRIPTS=$user/scripts BLENDER_USER_CONFIG=$user/config XDG_CACHE_HOME=$user/cache \
+# FLIP's tools venv stays where bpy_modules.py installs it, not under the redirected cache
+bpy_cache=$(/usr/bin/python3 -c 'import sys; sys.path.insert(0, sys.argv[1]); import bpy_modules; print(bpy_modules.cache_directory())' "$root/blender_tests")
+SD_BPY_CACHE=$bpy_cache BLENDER_USER_SCRIPTS=$user/scripts BLENDER_USER_CONFIG=$user/config XDG_CACHE_HOME=$user/cache \
   xvfb-run -a -s "-screen 0 1280x1024x24" blender --factory-startup --python-exit-code 1 \
   --python "$root/blender_tests/accuracy_report.py" -- --zip "$zip" --out "$out" --work "$work" "$@" \
   || status=$?

@@ -470,7 +470,8 @@ def against_cycles(package, name, scene, objects, texture, config, work, progres
 
 def ggx_cases(package, name, scene, objects, texture, config, work, progress, rows):
     """Principled BSDFs (issue 28): each of GGX_MATERIALS at each of GGX_ROUGHNESS on the measured
-    object (the others stay white) under each Cycles HDRI, baked at the panel's defaults (the
+    object (the others stay white, and stay in the measure: the pixels both renders cover) under
+    each Cycles HDRI, baked at the panel's defaults (the
     automatic mode) and previewed with the prefiltered glossy light (the default), and baked with
     the seed's Phong lobe truncated at s = 8 (TRUNCATED_BAKE, `prefiltered_glossy` off: the add-on
     before issue 28, at the largest order it offers), against Cycles: relative

@@ -57,7 +57,7 @@ GLOSSY = [  # name, base colour, roughness, metallic, largest relative RMS, larg
     ("gold", (1.0, 0.7, 0.3, 1.0), 0.4, 1.0, 0.045, 0.03),
     ("half metal", (0.3, 0.5, 0.9, 1.0), 0.3, 0.5, 0.02, 0.03),
     ("rough plastic", (0.3, 0.45, 0.8, 1.0), 0.6, 0.0, 0.03, 0.04)]
-BENT_TILT = 60.0   # degrees between the slab's front face and its shading normals
+BENT_TILT = 60.0   # degrees between the slab's front face's normal and its shading normals
 BENT = [  # metal's roughness (0.2: one prefiltered lookup; 0.5: the sampled lobe), largest relative RMS, largest |bias| per channel
     (0.2, 0.11, 0.04),
     (0.5, 0.08, 0.07)]
@@ -215,16 +215,21 @@ def bent_normals(checks, out):
         cycles, noise = sdtest.cycles_pair(scene, stem, SIZE // 2, SAMPLES, BLOCK)
         sdtest.bake_settings(scene, 'unshadowed', 'MATERIAL', 8, select=[slab])
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the slab (roughness %g)" % roughness)
-        ours = sdtest.preview(stem + "_preview.exr", width=SIZE // 2, height=SIZE // 2)
-        mask = sdtest.covered(ours, cycles)
-        a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
-        error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
-        bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
-        checks.check(mask.all() and error <= limit and np.abs(bias).max() <= bias_limit,
-                     "normals that mirror the view below their face (metal, roughness %g) = Cycles" % roughness,
-                     "relative RMS %.1f %% (limit %.0f %%, Cycles' noise %.2f %%), bias per channel %s %% "
-                     "(limit %.0f %%)" % (100 * error, 100 * limit, 100 * noise, np.round(100 * bias, 1),
-                                          100 * bias_limit))
+        for per_pixel in (False, True):
+            scene.sd_lighting.per_pixel = per_pixel
+            shading = "per pixel" if per_pixel else "per vertex"
+            ours = sdtest.preview("%s_%s.exr" % (stem, shading.replace(" ", "_")), width=SIZE // 2, height=SIZE // 2)
+            mask = sdtest.covered(ours, cycles)
+            a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
+            error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
+            bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+            checks.check(mask.all() and error <= limit and np.abs(bias).max() <= bias_limit,
+                         "normals that mirror the view below their face (metal, roughness %g, %s) = Cycles"
+                         % (roughness, shading),
+                         "relative RMS %.1f %% (limit %.0f %%, Cycles' noise %.2f %%), bias per channel %s %% "
+                         "(limit %.0f %%)" % (100 * error, 100 * limit, 100 * noise, np.round(100 * bias, 1),
+                                              100 * bias_limit))
+        scene.sd_lighting.per_pixel = False
 
 
 def mixed_slots(checks, package, scene):

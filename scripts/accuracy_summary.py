@@ -354,7 +354,8 @@ def ggx_table(report):
     truncated = {(r["scene"], r["hdri"], r["base"], r["roughness"]): r for r in ggx_rows(report, "truncated")}
     flip = lambda row: "%.3f" % row["flip"] if row.get("flip") is not None else "-"  # noqa: E731
     lines = ["", "## Glossy: Principled BSDFs against Cycles (issue 28)", "",
-             "Gold (metallic 1) and red plastic (metallic 0) Principled BSDFs on the measured object, baked at the "
+             "Gold (metallic 1) and red plastic (metallic 0) Principled BSDFs on the measured object (Suzanne's "
+             "white ground plane is in the frame and in the measure), baked at the "
              "panel's defaults (the automatic mode's choice in the setting column), against Cycles from the same "
              "camera: relative RMS over 4 x 4 blocks, bias (mean over Cycles' mean, per channel) and the mean "
              "HDR-FLIP per pixel (0: identical), with the prefiltered glossy light (the default), and baked instead "

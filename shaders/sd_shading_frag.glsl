@@ -124,7 +124,9 @@ float sd_smith_lambda(float c, float a2)
  * a smooth, coarse mesh's rims - Cycles turns it towards the geometric normal, in the plane of the
  * two, until the reflection lies just above the triangle (cosine min(0.9 v.ng, 0.01)). `ng`: the
  * triangle's normal, from the screen-space derivatives of the pixel's position, turned to the view
- * (the shading normal where they give none). A back face's normal (n.ng < 0) is left as it is. */
+ * (the shading normal where they give none, or where the normal faces the triangle's back: then
+ * both are left as they are). The bright sources' Lambert light takes the turned normal too (3.x's
+ * closures all take it; 4.x turns only the glossy ones). */
 vec3 sd_glossy_normal(vec3 normal, vec3 view, out vec3 ng)
 {
   ng = mat3(sd.world_to_local) * cross(dFdx(sd_origin_offset), dFdy(sd_origin_offset));
@@ -139,7 +141,11 @@ vec3 sd_glossy_normal(vec3 normal, vec3 view, out vec3 ng)
     iz = -iz;
   }
   float threshold = min(0.9 * iz, 0.01);
-  if (dot(normal, ng) <= 0.0 || dot(ng, 2.0 * dot(normal, view) * normal - view) >= threshold) {
+  if (dot(normal, ng) <= 0.0) {
+    ng = normal;   /* a back face's lobe is cut at its own normal only, as before */
+    return normal;
+  }
+  if (dot(ng, 2.0 * dot(normal, view) * normal - view) >= threshold) {
     return normal;
   }
   vec3 x = normal - dot(normal, ng) * ng;
@@ -232,8 +238,9 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
  * weighing the grazing light more; mixed by metallic). A metal's lobe rougher than
  * SD_SAMPLED_ROUGHNESS (blended in over the 0.1 below it) is sampled instead (sd_sampled_glossy_light),
  * where one lookup is too far off; a dielectric's layer keeps the one lookup, its share of the light
- * too small to pay for the taps. The visibility ratio stays the baked lobe's, around the mirrored
- * view. */
+ * too small to pay for the taps. Either way without the lobe's share below the triangle (ng:
+ * sd_triangle_horizon, or the taps there dropped), which the object itself hides. The visibility
+ * ratio stays the baked lobe's, around the mirrored view. */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
 {
   float roughness = sd_lobe_weights.z;

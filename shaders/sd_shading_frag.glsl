@@ -142,7 +142,7 @@ vec3 sd_glossy_normal(vec3 normal, vec3 view, out vec3 ng)
   }
   float threshold = min(0.9 * iz, 0.01);
   if (dot(normal, ng) <= 0.0) {
-    ng = normal;   /* a back face's lobe is cut at its own normal only, as before */
+    ng = normal;   /* no triangle horizon: the front triangle's would hide a back face's whole lobe */
     return normal;
   }
   if (dot(ng, 2.0 * dot(normal, view) * normal - view) >= threshold) {

@@ -80,10 +80,7 @@ def compare(name, scene, objects, out, size, block, defaults=False):
         images["EEVEE"] = eevee_render(scene, stem + "_eevee.exr", size)
     cells = []
     for label, ours in images.items():
-        mask = sdtest.covered(ours, cycles)
-        a, b = (sdtest.block_averages(image, mask, block) for image in (ours, cycles))
-        error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
-        bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+        error, bias, _, _ = sdtest.block_error(ours, cycles, block)
         try:
             flip = "%.3f" % sdtest.perceptual_error(ours, cycles)
         except ImportError:   # no FLIP for this CPython (sdtest.flip_module)

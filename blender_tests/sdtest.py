@@ -538,6 +538,23 @@ def block_differences(images, reference, mask, block):
     return [np.abs(block_averages(image, mask, block) - expected).max(axis=1) / scale for image in images]
 
 
+def relative_rms(values, reference):
+    """sqrt(mean((values - reference)^2) / mean(reference^2)) over every element."""
+    import math
+    import numpy as np
+    return math.sqrt(float(np.mean((values - reference) ** 2)) / float(np.mean(reference ** 2)))
+
+
+def block_error(ours, theirs, block, mask=None):
+    """The measure every comparison with Cycles quotes: (relative RMS of the block x block RGB
+    averages, the bias per channel as the ratio of their means less 1, our block averages [K, 3],
+    theirs [K, 3]) over the blocks wholly inside mask (None: the pixels both cover)."""
+    if mask is None:
+        mask = covered(ours, theirs)
+    a, b = block_averages(ours, mask, block), block_averages(theirs, mask, block)
+    return relative_rms(a, b), a.mean(axis=0) / b.mean(axis=0) - 1.0, a, b
+
+
 # The world's importance map of cycles_render: Cycles' automatic choice (4096 wide for Blender's
 # HDRIs) costs about a second more per render than 2048 for the same noise on forest.exr.
 FAST_IMPORTANCE_MAP = 2048

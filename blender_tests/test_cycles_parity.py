@@ -151,10 +151,7 @@ def preview(scene, obj, refine, path, least_squares=True, lightmap=0, before_bak
 def compare(ours, theirs):
     """(relative RMS, bias per channel, the share of blocks black where Cycles is lit) over the
     blocks both cover."""
-    mask = sdtest.covered(ours, theirs)
-    a, b = sdtest.block_averages(ours, mask, BLOCK), sdtest.block_averages(theirs, mask, BLOCK)
-    rms = math.sqrt(float(np.mean((a - b) ** 2)) / float(np.mean(b ** 2)))
-    bias = (a - b).mean(axis=0) / b.mean(axis=0)
+    rms, bias, a, b = sdtest.block_error(ours, theirs, BLOCK)
     lit = b.mean(axis=1) > 0.1 * b.mean()
     black = float(np.mean(a[lit].mean(axis=1) < 0.2 * b[lit].mean(axis=1)))
     return rms, bias, black

@@ -220,9 +220,7 @@ def bent_normals(checks, out):
             shading = "per pixel" if per_pixel else "per vertex"
             ours = sdtest.preview("%s_%s.exr" % (stem, shading.replace(" ", "_")), width=SIZE // 2, height=SIZE // 2)
             mask = sdtest.covered(ours, cycles)
-            a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
-            error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
-            bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+            error, bias, _, _ = sdtest.block_error(ours, cycles, BLOCK, mask)
             checks.check(mask.all() and error <= limit and np.abs(bias).max() <= bias_limit,
                          "normals that mirror the view below their face (metal, roughness %g, %s) = Cycles"
                          % (roughness, shading),
@@ -294,9 +292,7 @@ def glossy(checks, package, scene, preview, out, materials):
         checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake the %s sphere" % name)
         ours = preview(name.replace(" ", "_") + "_preview.exr")
         mask = sdtest.covered(ours, cycles)
-        a, b = (sdtest.block_averages(image, mask, BLOCK) for image in (ours, cycles))
-        error = np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2))
-        bias = a.mean(axis=0) / b.mean(axis=0) - 1.0
+        error, bias, a, b = sdtest.block_error(ours, cycles, BLOCK, mask)
         checks.check(error <= limit and np.abs(bias).max() <= bias_limit,
                      "%s (roughness %.1f, metallic %.1f) = Cycles" % (name, roughness, metallic),
                      "relative RMS %.1f %% (limit %.0f %%, Cycles' noise %.2f %%), bias per channel "
@@ -304,9 +300,8 @@ def glossy(checks, package, scene, preview, out, materials):
                                                 np.round(100 * bias, 1), 100 * bias_limit))
         if metallic == 1.0:   # the seed's truncated Phong lobe instead of the prefiltered GGX
             scene.sd_lighting.prefiltered_glossy = False
-            truncated = sdtest.block_averages(preview(name + "_truncated.exr"), mask, BLOCK)
+            truncated_error = sdtest.block_error(preview(name + "_truncated.exr"), cycles, BLOCK, mask)[0]
             scene.sd_lighting.prefiltered_glossy = True
-            truncated_error = np.sqrt(np.mean((truncated - b) ** 2) / np.mean(b ** 2))
             checks.check(error < 0.75 * truncated_error,
                          "the prefiltered glossy light is closer to Cycles than the truncated lobe",
                          "relative RMS %.1f %% against %.1f %%" % (100 * error, 100 * truncated_error))
@@ -349,8 +344,7 @@ def glossy(checks, package, scene, preview, out, materials):
                          "twice the world's strength shows the metal twice as bright",
                          "%.4f x" % (brighter.mean() / a.mean()))
             expected = sdtest.block_averages(turned_cycles, mask, BLOCK)
-            turned_error = np.sqrt(np.mean((turned - expected) ** 2) / np.mean(expected ** 2))
-            unturned_error = np.sqrt(np.mean((a - expected) ** 2) / np.mean(expected ** 2))
+            turned_error, unturned_error = sdtest.relative_rms(turned, expected), sdtest.relative_rms(a, expected)
             checks.check(turned_error <= limit and unturned_error > 2 * turned_error,
                          "%s with the world turned and tilted = Cycles" % name,
                          "relative RMS %.1f %% (limit %.0f %%; the unturned preview: %.1f %%)"
@@ -366,9 +360,8 @@ def glossy(checks, package, scene, preview, out, materials):
             # baked as Lambert, the specular layer lit live; folded into Lambert without the
             # prefiltered light
             scene.sd_lighting.prefiltered_glossy = False
-            folded = sdtest.block_averages(preview(name.replace(" ", "_") + "_folded.exr"), mask, BLOCK)
+            folded_error = sdtest.block_error(preview(name.replace(" ", "_") + "_folded.exr"), cycles, BLOCK, mask)[0]
             scene.sd_lighting.prefiltered_glossy = True
-            folded_error = np.sqrt(np.mean((folded - b) ** 2) / np.mean(b ** 2))
             checks.check(ball["sd_bake"]["lobe"] == "lambert" and error < 0.75 * folded_error,
                          "a rough plastic's Lambert bake with its specular layer is closer to Cycles "
                          "than with the layer folded", "relative RMS %.1f %% against %.1f %%"
@@ -378,8 +371,7 @@ def glossy(checks, package, scene, preview, out, materials):
                                  phong_exponent=package.scene.lobes.exponent_from_roughness(roughness),
                                  select=[ball])
             checks.check(bpy.ops.sd_lighting.bake() == {'FINISHED'}, "bake it as one Phong lobe")
-            one = sdtest.block_averages(preview(name + "_one_lobe.exr"), mask, BLOCK)
-            one_error = np.sqrt(np.mean((one - b) ** 2) / np.mean(b ** 2))
+            one_error = sdtest.block_error(preview(name + "_one_lobe.exr"), cycles, BLOCK, mask)[0]
             checks.check(one_error > 5 * error, "one Phong lobe of its colour is far off",
                          "relative RMS %.1f %%" % (100 * one_error))
 

@@ -97,12 +97,6 @@ def scene_setup():
     return scene, ground, cube
 
 
-def relative_rms(image, reference, mask):
-    a = sdtest.block_averages(image, mask, BLOCK)
-    b = sdtest.block_averages(reference, mask, BLOCK)
-    return math.sqrt(float(np.mean((a - b) ** 2)) / float(np.mean(b ** 2)))
-
-
 def umbra(image, mask):
     """The pixels of the mask darker than halfway between its 5th and 95th percentile luminance."""
     y = image[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
@@ -126,7 +120,7 @@ def compare(package, checks, scene, out, tag, label):
     # the blocks both cover, less the unbaked ball (the preview draws it flat grey)
     grey = np.all(np.abs(previews[True][..., :3] - package.live.preview.OTHER_MESH_GREY) < 1e-6, axis=-1)
     mask = sdtest.covered(cycles, previews[True]) & ~grey
-    errors = [relative_rms(previews[on], cycles, mask) for on in (True, False)]
+    errors = [sdtest.block_error(previews[on], cycles, BLOCK, mask)[0] for on in (True, False)]
     print("%s: relative RMS against Cycles %.2f %% with the sources, %.2f %% through SH alone"
           % (label, 100 * errors[0], 100 * errors[1]), flush=True)
     images = [cycles[..., :3], previews[True][..., :3], 4.0 * np.abs(previews[True][..., :3] - cycles[..., :3])]
@@ -176,7 +170,7 @@ def main():
     scene.sd_lighting.per_pixel = True
     per_pixel = sdtest.preview(os.path.join(args.out, "sunrise_per_pixel.exr"), width=SIZE, height=SIZE)
     scene.sd_lighting.per_pixel = False
-    error = relative_rms(per_pixel, cycles, mask)
+    error = sdtest.block_error(per_pixel, cycles, BLOCK, mask)[0]
     checks.check(error < MAX_ERROR, "per pixel: within %.0f %% of Cycles" % (100 * MAX_ERROR), "%.2f %%" % (100 * error))
 
 

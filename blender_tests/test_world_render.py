@@ -33,10 +33,6 @@ SIZE = 96
 SKY_MODELS = ("NISHITA", "HOSEK_WILKIE", "PREETHAM")
 
 
-def relative(a, b):
-    return float(np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2)))
-
-
 def main():
     args = sdtest.arguments()
     package = sdtest.install_addon(args.zip)
@@ -60,7 +56,7 @@ def main():
     why = environment.render_reason(world)
     source = environment.source(scene, render=True)
     rendered = environment.light_coefficients(source, ORDER)
-    error = relative(rendered, direct)
+    error = sdtest.relative_rms(rendered, direct)
     checks.check(why is not None and "rendered by Cycles" in source.description and error < SH_TOLERANCE,
                  "forest.exr through a Mix node: rendered, the file's light",
                  "%s; %.2f %% RMS over the coefficients" % (why, 100 * error))
@@ -68,7 +64,7 @@ def main():
     turned = environment.light_coefficients(environment.source(scene, render=True), ORDER)
     g = package.scene.transforms.mapping_rotation(mapping.inputs["Rotation"].default_value, mapping.vector_type)
     expected = package.native.get().rotated_environment_sh(direct, g)
-    error = relative(turned, expected)
+    error = sdtest.relative_rms(turned, expected)
     checks.check(environment.mapping_node(scene) is None and np.allclose(environment.rotation_matrix(scene), np.eye(3))
                  and error < SH_TOLERANCE, "a Mapping rotation inside a rendered world is in its image",
                  "%.2f %% RMS" % (100 * error))
@@ -82,7 +78,7 @@ def main():
     math_node.inputs[0].default_value = math_node.inputs[1].default_value = 2.0
     tree.links.new(math_node.outputs[0], background.inputs["Strength"])
     strong = environment.light_coefficients(environment.source(scene, render=True), ORDER)
-    error = relative(strong, 4.0 * direct)
+    error = sdtest.relative_rms(strong, 4.0 * direct)
     checks.check(error < SH_TOLERANCE, "a Strength of 2 x 2 from a Math node lights 4 times as bright",
                  "%.2f %% RMS" % (100 * error))
     tree.nodes.remove(math_node)

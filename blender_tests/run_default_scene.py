@@ -47,7 +47,8 @@ def suzanne(scene, subdivisions=1):
     monkey = bpy.context.active_object
     monkey.name = "Suzanne"
     monkey.rotation_euler = (math.radians(-20.0), 0.0, math.radians(-25.0))
-    monkey.modifiers.new("Subdivision", 'SUBSURF').levels = subdivisions
+    subdivision = monkey.modifiers.new("Subdivision", 'SUBSURF')
+    subdivision.levels = subdivision.render_levels = subdivisions   # Cycles renders what is baked
     bpy.ops.object.shade_smooth()
     material = bpy.data.materials.new("Clay")
     sdtest.use_nodes(material)

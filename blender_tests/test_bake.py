@@ -1,5 +1,6 @@
-"""Baking from the operator: the evaluated mesh, attributes, settings, all-or-nothing on cancel and
-failure, rebake, save and reload; the Environment panel naming the map's bright sources.
+"""Baking from the operator: the evaluated mesh (the panel saying where Cycles renders other
+geometry), attributes, settings, all-or-nothing on cancel and failure, rebake, save and reload; the
+Environment panel naming the map's bright sources.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_bake.py -- --zip Z --out DIR
 """
 
@@ -44,6 +45,17 @@ def main():
                                                            original_ball_vertices))
     checks.check(not any(a.name.startswith("sd_") for a in ball.data.attributes),
                  "the object's own mesh is untouched")
+    # Cycles renders a Subdivision at its render levels (2 by default), the bake the viewport's 1
+    bpy.context.view_layer.objects.active = ball
+    subdivision = ball.modifiers["Subdivision"]
+    told = " ".join(sdtest.panel_texts())
+    subdivision.render_levels = subdivision.levels
+    untold = " ".join(sdtest.panel_texts())
+    subdivision.render_levels = 2
+    checks.check("Cycles renders other geometry (Subdivision at 2 levels in renders, 1 in the viewport)" in told
+                 and "Cycles renders other geometry" not in untold,
+                 "the panel says when Cycles renders a Subdivision at other levels than the bake's",
+                 told[told.find("Cycles renders"):][:120])
     checks.check(baked.use_fake_user, "baked mesh has a fake user")
     names = sorted(a.name for a in baked.attributes if a.name.startswith("sd_"))
     checks.check(names == ["sd_ambient_occlusion", "sd_design_count", "sd_normal"],

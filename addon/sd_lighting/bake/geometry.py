@@ -237,6 +237,22 @@ def evaluated_geometry(obj, depsgraph, shape):
         evaluated.to_mesh_clear()
 
 
+def render_differences(obj):
+    """Where Cycles' renders evaluate the object's modifiers differently from the viewport's mesh
+    that the bake reads and the preview draws: one phrase per modifier (none: the same geometry).
+    A Subdivision's render levels are 2 by default where its viewport levels are 1, which moves a
+    glossy highlight's every glint."""
+    notes = []
+    for modifier in getattr(obj, "modifiers", ()):
+        if modifier.show_viewport != modifier.show_render:
+            notes.append("%s only in %s" % (modifier.name, "renders" if modifier.show_render else "the viewport"))
+        elif (modifier.show_render and modifier.type in {'SUBSURF', 'MULTIRES'}
+              and modifier.render_levels != modifier.levels):
+            notes.append("%s at %d levels in renders, %d in the viewport"
+                         % (modifier.name, modifier.render_levels, modifier.levels))
+    return notes
+
+
 @dataclasses.dataclass
 class Part:
     """A piece of visible geometry in world space: an object, or an instance of one (a collection

@@ -16,7 +16,7 @@ import textwrap
 import bpy
 
 from .. import methods, native
-from ..bake import least_squares
+from ..bake import geometry, least_squares
 from ..live import drawing, gpu_shading, live_rebake, staleness
 from ..plan import analysis, cost
 from ..scene import environment, light_sources, materials, ringing
@@ -435,6 +435,10 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
                   "it are from there: bake again", icon='ERROR')
         if baked.scale_changed(obj):
             _text(warnings, context, "Scale changed since the bake: bake again", icon='ERROR')
+        differences = geometry.render_differences(obj)
+        if differences:
+            _text(warnings, context, "Cycles renders other geometry (%s): the bake and the preview are "
+                  "of the viewport's" % "; ".join(differences), icon='INFO')
         if baked.albedo_texture_unbaked(obj):
             _text(warnings, context, "The image texture needs UVs the bake did not keep: bake again",
                   icon='ERROR')

@@ -51,6 +51,20 @@ vec4 sd_environment_brdf(float n_dot_v, float roughness)
   return sd_brdf_table(n_dot_v, roughness, 0);
 }
 
+/* The dielectric layer's Fresnel shape at cos c = v.h: the real Fresnel of IOR SD_DIELECTRIC_IOR
+ * (Walter et al. 2007, eq. 22) remapped to 0 at c = 1 and 1 at c = 0, the shape the table's
+ * dielectric B integrates and Cycles' Principled BSDF reflects (3.x: interpolate_fresnel_color;
+ * 4.x: the dielectric closure's Fresnel). */
+float sd_dielectric_shape(float c)
+{
+  float n = float(SD_DIELECTRIC_IOR);
+  float g = sqrt(n * n - 1.0 + c * c);
+  float a = (g - c) / (g + c);
+  float b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+  float normal = (n - 1.0) * (n - 1.0) / ((n + 1.0) * (n + 1.0));
+  return (0.5 * a * a * (1.0 + b * b) - normal) / (1.0 - normal);
+}
+
 /* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg):
  * the single-scattering F0 A + B, times (multiscatter 1: Multiscatter GGX) the light multiple
  * scattering adds as Cycles' Multiscatter GGX keeps it (Kulla and Conty 2017, "Revisiting
@@ -268,8 +282,8 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
  * those below the horizon dark; each D's alpha^2 widened by a quarter of its point's share of the
  * disc, so that a mirror-like lobe sees a disc, not the points), over the lobe's albedo - a metal's
  * with F = 1 (its Fresnel hardly varies), a dielectric's as its Fresnel at the disc's centre
- * weighs it, Schlick's F(v.h) over the layer's (sd_surface's dielectric shape; a sun at a grazing
- * reflection is stronger than the layer's mean albedo says). Averaged, not with alpha widened by
+ * weighs it, F(v.h) of the layer's shape (sd_dielectric_shape) over the layer's albedo (a sun at a
+ * grazing reflection is stronger than the layer's mean albedo says). Averaged, not with alpha widened by
  * the whole disc: a widened GGX's tails are the wide lobe's, several times a narrow lobe's around
  * a sun's reflection. On its own, a sun is neither blurred by the atlas's level nor seen by the
  * sampled lobe's taps as spots (msd-notes, "Bright sources"). */
@@ -301,7 +315,7 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
   float f0 = sd_lobe_weights.y;
   vec3 h = view + centre;
   float v_dot_h = dot(h, h) > 1e-12 ? dot(view, h) * inversesqrt(dot(h, h)) : 0.0;
-  float fresnel = f0 + (1.0 - f0) * pow(1.0 - clamp(v_dot_h, 0.0, 1.0), 5.0);
+  float fresnel = f0 + (1.0 - f0) * sd_dielectric_shape(clamp(v_dot_h, 0.0, 1.0));
   float layer = f0 * (brdf.x + brdf.y - brdf.w) + brdf.w;
   float albedo = mix(fresnel / max(layer, 1e-4), 1.0 / max(brdf.x + brdf.y, 1e-4), sd_lobe_weights.x);
   return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v * float(SD_HIGHLIGHT_POINTS))) * sd.source_irradiance[i].rgb;

@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import methods
 from ..scene.light_sources import SHADOW_MAP_SIZE, SOURCE_ROWS
+from ..scene.lobes import DIELECTRIC_SHAPE_IOR
 from ..store.bake_data import TEXTURE_WIDTH_LOG2
 
 
@@ -221,6 +222,7 @@ class Variant:
             if self.weighted:
                 d["SD_LOBE_WEIGHTS"] = "1"
                 d["SD_BRDF_TABLE_SIZE"] = str(BRDF_TABLE_SIZE)
+                d["SD_DIELECTRIC_IOR"] = "%.6g" % DIELECTRIC_SHAPE_IOR
         if self.prefiltered_lookup:
             d["SD_PREFILTERED"] = "1"
             d["SD_PREFILTERED_MAP"] = PREFILTERED_SAMPLER[1]

@@ -27,7 +27,8 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
    where Cycles has them (the sun's shadow darkens both the diffuse and the glossy light).
 7. sunrise.exr on a gold sphere of roughness 0.3, the sun's reflection in view (a rough metal's
    sampled lobe reads the atlas without the sun; the sun is a highlight of its own): under
-   MAX_GOLD_ERROR.
+   MAX_GOLD_ERROR; at MIRROR_ROUGHNESS under MAX_MIRROR_ERROR, its brightest pixel Cycles' within
+   MAX_MIRROR_PEAK.
 The panel says the sources are shadowed per pixel. Error images (Cycles, preview, |difference| x 4)
 go to --out. --quick (the quick tier): step 1 alone.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_source_shadows.py -- --zip Z --out DIR
@@ -61,6 +62,12 @@ MAX_GLOSSY_ERROR = 0.06
 # metal's) reads the atlas without the sun, and the sun's highlight is added on its own; with the
 # sun in the atlas its 64 taps drew it as a star of spots (msd-notes, Bright sources).
 MAX_GOLD_ERROR = 0.03
+# The same sphere as a near-mirror: the sun's reflection is a pixel or two, which Cycles draws as
+# peaked as the map's texels read bilinearly; a uniform disc of the sun's size drew it at 0.66x
+# (msd-notes, Bright sources).
+MIRROR_ROUGHNESS = 0.05
+MAX_MIRROR_ERROR = 0.10
+MAX_MIRROR_PEAK = 0.25
 
 
 def two_suns(package, path):
@@ -244,6 +251,15 @@ def main():
     checks.check(result == {'FINISHED'} and metal < MAX_GOLD_ERROR,
                  "a rough metal's reflection of the sun as Cycles has it (one highlight, not the sampled lobe's spots)",
                  "%.2f %%" % (100 * metal))
+    gold.data.materials[0].node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = MIRROR_ROUGHNESS
+    result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake, go_ahead=True)
+    (mirror, _), mask, preview, cycles = compare(package, checks, scene, args.out, "sunrise_mirror",
+                                                 "sunrise.exr, gold roughness %g" % MIRROR_ROUGHNESS)
+    y = np.array([0.2126, 0.7152, 0.0722])
+    peak = float((preview[..., :3] @ y)[mask].max() / (cycles[..., :3] @ y)[mask].max())
+    checks.check(result == {'FINISHED'} and mirror < MAX_MIRROR_ERROR and abs(peak - 1.0) < MAX_MIRROR_PEAK,
+                 "a near-mirror's reflection of the sun as peaked as Cycles' (the sun's own texels, not a disc)",
+                 "%.2f %% (limit %.0f %%); its brightest pixel %.2f x Cycles'" % (100 * mirror, 100 * MAX_MIRROR_ERROR, peak))
     return checks.summary()
 
 

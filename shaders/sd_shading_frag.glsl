@@ -273,20 +273,21 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
 #endif
 
 #if defined(SD_SOURCES) && defined(SD_PREFILTERED)
-#define SD_HIGHLIGHT_POINTS 16   /* over a highlight source's disc (sd_source_highlight) */
-
 /* Source i's highlight (one the atlas is without, source_irradiance.w = 1;
  * light_sources.HIGHLIGHT_RADIUS) as the prefiltered light is (what sd_surface multiplies by the
  * layer's albedo E, the strength in): its power L Omega = pi x its irradiance times the GGX lobe
- * D G2 / (4 n.v) averaged over its disc (SD_HIGHLIGHT_POINTS directions spread evenly over it,
- * those below the horizon dark; each D's alpha^2 widened by a quarter of its point's share of the
- * disc, so that a mirror-like lobe sees a disc, not the points), over the lobe's albedo - a metal's
- * with F = 1 (its Fresnel hardly varies), a dielectric's as its Fresnel at the disc's centre
- * weighs it, F(v.h) of the layer's shape (sd_dielectric_shape) over the layer's albedo (a sun at a
- * grazing reflection is stronger than the layer's mean albedo says). Averaged, not with alpha widened by
- * the whole disc: a widened GGX's tails are the wide lobe's, several times a narrow lobe's around
- * a sun's reflection. On its own, a sun is neither blurred by the atlas's level nor seen by the
- * sampled lobe's taps as spots (msd-notes, "Bright sources"). */
+ * D G2 / (4 n.v) summed over its SD_HIGHLIGHT_POINTS points (light_sources.highlight_rows: the
+ * source's own texels gathered into directions with their share of its power per channel, so that
+ * a sun is as peaked and its core as white as the map has them and a lamp as long; those below the
+ * horizon dark; a point without texels has no share), each D's alpha^2 widened as its texels
+ * spread the light (so that a mirror-like lobe sees their profile, not a point), over
+ * the lobe's albedo - a metal's with F = 1 (its Fresnel hardly varies), a dielectric's as its
+ * Fresnel at the source's centre weighs it, F(v.h) of the layer's shape (sd_dielectric_shape)
+ * over the layer's albedo (a sun at a grazing reflection is stronger than the layer's mean albedo
+ * says). Summed over points, not with alpha widened by the whole source: a widened GGX's tails
+ * are the wide lobe's, several times a narrow lobe's around a sun's reflection. On its own, a sun
+ * is neither blurred by the atlas's level nor seen by the sampled lobe's taps as spots
+ * (msd-notes, "Bright sources"). */
 vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
 {
   vec3 centre = sd.source_direction[i].xyz;
@@ -294,21 +295,17 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
   float a2 = alpha * alpha;
   float n_dot_v = clamp(dot(normal, view), 1e-4, 1.0);
   float lambda_v = sd_smith_lambda(n_dot_v, a2);
-  float sin2_sigma = sd.source_direction[i].w;
-  float tan_sigma = sqrt(sin2_sigma / max(1.0 - sin2_sigma, 1e-6));
-  float widened = a2 + 0.25 * tan_sigma * tan_sigma / float(SD_HIGHLIGHT_POINTS);
-  vec3 t1, t2;
-  sd_orthonormal_basis(centre, t1, t2);
-  float lobe = 0.0;
+  vec3 lobe = vec3(0.0);
   for (int k = 0; k < SD_HIGHLIGHT_POINTS; k++) {
-    vec2 disc = tan_sigma * sd_disc_point(k, SD_HIGHLIGHT_POINTS);
-    vec3 l = normalize(centre + disc.x * t1 + disc.y * t2);
-    float n_dot_l = dot(normal, l);
-    vec3 h = view + l;   /* zero only where a back-facing shading normal has the view behind it */
+    vec4 point = sd.source_points[2 * (SD_HIGHLIGHT_POINTS * i + k)];
+    vec3 share = sd.source_points[2 * (SD_HIGHLIGHT_POINTS * i + k) + 1].rgb;
+    float n_dot_l = dot(normal, point.xyz);
+    vec3 h = view + point.xyz;   /* zero only where a back-facing shading normal has the view behind it */
     if (n_dot_l > 0.0 && dot(h, h) > 1e-12) {
+      float widened = a2 + point.w;
       float n_dot_h = dot(normal, h) * inversesqrt(dot(h, h));
       float q = n_dot_h * n_dot_h * (widened - 1.0) + 1.0;
-      lobe += widened / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2));
+      lobe += share * (widened / (3.141592653589793 * q * q) / (1.0 + lambda_v + sd_smith_lambda(n_dot_l, a2)));
     }
   }
   vec4 brdf = sd_environment_brdf(n_dot_v, roughness);
@@ -318,7 +315,7 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
   float fresnel = f0 + (1.0 - f0) * sd_dielectric_shape(clamp(v_dot_h, 0.0, 1.0));
   float layer = f0 * (brdf.x + brdf.y - brdf.w) + brdf.w;
   float albedo = mix(fresnel / max(layer, 1e-4), 1.0 / max(brdf.x + brdf.y, 1e-4), sd_lobe_weights.x);
-  return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v * float(SD_HIGHLIGHT_POINTS))) * sd.source_irradiance[i].rgb;
+  return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v)) * sd.source_irradiance[i].rgb;
 }
 
 /* The sources' light at the pixel: on the Lambert lobe (sd_source_light), returned; on the glossy

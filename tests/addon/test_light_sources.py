@@ -180,3 +180,62 @@ def test_a_sun_is_a_highlight_and_a_softbox_stays_in_the_atlas(sdnative):
     assert np.array_equal(shown[~near_sun], whole[~near_sun])      # the softbox and the sky stay
     directions, irradiance = light_sources.shading_rows(sources, np.eye(3), 1.0)
     assert list(irradiance[:, 3]) == [1.0, 0.0]
+
+
+def test_a_highlight_keeps_its_own_texels_shape_and_colours(sdnative):
+    """with_highlight_points: a sun with a white core and a red rim becomes points that hold all of
+    its light per channel about its direction, the core's whiter than the rim's; a one-texel sun is
+    one point at the texel, widened to a bilinear texel's peak (h_theta h_phi / (4 pi))."""
+    height, width = 512, 1024
+    theta = (np.arange(height) + 0.5) * np.pi / height
+    phi = np.pi * (width - 2 * np.arange(width) - 1) / width
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    d = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    sun = np.array([math.cos(math.radians(30.0)), 0.0, math.sin(math.radians(30.0))])
+    rgb = np.full((height, width, 3), 0.5, np.float32)
+    rgb[d @ sun > math.cos(math.radians(0.9))] = (3000.0, 1000.0, 500.0)     # the rim
+    rgb[d @ sun > math.cos(math.radians(0.4))] = (8000.0, 8000.0, 8000.0)    # the core
+    env = sdnative.environment_from_pixels(rgb)
+    split = env.light_sources(light_sources.SPLIT_ORDER)
+    sources = [light_sources.Source.from_split(s) for s in split["sources"]]
+    (source,) = light_sources.with_highlight_points(sources, env.pixels(), split["remainder"].pixels())
+    points = np.array(source.points)
+    assert points.shape == (light_sources.HIGHLIGHT_POINTS, 7)
+    assert points[:, 4:].sum(axis=0) == pytest.approx([1.0, 1.0, 1.0])
+    mean = (points[:, 4:5] * points[:, :3]).sum(axis=0)
+    assert mean / np.linalg.norm(mean) @ np.asarray(source.direction) > math.cos(math.radians(0.05))
+    near = points[:, :3] @ sun > math.cos(math.radians(0.4))
+    assert near.any() and (~near & (points[:, 4] > 0.0)).any()
+    core, rim = points[near], points[~near & (points[:, 4] > 0.0)]
+    assert core[:, 6].sum() / core[:, 4].sum() > 2.0 * rim[:, 6].sum() / rim[:, 4].sum()   # bluer, as the map
+
+    one = np.full((height, width, 3), 0.5, np.float32)
+    row, column = 120, 200
+    one[row, column] = 1.0e6
+    env = sdnative.environment_from_pixels(one)
+    split = env.light_sources(light_sources.SPLIT_ORDER)
+    sources = [light_sources.Source.from_split(s) for s in split["sources"]]
+    (source,) = light_sources.with_highlight_points(sources, env.pixels(), split["remainder"].pixels())
+    (x, y, z, widening, *share), *rest = sorted(source.points, key=lambda q: -q[4])
+    assert share == pytest.approx([1.0, 1.0, 1.0]) and not any(q[4] for q in rest)
+    assert np.array([x, y, z]) @ d[row, column] == pytest.approx(1.0, abs=1e-9)
+    h_theta, h_phi = math.pi / height, 2.0 * math.pi / width * math.sin(theta[row])
+    assert widening == pytest.approx(h_theta * h_phi / (4.0 * math.pi))
+
+
+def test_highlight_rows_turn_the_points_into_the_bake_space():
+    gr = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])   # 90 degrees about x
+    point = (0.0, 0.6, 0.8, 2e-5, 0.25, 0.5, 1.0)
+    found = light_sources.Source((0.0, 0.6, 0.8), (1.0, 0.0, 0.0), 0.01, 0.004, (1.0, 1.0, 1.0),
+                                 points=(point,) + ((0.0,) * 7,) * (light_sources.HIGHLIGHT_POINTS - 1))
+    bare = light_sources.Source((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), 0.01, 0.004, (1.0, 1.0, 1.0))
+    rows = light_sources.highlight_rows([found, bare], gr)
+    assert rows.shape == (4 * light_sources.HIGHLIGHT_POINTS, 4)
+    assert rows[0] == pytest.approx([*(gr.T @ [0.0, 0.6, 0.8]), 2e-5])
+    assert rows[1] == pytest.approx([0.25, 0.5, 1.0, 0.0])
+    assert not rows[2:2 * light_sources.HIGHLIGHT_POINTS].any()
+    # a source given without its texels: its centre, all of its light, an ellipse's peak
+    k = 2 * light_sources.HIGHLIGHT_POINTS
+    assert rows[k] == pytest.approx([*(gr.T @ [0.0, 0.0, 1.0]), 0.25 * 0.01 * 0.004])
+    assert rows[k + 1] == pytest.approx([1.0, 1.0, 1.0, 0.0])
+    assert not rows[k + 2:].any()

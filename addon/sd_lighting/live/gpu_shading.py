@@ -545,6 +545,8 @@ class ObjectData:
             values["source_direction"], values["source_irradiance"] = light_sources.shading_rows(
                 sources[0], local_to_environment, strength)
             values["source_shadow"] = sources[1]
+            if self.variant.prefiltered_lookup:
+                values["source_points"] = light_sources.highlight_rows(sources[0], local_to_environment)
         values.update(surface_rows)
         return self.variant.frame_block(values)
 

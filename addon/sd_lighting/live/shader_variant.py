@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import methods
-from ..scene.light_sources import SHADOW_MAP_SIZE, SOURCE_ROWS
+from ..scene.light_sources import HIGHLIGHT_POINTS, SHADOW_MAP_SIZE, SOURCE_ROWS
 from ..scene.lobes import DIELECTRIC_SHAPE_IOR
 from ..store.bake_data import TEXTURE_WIDTH_LOG2
 
@@ -239,6 +239,7 @@ class Variant:
             d["SD_SOURCES"] = str(self.sources)
             d["SD_SOURCE_ROWS"] = str(SOURCE_ROWS)
             d["SD_SHADOW_MAP_SIZE"] = str(SHADOW_MAP_SIZE)
+            d["SD_HIGHLIGHT_POINTS"] = str(HIGHLIGHT_POINTS)
         return d
 
     def vertex_inputs(self):
@@ -333,6 +334,8 @@ class Variant:
             fields += [BlockField("source_direction", "vec4", self.sources),
                        BlockField("source_irradiance", "vec4", self.sources),
                        BlockField("source_shadow", "vec4", SOURCE_ROWS * self.sources)]
+            if self.prefiltered_lookup:   # light_sources.highlight_rows
+                fields.append(BlockField("source_points", "vec4", 2 * HIGHLIGHT_POINTS * self.sources))
         return fields
 
     def frame_struct(self):

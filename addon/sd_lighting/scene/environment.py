@@ -345,7 +345,8 @@ def source_split(src, wait):
 
     def compute():
         split = env.light_sources(light_sources.SPLIT_ORDER)
-        return {"sources": [light_sources.Source.from_split(s) for s in split["sources"]],
+        sources = [light_sources.Source.from_split(s) for s in split["sources"]]
+        return {"sources": light_sources.with_highlight_points(sources, env.pixels(), split["remainder"].pixels()),
                 "remainder": split["remainder"],
                 "found": light_sources.found(split, float(env.mass[3]))}
 

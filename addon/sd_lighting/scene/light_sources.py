@@ -12,6 +12,7 @@ frames and the shader's rows of each source.
 Nothing here needs Blender.
 """
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -26,6 +27,7 @@ SOURCE_ROWS = 5          # vec4 rows per source in the shader's block (shadow_ro
 # uniform disc of GGX (a sun, a lamp): wider ones (softboxes, windows) stay in the prefiltered
 # atlas, where a sharp lobe sees their own shape (msd-notes, "Bright sources").
 HIGHLIGHT_RADIUS = math.radians(1.0)
+HIGHLIGHT_POINTS = 16    # the directions a highlight is shaded at (with_highlight_points)
 
 
 def found(split, mass):
@@ -63,6 +65,7 @@ class Source:
     minor_radius: float
     power: tuple          # RGB: integral of its radiance over the sphere's measure (the sphere: 1)
     extent: float = 0.0   # radians from its direction to its farthest texel's centre
+    points: tuple = ()    # a highlight's light as weighted directions (with_highlight_points)
 
     @classmethod
     def from_split(cls, source):
@@ -157,19 +160,14 @@ def shading_rows(sources, local_to_environment, strength):
     return directions, irradiance
 
 
-def without_highlights(whole, remainder, sources):
-    """The map for the prefiltered atlas where the glossy lobe takes the highlight sources on their
-    own (Source.highlight): the remainder's texels within each one's extent (and a texel more),
-    the whole map's elsewhere and within a wider source's extent - so a wider source stays in the
-    atlas whole. whole, remainder: the maps' RGB, [H, W, 3], rows top-first (sdnative's
-    environment_from_pixels); float32 [H, W, 3]. Only the rows a cap crosses are looked at."""
-    out = np.array(whole, dtype=np.float32)
-    height, width, _ = out.shape
+def _highlight_texels(sources, height, width):
+    """For each highlight source (Source.highlight) of `sources`: (source, rows, taken), the rows
+    (top-first) its extent and a texel more crosses in a map of height x width, and which texels of
+    them it takes - its extent and a texel more, less any wider source's - bool [len(rows), width]."""
     texel = math.pi / height
     phi = ((0.5 - (np.arange(width) + 0.5) / width) * 2.0 * np.pi).astype(np.float32)
 
     def cap(source, rows):
-        """Which texels of `rows` (top-first) lie within the source's extent and a texel more."""
         theta = ((rows + 0.5) * texel).astype(np.float32)[:, None]
         d = np.asarray(source.direction, dtype=np.float32)
         cosine = np.sin(theta) * (np.cos(phi) * d[0] + np.sin(phi) * d[1]) + np.cos(theta) * d[2]
@@ -185,7 +183,96 @@ def without_highlights(whole, remainder, sources):
         for other in sources:
             if not other.highlight:
                 taken &= ~cap(other, rows)
+        yield source, rows, taken
+
+
+def highlight_rows(sources, local_to_environment):
+    """The shader's rows of each highlight's points (Source.points) for one object, two per point,
+    float64 [2 N HIGHLIGHT_POINTS, 4]: its direction in the object's bake space, (g R)^T times its
+    own, with its alpha^2 widening; its share of the source's power per channel, with 0. A source
+    without points (none found in a map, or not a highlight) is its ellipse's centre with all of
+    its power, widened as the ellipse's peak is, major minor / 4."""
+    gr = np.asarray(local_to_environment, dtype=np.float64)
+    rows = np.zeros((2 * HIGHLIGHT_POINTS * len(sources), 4))
+    for i, source in enumerate(sources):
+        own = source.points or ((*source.direction, 0.25 * source.major_radius * source.minor_radius, 1.0, 1.0, 1.0),)
+        for k, (x, y, z, widening, *share) in enumerate(own):
+            rows[2 * (HIGHLIGHT_POINTS * i + k)] = (*(gr.T @ np.array([x, y, z])), widening)
+            rows[2 * (HIGHLIGHT_POINTS * i + k) + 1, :3] = share
+    return rows
+
+
+def without_highlights(whole, remainder, sources):
+    """The map for the prefiltered atlas where the glossy lobe takes the highlight sources on their
+    own (Source.highlight): the remainder's texels within each one's extent (and a texel more),
+    the whole map's elsewhere and within a wider source's extent - so a wider source stays in the
+    atlas whole. whole, remainder: the maps' RGB, [H, W, 3], rows top-first (sdnative's
+    environment_from_pixels); float32 [H, W, 3]. Only the rows a cap crosses are looked at."""
+    out = np.array(whole, dtype=np.float32)
+    for _, rows, taken in _highlight_texels(sources, *out.shape[:2]):
         band = out[rows]
         band[taken] = np.asarray(remainder[rows[0]:rows[-1] + 1], dtype=np.float32)[taken]
         out[rows] = band
     return out
+
+
+def with_highlight_points(sources, whole, remainder, count=HIGHLIGHT_POINTS):
+    """`sources` with each highlight's `points`: the light without_highlights takes from the atlas
+    (whole - remainder over the texels it takes, luminance times each texel's solid angle) as
+    `count` weighted directions, so that its highlight has the source's own shape and colours - a
+    sun's peaked, whiter core, a lamp's ellipse - not a uniform disc's flat top. Texels are gathered
+    by k-means weighted by luminance in the plane tangent at the source's direction, from the
+    brightest; each point is its texels' mean direction, how much its lobe's alpha^2 is widened
+    to spread the light as they do, and their share of the power per channel. The widening matches
+    the peak of D in l (1 / (4 pi alpha^2) for a mirror seen head-on) to the light's: a texel is read
+    bilinearly by Cycles, a tent of peak 1 / (h_theta h_phi) (h: its angular sides), so
+    h_theta h_phi / (4 pi); the texels' spread about the point adds half their second moment (a
+    uniform disc's radius^2 / 4). Points without texels have no share."""
+    whole = np.asarray(whole, dtype=np.float64)
+    height, width, _ = whole.shape
+    texel = math.pi / height
+    out = []
+    for source, rows, taken in _highlight_texels(sources, height, width):
+        y, x = np.nonzero(taken)
+        theta = (rows[y] + 0.5) * texel
+        phi = (0.5 - (x + 0.5) / width) * 2.0 * np.pi
+        excess = np.maximum(whole[rows[y], x] - np.asarray(remainder, dtype=np.float64)[rows[y], x], 0.0)
+        power = excess * np.sin(theta)[:, None]
+        directions = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
+        tent = texel * (2.0 * np.pi / width * np.sin(theta)) / (4.0 * np.pi)
+        keep = power @ np.asarray(LUMINANCE) > 0.0
+        points = _clustered(directions[keep], power[keep], tent[keep], np.asarray(source.direction), count)
+        out.append((source, points))
+    found = {id(source): points for source, points in out}
+    return [dataclasses.replace(s, points=found[id(s)]) if id(s) in found else s for s in sources]
+
+
+def _clustered(directions, power, tents, centre, count):
+    """((x, y, z, widening, share R, G, B) * count): k-means of unit `directions` weighted by the
+    luminance of their RGB `power` into `count` points in the gnomonic plane about `centre`, each
+    point's alpha^2 widening its texels' own `tents` and half their second moment
+    (with_highlight_points); zero rows past the texels."""
+    if not len(power):
+        return ((0.0,) * 7,) * count
+    weights = power @ np.asarray(LUMINANCE)
+    u, w = _perpendicular_frame(centre)
+    depth = directions @ centre
+    plane = np.stack([directions @ u, directions @ w], axis=1) / depth[:, None]
+    order = np.argsort(-weights, kind="stable")
+    means = plane[order[:count]].copy()
+    for _ in range(8):
+        label = np.argmin(((plane[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1)
+        for k in range(len(means)):
+            mine = label == k
+            if mine.any():
+                means[k] = np.average(plane[mine], axis=0, weights=weights[mine])
+    total = np.maximum(power.sum(axis=0), 1e-30)
+    points = []
+    for k in range(len(means)):
+        mine = label == k
+        if not mine.any():
+            continue
+        spread = np.average(0.5 * ((plane[mine] - means[k]) ** 2).sum(axis=1) + tents[mine], weights=weights[mine])
+        direction = centre + means[k][0] * u + means[k][1] * w
+        points.append((*(direction / np.linalg.norm(direction)), float(spread), *(power[mine].sum(axis=0) / total)))
+    return tuple(points) + ((0.0,) * 7,) * (count - len(points))

@@ -334,7 +334,8 @@ def bright_source_searches():
 
 def source_split(src, wait):
     """The map's bright compact sources split off (Environment.light_sources at
-    light_sources.SPLIT_ORDER), found in a worker thread (about 0.2 s for 1024 x 512) and cached:
+    light_sources.SPLIT_ORDER) with the highlights' points (with_highlight_points), found in a
+    worker thread (about 0.25 s for 1024 x 512) and cached:
     {"sources": [light_sources.Source], "remainder": the Environment without them, "found":
     light_sources.found's list}. wait=False (the panel, the interactive draw) gives None until it is
     there; a failed search raises background.Failed (wait=True too). A uniform colour has no

@@ -23,8 +23,8 @@ from .lobes import LUMINANCE
 SPLIT_ORDER = 8          # the SH order the sources are split off for (the panel's default order)
 SHADOW_MAP_SIZE = 2048   # texels along each side of a source's shadow map
 SOURCE_ROWS = 5          # vec4 rows per source in the shader's block (shadow_rows)
-# The widest source (its ellipse's major semi-axis) whose glossy highlight is shaded on its own, as a
-# uniform disc of GGX (a sun, a lamp): wider ones (softboxes, windows) stay in the prefiltered
+# The widest source (its ellipse's major semi-axis) whose glossy highlight is shaded on its own, from
+# points of its own texels (a sun, a lamp): wider ones (softboxes, windows) stay in the prefiltered
 # atlas, where a sharp lobe sees their own shape (msd-notes, "Bright sources").
 HIGHLIGHT_RADIUS = math.radians(1.0)
 HIGHLIGHT_POINTS = 16    # the directions a highlight is shaded at (with_highlight_points)
@@ -163,7 +163,8 @@ def shading_rows(sources, local_to_environment, strength):
 def _highlight_texels(sources, height, width):
     """For each highlight source (Source.highlight) of `sources`: (source, rows, taken), the rows
     (top-first) its extent and a texel more crosses in a map of height x width, and which texels of
-    them it takes - its extent and a texel more, less any wider source's - bool [len(rows), width]."""
+    them it takes - its extent and a texel more, less any wider source's and any earlier highlight's
+    (two close lamps share no texel) - bool [len(rows), width]."""
     texel = math.pi / height
     phi = ((0.5 - (np.arange(width) + 0.5) / width) * 2.0 * np.pi).astype(np.float32)
 
@@ -173,15 +174,15 @@ def _highlight_texels(sources, height, width):
         cosine = np.sin(theta) * (np.cos(phi) * d[0] + np.sin(phi) * d[1]) + np.cos(theta) * d[2]
         return cosine >= math.cos(min(source.extent + texel, math.pi))
 
-    for source in sources:
+    for i, source in enumerate(sources):
         if not source.highlight:
             continue
         polar = math.acos(max(-1.0, min(1.0, source.direction[2])))
         reach = source.extent + 2.0 * texel
         rows = np.arange(max(0, int((polar - reach) / texel)), min(height, int((polar + reach) / texel) + 1))
         taken = cap(source, rows)
-        for other in sources:
-            if not other.highlight:
+        for j, other in enumerate(sources):
+            if not other.highlight or j < i:
                 taken &= ~cap(other, rows)
         yield source, rows, taken
 
@@ -190,16 +191,19 @@ def highlight_rows(sources, local_to_environment):
     """The shader's rows of each highlight's points (Source.points) for one object, two per point,
     float64 [2 N HIGHLIGHT_POINTS, 4]: its direction in the object's bake space, (g R)^T times its
     own, with its alpha^2 widening; its share of the source's power per channel, with 0. A source
-    without points (none found in a map, or not a highlight) is its ellipse's centre with all of
-    its power, widened as the ellipse's peak is, major minor / 4."""
+    given without points (not a highlight; made without a map, as in a test) is its ellipse's
+    centre with all of its power, widened as the ellipse's peak is, major minor / 4. (A highlight
+    whose texels all lie in a wider source's extent has points without shares: its light stays in
+    the atlas.)"""
     gr = np.asarray(local_to_environment, dtype=np.float64)
-    rows = np.zeros((2 * HIGHLIGHT_POINTS * len(sources), 4))
+    rows = np.zeros((len(sources), HIGHLIGHT_POINTS, 2, 4))
     for i, source in enumerate(sources):
-        own = source.points or ((*source.direction, 0.25 * source.major_radius * source.minor_radius, 1.0, 1.0, 1.0),)
-        for k, (x, y, z, widening, *share) in enumerate(own):
-            rows[2 * (HIGHLIGHT_POINTS * i + k)] = (*(gr.T @ np.array([x, y, z])), widening)
-            rows[2 * (HIGHLIGHT_POINTS * i + k) + 1, :3] = share
-    return rows
+        own = np.array(source.points or ((*source.direction, 0.25 * source.major_radius * source.minor_radius,
+                                          1.0, 1.0, 1.0),), dtype=np.float64)
+        rows[i, :len(own), 0, :3] = own[:, :3] @ gr     # (g R)^T d, row by row
+        rows[i, :len(own), 0, 3] = own[:, 3]
+        rows[i, :len(own), 1, :3] = own[:, 4:]
+    return rows.reshape(-1, 4)
 
 
 def without_highlights(whole, remainder, sources):
@@ -216,10 +220,10 @@ def without_highlights(whole, remainder, sources):
     return out
 
 
-def with_highlight_points(sources, whole, remainder, count=HIGHLIGHT_POINTS):
+def with_highlight_points(sources, whole, remainder):
     """`sources` with each highlight's `points`: the light without_highlights takes from the atlas
     (whole - remainder over the texels it takes, luminance times each texel's solid angle) as
-    `count` weighted directions, so that its highlight has the source's own shape and colours - a
+    HIGHLIGHT_POINTS weighted directions, so that its highlight has the source's own shape and colours - a
     sun's peaked, whiter core, a lamp's ellipse - not a uniform disc's flat top. Texels are gathered
     by k-means weighted by luminance in the plane tangent at the source's direction, from the
     brightest; each point is its texels' mean direction, how much its lobe's alpha^2 is widened
@@ -228,20 +232,21 @@ def with_highlight_points(sources, whole, remainder, count=HIGHLIGHT_POINTS):
     bilinearly by Cycles, a tent of peak 1 / (h_theta h_phi) (h: its angular sides), so
     h_theta h_phi / (4 pi); the texels' spread about the point adds half their second moment (a
     uniform disc's radius^2 / 4). Points without texels have no share."""
-    whole = np.asarray(whole, dtype=np.float64)
-    height, width, _ = whole.shape
+    height, width, _ = np.shape(whole)
     texel = math.pi / height
     out = []
     for source, rows, taken in _highlight_texels(sources, height, width):
         y, x = np.nonzero(taken)
         theta = (rows[y] + 0.5) * texel
         phi = (0.5 - (x + 0.5) / width) * 2.0 * np.pi
-        excess = np.maximum(whole[rows[y], x] - np.asarray(remainder, dtype=np.float64)[rows[y], x], 0.0)
+        excess = np.maximum(np.asarray(whole[rows[y], x], dtype=np.float64) - remainder[rows[y], x], 0.0)
         power = excess * np.sin(theta)[:, None]
         directions = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
         tent = texel * (2.0 * np.pi / width * np.sin(theta)) / (4.0 * np.pi)
-        keep = power @ np.asarray(LUMINANCE) > 0.0
-        points = _clustered(directions[keep], power[keep], tent[keep], np.asarray(source.direction), count)
+        centre = np.asarray(source.direction, dtype=np.float64)
+        # the gnomonic plane holds the texels well within a hemisphere (an extent is at most 10 degrees)
+        keep = (power @ np.asarray(LUMINANCE) > 0.0) & (directions @ centre > 0.5)
+        points = _clustered(directions[keep], power[keep], tent[keep], centre, HIGHLIGHT_POINTS)
         out.append((source, points))
     found = {id(source): points for source, points in out}
     return [dataclasses.replace(s, points=found[id(s)]) if id(s) in found else s for s in sources]

@@ -160,16 +160,23 @@ def shading_rows(sources, local_to_environment, strength):
     return directions, irradiance
 
 
+def _texel_angles(rows, columns, height, width):
+    """(polar angle, azimuth) of the centres of the texels at `rows` (top-first) and `columns` of a
+    height x width equirect map in Blender's orientation (u = 0.5 - atan2(y, x) / 2 pi)."""
+    return (rows + 0.5) * (math.pi / height), (0.5 - (columns + 0.5) / width) * 2.0 * math.pi
+
+
 def _highlight_texels(sources, height, width):
     """For each highlight source (Source.highlight) of `sources`: (source, rows, taken), the rows
     (top-first) its extent and a texel more crosses in a map of height x width, and which texels of
     them it takes - its extent and a texel more, less any wider source's and any earlier highlight's
     (two close lamps share no texel) - bool [len(rows), width]."""
     texel = math.pi / height
-    phi = ((0.5 - (np.arange(width) + 0.5) / width) * 2.0 * np.pi).astype(np.float32)
+    _, phi = _texel_angles(0, np.arange(width), height, width)
+    phi = phi.astype(np.float32)
 
     def cap(source, rows):
-        theta = ((rows + 0.5) * texel).astype(np.float32)[:, None]
+        theta = _texel_angles(rows, 0, height, width)[0].astype(np.float32)[:, None]
         d = np.asarray(source.direction, dtype=np.float32)
         cosine = np.sin(theta) * (np.cos(phi) * d[0] + np.sin(phi) * d[1]) + np.cos(theta) * d[2]
         return cosine >= math.cos(min(source.extent + texel, math.pi))
@@ -237,8 +244,7 @@ def with_highlight_points(sources, whole, remainder):
     out = []
     for source, rows, taken in _highlight_texels(sources, height, width):
         y, x = np.nonzero(taken)
-        theta = (rows[y] + 0.5) * texel
-        phi = (0.5 - (x + 0.5) / width) * 2.0 * np.pi
+        theta, phi = _texel_angles(rows[y], x, height, width)
         excess = np.maximum(np.asarray(whole[rows[y], x], dtype=np.float64) - remainder[rows[y], x], 0.0)
         power = excess * np.sin(theta)[:, None]
         directions = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)

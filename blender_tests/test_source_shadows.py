@@ -29,6 +29,9 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
    sampled lobe reads the atlas without the sun; the sun is a highlight of its own): under
    MAX_GOLD_ERROR; at MIRROR_ROUGHNESS under MAX_MIRROR_ERROR, its brightest pixel Cycles' within
    MAX_MIRROR_PEAK.
+8. forest.exr on the ground and the cube in polished steel (roughness TRACED_ROUGHNESS): the ground
+   mirrors the cube. With the Reflection Rays (the default: the glossy lobe's visibility traced
+   per pixel) under MAX_TRACED_ERROR and under TRACED_GAIN of the error with the baked visibility.
 The panel says the sources are shadowed per pixel. Error images (Cycles, preview, |difference| x 4)
 go to --out. --quick (the quick tier): step 1 alone.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_source_shadows.py -- --zip Z --out DIR
@@ -68,6 +71,11 @@ MAX_GOLD_ERROR = 0.03
 MIRROR_ROUGHNESS = 0.05
 MAX_MIRROR_ERROR = 0.10
 MAX_MIRROR_PEAK = 0.25
+# Polished steel on the ground and the cube: the ground's reflection of the cube, whose visibility
+# the Reflection Rays trace per pixel (the baked ratio, of order s' at the vertices, smears it).
+TRACED_ROUGHNESS = 0.1
+MAX_TRACED_ERROR = 0.10
+TRACED_GAIN = 0.7
 
 
 def two_suns(package, path):
@@ -239,6 +247,26 @@ def main():
                  "a glossy Principled BSDF sees the sun's shadow where Cycles has it, in its diffuse and its glossy light",
                  "%.2f %% against %.2f %% through SH alone; the umbrae differ on %.2f %% of the pixels"
                  % (100 * glossy, 100 * glossy_sh, 100 * mismatch))
+
+    # polished steel: the ground mirrors the cube, which the baked visibility (order s' at the
+    # vertices) smears over the ground; traced per pixel, its reflection lies where Cycles has it
+    steel = sdtest.principled_material("Steel", (0.7, 0.7, 0.72, 1.0), TRACED_ROUGHNESS, 1.0)
+    for obj in (ground, cube):
+        obj.data.materials[0] = steel
+    world.node_tree.nodes["Environment Texture"].image = bpy.data.images.load(sdtest.hdri("forest.exr"),
+                                                                              check_existing=True)
+    mapping.inputs["Rotation"].default_value[2] = 0.0
+    result, _ = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
+    (traced, _), mask, _, cycles = compare(package, checks, scene, args.out, "forest_steel",
+                                           "forest.exr, steel roughness %g" % TRACED_ROUGHNESS)
+    scene.sd_lighting.reflection_rays = False
+    untraced = sdtest.block_error(sdtest.preview(os.path.join(args.out, "forest_steel_untraced.exr"),
+                                                 width=SIZE, height=SIZE), cycles, BLOCK, mask)[0]
+    scene.sd_lighting.reflection_rays = True
+    checks.check(result == {'FINISHED'} and traced < MAX_TRACED_ERROR and traced < TRACED_GAIN * untraced,
+                 "a polished floor mirrors the cube where Cycles does (its visibility traced per pixel)",
+                 "%.2f %% (limit %.0f %%); with the baked visibility %.2f %%"
+                 % (100 * traced, 100 * MAX_TRACED_ERROR, 100 * untraced))
 
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri("sunrise.exr"))

@@ -190,60 +190,117 @@ float sd_triangle_horizon(vec3 axis, vec3 normal, vec3 ng, float roughness)
   return min(sd_lobe_above(dot(axis, ng), alpha) / max(sd_lobe_above(dot(axis, normal), alpha), 1e-4), 1.0);
 }
 
-/* The mean light of the GGX lobe the view reflects (F = 1), from SD_GLOSSY_TAPS of its directions:
- * filtered importance sampling (Krivanek and Colbert 2008) of the lobe's visible normals (Heitz
- * 2018), each direction read from the prefiltered level whose lobe covers about its solid angle
- * 1 / (N pdf), weighed by G2 / G1(v), the estimator's weight of that sampling. Where the split
- * sum's lobe about one direction misses the real one (a rough metal: the lobe stretched along the
- * plane of n and v, cut at the horizon, its tails towards the view heavier; msd-notes, "Glossy
- * light"). The points are one Hammersley set for every pixel, so the estimate is smooth over the
- * surface, without noise. */
+/* The frame of the GGX lobe (alpha^2 = a2) the view reflects, for drawing its visible normals
+ * (Heitz 2018): the view in the shading normal's tangent frame (t1, t2, normal; v.z the cosine,
+ * at least 1e-4), vh the view stretched to alpha = 1, b1 and b2 two directions across it. */
+void sd_lobe_frame(vec3 normal, vec3 view, float alpha, out vec3 t1, out vec3 t2, out vec3 v, out vec3 vh,
+                   out vec3 b1, out vec3 b2)
+{
+  sd_orthonormal_basis(normal, t1, t2);
+  v = vec3(dot(view, t1), dot(view, t2), clamp(dot(view, normal), 1e-4, 1.0));
+  vh = normalize(vec3(alpha * v.xy, v.z));
+  float across = dot(vh.xy, vh.xy);
+  b1 = (across > 1e-12) ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(across) : vec3(1.0, 0.0, 0.0);
+  b2 = cross(vh, b1);
+}
+
+/* The microfacet normal (tangent frame) of Hammersley point i of `count`, ((i + 1/2) / count, the
+ * radical inverse of i in base 2), mapped onto the visible normals of sd_lobe_frame's frame. One
+ * set for every pixel, so that what the taps estimate is smooth over the surface, without noise. */
+vec3 sd_lobe_tap(int i, int count, vec3 vh, vec3 b1, vec3 b2, float alpha)
+{
+  float u2 = 0.0;
+  float digit = 0.5;
+  for (int bits = i; bits > 0; bits /= 2) {
+    u2 += digit * float(bits % 2);
+    digit *= 0.5;
+  }
+  float radius = sqrt((float(i) + 0.5) / float(count));
+  float phi = 6.283185307179586 * u2;
+  float p1 = radius * cos(phi);
+  float s = 0.5 * (1.0 + vh.z);
+  float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * radius * sin(phi);
+  vec3 m = p1 * b1 + p2 * b2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+  return normalize(vec3(alpha * m.xy, max(m.z, 1e-6)));
+}
+
+/* Tap h's weight in the estimate of the lobe's mean over its visible normals, G2 / G1(v), and the
+ * roughness of the prefiltered level whose lobe covers about the tap's solid angle 1 / (count pdf)
+ * (filtered importance sampling, Krivanek and Colbert 2008: the level of alpha^2 = that solid
+ * angle / 4 pi). l: the reflected direction, l.z > 0. */
+vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
+{
+  float w = (1.0 + lambda_v) / (1.0 + lambda_v + sd_smith_lambda(l.z, a2));
+  float q = (a2 - 1.0) * h.z * h.z + 1.0;
+  float d = a2 / (3.141592653589793 * q * q);
+  float solid_angle = 4.0 * v.z * (1.0 + lambda_v) / (float(count) * d);
+  return vec2(w, sqrt(sqrt(solid_angle / 12.566370614359172)));
+}
+
+/* The mean light of the GGX lobe the view reflects (F = 1), from SD_GLOSSY_TAPS of its directions
+ * (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
+ * sd_tap_weight. Where the split sum's lobe about one direction misses the real one (a rough metal:
+ * the lobe stretched along the plane of n and v, cut at the horizon, its tails towards the view
+ * heavier; msd-notes, "Glossy light"). */
 vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
 {
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
-  vec3 t1, t2;
-  sd_orthonormal_basis(normal, t1, t2);
-  vec3 v = vec3(dot(view, t1), dot(view, t2), clamp(dot(view, normal), 1e-4, 1.0));
-  /* the hemisphere of visible normals, stretched to alpha = 1 */
-  vec3 vh = normalize(vec3(alpha * v.xy, v.z));
-  float across = dot(vh.xy, vh.xy);
-  vec3 b1 = (across > 1e-12) ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(across) : vec3(1.0, 0.0, 0.0);
-  vec3 b2 = cross(vh, b1);
+  vec3 t1, t2, v, vh, b1, b2;
+  sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec3 sum = vec3(0.0);
   float weights = 0.0;
   for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
-    /* Hammersley point i: ((i + 1/2) / N, the radical inverse of i in base 2) */
-    float u2 = 0.0;
-    float digit = 0.5;
-    for (int bits = i; bits > 0; bits /= 2) {
-      u2 += digit * float(bits % 2);
-      digit *= 0.5;
-    }
-    float radius = sqrt((float(i) + 0.5) / float(SD_GLOSSY_TAPS));
-    float phi = 6.283185307179586 * u2;
-    float p1 = radius * cos(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * radius * sin(phi);
-    vec3 m = p1 * b1 + p2 * b2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    vec3 h = normalize(vec3(alpha * m.xy, max(m.z, 1e-6)));
+    vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
-      float w = (1.0 + lambda_v) / (1.0 + lambda_v + sd_smith_lambda(l.z, a2));
-      float q = (a2 - 1.0) * h.z * h.z + 1.0;
-      float d = a2 / (3.141592653589793 * q * q);
-      float solid_angle = 4.0 * v.z * (1.0 + lambda_v) / (float(SD_GLOSSY_TAPS) * d);
-      /* the level of alpha^2 = solid angle / 4 pi: its lobe's solid angle about that */
-      float r = sqrt(sqrt(solid_angle / 12.566370614359172));
+      vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
       vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
       /* a direction below the triangle is the object's own (sd_triangle_horizon) */
-      sum += (w * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, r);
-      weights += w;
+      sum += (tap.x * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
+      weights += tap.x;
     }
   }
   return (weights > 0.0) ? sum / weights : vec3(0.0);
 }
+
+#ifdef SD_REFLECTION_RAYS
+/* The share of the glossy lobe's light that reaches the pixel past the scene's triangles, traced
+ * (the Reflection Rays option): SD_REFLECTION_RAYS directions of the lobe the view reflects
+ * (sd_lobe_tap; one, along `axis`, below SD_SINGLE_RAY_ROUGHNESS, where the lobe is narrower than
+ * the taps' spread would matter), each a ray from the pixel through the ray BVH (sd_ray_occluded),
+ * weighed by its light (the prefiltered level of its solid angle, in luminance) and sd_tap_weight.
+ * Directions below the triangle are left out: sd_triangle_horizon takes that share. The baked
+ * visibility ratio, of order s' at the vertices, is too smooth for a sharp lobe: it lets through a
+ * crease's reflection of the object itself (msd-notes, "Glossy light"). The rays start
+ * sd.ray_offset.x along the triangle's normal (live/ray_bvh.py). */
+float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float roughness)
+{
+  mat3 to_world = transpose(mat3(sd.world_to_local));
+  vec3 origin = sd.ray_bvh.yzw + sd_origin_offset + sd.ray_offset.x * (to_world * ng);
+  if (roughness < SD_SINGLE_RAY_ROUGHNESS) {
+    return sd_ray_occluded(origin, to_world * axis, 0.0) ? 0.0 : 1.0;
+  }
+  float alpha = max(roughness * roughness, 1e-4);
+  float a2 = alpha * alpha;
+  vec3 t1, t2, v, vh, b1, b2;
+  sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
+  float lambda_v = sd_smith_lambda(v.z, a2);
+  vec2 light = vec2(0.0);   /* reaching the pixel, all */
+  for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
+    vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
+    vec3 l = 2.0 * dot(v, h) * h - v;
+    vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
+    if (l.z > 0.0 && dot(direction, ng) > 0.0) {
+      vec2 tap = sd_tap_weight(v, h, l, SD_REFLECTION_RAYS, a2, lambda_v);
+      float w = tap.x * max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
+      light += vec2(sd_ray_occluded(origin, to_world * direction, 0.0) ? 0.0 : w, w);
+    }
+  }
+  return (light.y > 0.0) ? light.x / light.y : 1.0;
+}
+#endif
 
 /* The unshadowed glossy light at the pixel: the environment prefiltered by the slot's GGX lobe,
  * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
@@ -340,8 +397,10 @@ vec3 sd_sources_on_lobes(vec3 normal, vec3 view, vec3 axis, vec3 open, float sto
       held += sd_source_in_atlas(i, axis, roughness) * vec2(1.0, visible[i]);
     }
   }
+#  ifndef SD_REFLECTION_RAYS   /* traced visibility sees those sources' shadows too */
   float share = clamp(held.x / max(dot(open, SD_LUMINANCE), 1e-8), 0.0, 1.0);
   visibility = mix(visibility, held.x > 0.0 ? held.y / held.x : 1.0, stored * share);
+#  endif
   return stored * lit;
 }
 #endif
@@ -415,6 +474,9 @@ void main()
   normal = sd_glossy_normal(normal, view, ng);
   vec3 axis;
   vec3 open = sd_open_glossy_light(normal, view, ng, axis);
+#    ifdef SD_REFLECTION_RAYS
+  visibility = stored * sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z);
+#    endif
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
   diffuse += sd_sources_on_lobes(normal, view, axis, open, stored, visibility, highlights);
@@ -439,6 +501,9 @@ void main()
   float visibility = sd_visibility;
   vec3 axis;
   vec3 open = sd_open_glossy_light(normal, view, ng, axis);
+#    ifdef SD_REFLECTION_RAYS
+  visibility = sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z);
+#    endif
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
   diffuse += sd.params.x * sd_sources_on_lobes(normal, view, axis, open, 1.0, visibility, highlights);

@@ -38,7 +38,7 @@ _SUBMODULES = ("background", "compat", "errors", "native", "redraw",
                "bake.prepare",
                "live.gpu_context", "live.lobe_designs", "live.rebake_schedule", "live.band_limited_map",
                "live.shader_variant",
-               "live.gpu_shading", "live.staleness", "live.source_shadows", "live.drawing", "live.live_rebake", "live.preview",
+               "live.gpu_shading", "live.staleness", "live.source_shadows", "live.ray_bvh", "live.drawing", "live.live_rebake", "live.preview",
                "ui.limits", "ui.prediction", "ui.operators", "ui.panels", "ui.properties", "registration")
 
 if "registration" in locals():

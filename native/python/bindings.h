@@ -48,4 +48,7 @@ void bind_shading(pybind11::module_& m);
 /// The Monte Carlo reference of eq. (1).
 void bind_reference(pybind11::module_& m);
 
+/// The flat BVH of the live shading's per-pixel rays, and its walk.
+void bind_ray_bvh(pybind11::module_& m);
+
 }  // namespace sdpy

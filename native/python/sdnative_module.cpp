@@ -122,4 +122,5 @@ PYBIND11_MODULE(sdnative, m) {
   sdpy::bind_visibility(m);
   sdpy::bind_shading(m);
   sdpy::bind_reference(m);
+  sdpy::bind_ray_bvh(m);
 }

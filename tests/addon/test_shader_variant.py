@@ -30,6 +30,8 @@ def all_variants():
                     (0, 2) if not target else (0,)):
                 if sources and lobes not in ("lambert", "layer") and not (prefiltered and albedo):
                     continue   # a glossy lobe takes the sources where the prefiltered atlas lights it
+                # a glossy lobe lit by the prefiltered atlas traces its visibility (reflection rays)
+                rays = lobes not in ("lambert", "layer") and prefiltered and albedo and not target
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
@@ -39,7 +41,7 @@ def all_variants():
                               diffuse_lobe=both,
                               diffuse_design_size=12 if both and method.lobe_design else 0,
                               lightmap=(64, 32) if texels else (), prefiltered=(1024, 7) if prefiltered else (),
-                              sources=sources)
+                              sources=sources, reflection_rays=rays)
 
 
 def test_defines_of_a_known_variant(sdnative):

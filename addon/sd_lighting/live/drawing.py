@@ -28,8 +28,8 @@ from ..scene import environment, light_sources, materials, transforms
 from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
-from . import gpu_shading, source_shadows, staleness
-from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER, SHADOW_MAP_SAMPLER
+from . import gpu_shading, ray_bvh, source_shadows, staleness
+from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER, RAY_BVH_SAMPLER, SHADOW_MAP_SAMPLER
 
 log = logging.getLogger(__name__)
 
@@ -40,7 +40,9 @@ _objects = {}         # object name -> (key, ObjectData)
 _generations = ()     # the background work's generations the viewports last showed
 _instances = (None, [])   # (key, baked_instances' result) of the last depsgraph looked through
 last_error = ""
-source_error = ""     # why the last interactive draw shaded the bright sources through SH (the panel)
+# Why the last interactive draw went without what the scene asks for (the panel shows it), or "":
+# "sources": the bright sources shaded through SH; "rays": no reflection rays traced.
+errors = {"sources": "", "rays": ""}
 
 
 def clear_cache():
@@ -48,6 +50,7 @@ def clear_cache():
     _objects.clear()
     _instances = (None, [])
     source_shadows.clear_cache()
+    ray_bvh.clear_cache()
 
 
 def object_data(obj, per_pixel=False, vertex_target=False, band_limited_texture=False, prefiltered=False):
@@ -204,11 +207,46 @@ def use_prefiltered_glossy(scene):
     return bool(settings is None or settings.prefiltered_glossy)
 
 
-def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, sources=None, **kwargs):
+def use_reflection_rays(scene):
+    """The scene's option: the prefiltered glossy lobes trace their visibility per pixel."""
+    settings = getattr(scene, "sd_lighting", None)
+    return bool(settings is None or settings.reflection_rays)
+
+
+def reflection_rays(scene, wait, view_layer=None):
+    """The scene's ray BVH (ray_bvh.scene_bvh), or None where building it failed (errors["rays"]
+    says why; wait=True raises): the glossy lobes keep the baked visibility ratio."""
+    import bpy
+    view_layer = view_layer or bpy.context.view_layer
+    return _unless_failed("rays", "the glossy lobes keep the baked visibility", wait,
+                          lambda: ray_bvh.scene_bvh(scene, view_layer.depsgraph, view_layer))
+
+
+def _unless_failed(what, instead, wait, work):
+    """work(), or None where it raises: wait=True raises it on; else errors[what] keeps why, and it
+    is logged once, saying what is drawn `instead`."""
+    try:
+        result = work()
+    except Exception as exc:
+        if wait:
+            raise
+        message = "%s: %s" % (type(exc).__name__, exc)
+        if message != errors[what]:
+            log.error("%s: %s", instead, message)
+        errors[what] = message
+        return None
+    errors[what] = ""
+    return result
+
+
+def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matrix=None, sources=None, rays=None,
+           **kwargs):
     """(uniform block, {sampler: texture} of the environment textures it reads) of one draw of the
     object's data with `matrix` (default: its world matrix; an instance's). wait: as
     shading_light; without waiting, what is still pending is watched (watch_background).
     sources: source_lighting's, for data that takes them (ObjectData.takes_sources), or None.
+    rays: the scene's ray BVH (ray_bvh.scene_bvh) for data whose glossy lobe traces its
+    visibility, or None.
     The sources' shadow rows are made relative to the object's origin here, in float64 (the
     shader has the pixel's position relative to it)."""
     matrix = np.array(obj.matrix_world if matrix is None else matrix)
@@ -230,6 +268,9 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
     if sources is not None:
         kwargs["sources"] = (sources[0], light_sources.rows_from(sources[2], matrix[:3, 3]))
         textures[SHADOW_MAP_SAMPLER[1]] = sources[1]
+    if rays is not None:
+        kwargs["rays"] = ray_bvh.block_rows(rays, matrix, data.radius)
+        textures[RAY_BVH_SAMPLER[1]] = rays[0]
     block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
                              albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None,
                              strength=source.strength, **kwargs)
@@ -249,27 +290,19 @@ def source_lighting(scene, source, g, wait, view_layer=None):
     map's bright sources that light objects on their own (the scene's Sharp Source Shadows;
     gpu_shading.takes_sources says which), or None: the option is off, the map has none, or
     (wait=False) they are still being found (the whole map through SH meanwhile), or their search
-    or their shadow maps failed (the whole map through SH; source_error says why, the panel shows
-    it; wait=True raises). The maps are rendered now when the sources or the casters changed
-    (source_shadows.py)."""
+    or their shadow maps failed (the whole map through SH; errors["sources"] says why; wait=True
+    raises). The maps are rendered now when the sources or the casters changed (source_shadows.py)."""
     import bpy
-    global source_error
-    try:
+
+    def work():
         split = _shading_split(scene, source, wait)
         if split is None:
             return None
-        view_layer = view_layer or bpy.context.view_layer
-        texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, view_layer.depsgraph, view_layer)
-    except Exception as exc:
-        if wait:
-            raise
-        message = "%s: %s" % (type(exc).__name__, exc)
-        if message != source_error:
-            log.error("the bright sources are shaded through SH: %s", message)
-        source_error = message
-        return None
-    source_error = ""
-    return split["sources"], texture, rows
+        layer = view_layer or bpy.context.view_layer
+        texture, rows = source_shadows.shadow_maps(split["sources"], g, scene, layer.depsgraph, layer)
+        return split["sources"], texture, rows
+
+    return _unless_failed("sources", "the bright sources are shaded through SH", wait, work)
 
 
 def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, wait=False, instances=(),
@@ -284,14 +317,18 @@ def draw_objects(scene, objects, view, scale, per_pixel=False, depth_bias=0.0, w
     band_limited_texture = use_band_limited_texture(scene)
     prefiltered = use_prefiltered_glossy(scene)
     sources = source_lighting(scene, source, g, wait, view_layer) if objects or instances else None
+    traced = prefiltered and use_reflection_rays(scene)
+    rays = []   # the ray BVH, built when the first object that traces is drawn
     for obj, matrix in [(obj, None) for obj in objects] + list(instances):
         record = baked.record(obj)
         data = object_data(obj, per_pixel=per_pixel or bool(record and record.per_pixel),
                            band_limited_texture=band_limited_texture, prefiltered=prefiltered)
         if data is None:
             continue
+        if traced and data.traces_reflections and not rays:
+            rays.append(reflection_rays(scene, wait, view_layer))
         block, textures = _frame(scene, obj, data, view, scale, wait, source, g, matrix, sources,
-                                 depth_bias=depth_bias)
+                                 rays[0] if rays and data.traces_reflections else None, depth_bias=depth_bias)
         data.draw(block, textures)
 
 

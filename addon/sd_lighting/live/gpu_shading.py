@@ -47,7 +47,8 @@ from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BRDF_TABLE_SAMPLER, BRDF_TA
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
 # (library, vertex, fragment): the fragment stage alone shades the bright sources
-SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl", ("sd_source_shadows.glsl", "sd_shading_frag.glsl"))
+SHADER_FILES = ("sd_shading_lib.glsl", "sd_shading_vert.glsl",
+                ("sd_source_shadows.glsl", "sd_ray_bvh.glsl", "sd_shading_frag.glsl"))
 BACKGROUND_FILES = ("sd_background_vert.glsl", "sd_background_frag.glsl")
 CASTER_FILES = ("sd_caster_vert.glsl", "sd_caster_frag.glsl")
 ALL_FILES = tuple(name for stage in (EQUIRECT_FILE,) + SHADER_FILES + BACKGROUND_FILES + CASTER_FILES
@@ -383,6 +384,9 @@ class ObjectData:
         self._lobe_factors = (None, None)   # (lobe_vec4s, lobe_order, lobe_count), lobe_factors()
 
         positions = attributes.read_positions(mesh)
+        # how far the mesh reaches from its origin: where the reflection rays start (ray_bvh.block_rows)
+        self.radius = float(np.sqrt(np.max(np.sum(np.square(positions, dtype=np.float64), axis=1)))) \
+            if len(positions) else 0.0
         normals = attributes.read_normals(mesh)
         slots, uvs, sides = attributes.read_surface(mesh)
         self.slot_count = int(slots.max()) + 1 if slots is not None and len(slots) else 1
@@ -458,6 +462,12 @@ class ObjectData:
         prefiltered: whether the prefiltered atlas is there to draw with)."""
         return takes_sources(self.record, self.variant.vertex_target, bool(self.prefiltered) and prefiltered)
 
+    @property
+    def traces_reflections(self):
+        """Whether the glossy lobe can trace its visibility (a Phong lobe 0 with the prefiltered
+        atlas; frame_block decides with the slots' weights)."""
+        return self.lobe == "phong" and bool(self.prefiltered) and not self.variant.vertex_target
+
     def _use_sources(self, count):
         """Switches to the variant lit by `count` sources on their own (0: none)."""
         variant = dataclasses.replace(self.variant, sources=count)
@@ -506,7 +516,7 @@ class ObjectData:
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0,
-                    band_limited_scale=1.0, sources=None):
+                    band_limited_scale=1.0, sources=None, rays=None):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
@@ -519,12 +529,18 @@ class ObjectData:
         meanwhile), for data made with the prefiltered lookup; strength: the environment's, which
         the atlas is without; band_limited_scale: that of the band-limited texture's codes;
         sources: (scene/light_sources.Source list, their shadow rows) lighting the data on their
-        own (takes_sources; `light` is then the rest of the map), or None. The
+        own (takes_sources; `light` is then the rest of the map), or None; rays: the ray_bvh and
+        ray_offset rows (ray_bvh.block_rows) where the glossy lobe traces its visibility, or None. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
         surface_rows = self._use_albedos(list(albedos), prefiltered)
         self._use_sources(len(sources[0]) if sources else 0)
+        traced = rays is not None and self.variant.glossy and self.variant.prefiltered_lookup
+        if traced != self.variant.reflection_rays:
+            self.variant = dataclasses.replace(self.variant, reflection_rays=traced)
+            self.shader = shader_program(self.variant)
+            self.ubo = None
         self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:
@@ -547,6 +563,8 @@ class ObjectData:
             values["source_shadow"] = sources[1]
             if self.variant.prefiltered_lookup:
                 values["source_points"] = light_sources.highlight_rows(sources[0], local_to_environment)
+        if self.variant.reflection_rays:
+            values.update(rays)
         values.update(surface_rows)
         return self.variant.frame_block(values)
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import methods
+from .. import methods, native
 from ..scene.light_sources import HIGHLIGHT_POINTS, SHADOW_MAP_SIZE, SOURCE_ROWS
 from ..scene.lobes import DIELECTRIC_SHAPE_IOR
 from ..store.bake_data import TEXTURE_WIDTH_LOG2
@@ -27,11 +27,17 @@ PREFILTERED_SAMPLER = (5, "sd_prefiltered")                 # the environment pr
 BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's tables over n.v, roughness
 BRDF_TABLE_SIZE = 32   # each table's side (sdnative.environment_brdf_table, glossy_bend_table)
 SHADOW_MAP_SAMPLER = (7, "sd_shadow_map")                   # the sources' shadow maps, side by side
+RAY_BVH_SAMPLER = (8, "sd_ray_bvh")                         # the scene's triangles (live/ray_bvh.py)
 # A metal's glossy light from this roughness on (blended in over the 0.1 below) is sampled by
 # GLOSSY_TAPS directions of its lobe instead of one prefiltered lookup (sd_sampled_glossy_light;
 # msd-notes, "Glossy light", measures both).
 SAMPLED_ROUGHNESS = 0.3
 GLOSSY_TAPS = 64
+# The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel, drawn
+# as the taps are; below SINGLE_RAY_ROUGHNESS one, along the lobe's axis (a lobe under a degree or
+# two wide).
+REFLECTION_RAYS = 8
+SINGLE_RAY_ROUGHNESS = 0.1
 
 
 
@@ -104,6 +110,7 @@ class Variant:
                                   # looked up in (drawn with weights), or () for its SH result
     sources: int = 0              # the map's bright sources lighting the lobes on their own,
                                   # shadowed per pixel (scene/light_sources.py); L is the rest
+    reflection_rays: bool = False # the glossy lobe's visibility traced per pixel (live/ray_bvh.py)
 
     def __post_init__(self):
         if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \
@@ -117,6 +124,8 @@ class Variant:
         if self.sources and (self.vertex_target or (self.glossy and not self.prefiltered_lookup)):
             raise ValueError("the bright sources light a Lambert lobe 0, or a glossy one lit by the "
                              "prefiltered atlas, in a drawn image")
+        if self.reflection_rays and not (self.glossy and self.prefiltered_lookup):
+            raise ValueError("reflection rays trace a glossy lobe lit by the prefiltered atlas")
 
     @property
     def weighted(self):
@@ -240,6 +249,11 @@ class Variant:
             d["SD_SOURCE_ROWS"] = str(SOURCE_ROWS)
             d["SD_SHADOW_MAP_SIZE"] = str(SHADOW_MAP_SIZE)
             d["SD_HIGHLIGHT_POINTS"] = str(HIGHLIGHT_POINTS)
+        if self.reflection_rays:
+            d["SD_REFLECTION_RAYS"] = str(REFLECTION_RAYS)
+            d["SD_SINGLE_RAY_ROUGHNESS"] = "%.3f" % SINGLE_RAY_ROUGHNESS
+            # the walk's stack: the native builder's depth bound (ray_bvh.h)
+            d["SD_RAY_BVH_MAX_DEPTH"] = str(native.get().RAY_BVH_MAX_DEPTH)
         return d
 
     def vertex_inputs(self):
@@ -304,6 +318,8 @@ class Variant:
             out.append(PREFILTERED_SAMPLER)
         if self.sources:
             out.append(SHADOW_MAP_SAMPLER)
+        if self.reflection_rays:
+            out.append(RAY_BVH_SAMPLER)
         return out
 
     def frame_fields(self):
@@ -336,6 +352,8 @@ class Variant:
                        BlockField("source_shadow", "vec4", SOURCE_ROWS * self.sources)]
             if self.prefiltered_lookup:   # light_sources.highlight_rows
                 fields.append(BlockField("source_points", "vec4", 2 * HIGHLIGHT_POINTS * self.sources))
+        if self.reflection_rays:   # live/ray_bvh.block_rows
+            fields += [BlockField("ray_bvh", "vec4"), BlockField("ray_offset", "vec4")]
         return fields
 
     def frame_struct(self):

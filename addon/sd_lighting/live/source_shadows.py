@@ -17,6 +17,7 @@ from ..bake import geometry
 from ..scene import light_sources
 from . import gpu_shading, staleness
 
+_mesh = [None, None]      # [key, (world vertices float64 or None, triangles, centre, radius)]
 _casters = [None, None]   # [key, (GPUBatch or None, centre, radius)]
 _maps = [None, None]      # [key, (texture, shader rows)]
 _targets = {}             # source count -> (colour GPUTexture, depth GPUTexture)
@@ -26,6 +27,7 @@ EMPTY = -1.0e30           # what a texel holds where nothing casts
 
 
 def clear_cache():
+    _mesh[:] = [None, None]
     _casters[:] = [None, None]
     _maps[:] = [None, None]
     _targets.clear()
@@ -58,20 +60,32 @@ def _visible(scene, view_layer):
     return tuple(out)
 
 
-def casters(scene, depsgraph, view_layer):
-    """(batch of every visible triangle in world space or None, centre, radius of their bounding
-    sphere), read again when something moved, changed, appeared or was hidden since the last call."""
+def caster_mesh(scene, depsgraph, view_layer):
+    """(key, world vertices float64 [V, 3] or None, triangles [T, 3], centre, radius of their
+    bounding sphere) of every visible triangle that casts, read again when something moved,
+    changed, appeared or was hidden since the last call - exactly when the key changes. The
+    shadow maps draw them; the reflection rays trace them (ray_bvh.py)."""
     key = (staleness.shape_generation, scene.name_full, _visible(scene, view_layer))
-    if _casters[0] != key:
+    if _mesh[0] != key:
         vertices, triangles = geometry.join([(part.vertices, part.triangles)
                                              for part in geometry.scene_parts(depsgraph, view_layer)])
         if vertices is None:
-            _casters[1] = (None, np.zeros(3), 1.0)
+            _mesh[1] = (None, None, np.zeros(3), 1.0)
         else:
             low, high = vertices.min(axis=0), vertices.max(axis=0)
-            batch = compat.make_batch('TRIS', {"pos": vertices.astype(np.float32)}, indices=triangles)
-            _casters[1] = (batch, (low + high) / 2.0, max(float(np.linalg.norm(high - low)) / 2.0, 1e-6))
-        _casters[0] = key
+            _mesh[1] = (vertices, triangles, (low + high) / 2.0,
+                        max(float(np.linalg.norm(high - low)) / 2.0, 1e-6))
+        _mesh[0] = key
+    return (_mesh[0],) + _mesh[1]
+
+
+def casters(scene, depsgraph, view_layer):
+    """(batch of caster_mesh's triangles or None, centre, radius of their bounding sphere)."""
+    key, vertices, triangles, centre, radius = caster_mesh(scene, depsgraph, view_layer)
+    if _casters[0] != key:
+        batch = None if vertices is None else \
+            compat.make_batch('TRIS', {"pos": vertices.astype(np.float32)}, indices=triangles)
+        _casters[:] = [key, (batch, centre, radius)]
     return _casters[1]
 
 

@@ -178,8 +178,8 @@ class SD_PT_lighting_environment(_SubPanel, bpy.types.Panel):
                 drawing.watch_background()   # the panel is drawn again when they are found
             for i, line in enumerate(light_sources.lines(sources, settings.source_shadows)):
                 _text(layout, context, line, icon='LIGHT_SUN' if i == 0 else 'DOT')
-            if settings.source_shadows and drawing.source_error:
-                _text(layout, context, "Shaded through SH: " + drawing.source_error, icon='ERROR')
+            if settings.source_shadows and drawing.errors["sources"]:
+                _text(layout, context, "Shaded through SH: " + drawing.errors["sources"], icon='ERROR')
         except Exception as exc:  # a broken world must not break the panel
             _text(layout, context, str(exc), icon='ERROR')
         layout.prop(settings, "environment_rotation")
@@ -346,6 +346,11 @@ class SD_PT_lighting_live(_SubPanel, bpy.types.Panel):
         col.row(heading="World").prop(settings, "world_background", text="Background")
         col.row(heading="Texture").prop(settings, "band_limited_texture", text="Band-Limited")
         col.row(heading="Glossy").prop(settings, "prefiltered_glossy", text="Prefiltered")
+        row = col.row(heading="Reflections")
+        row.active = settings.prefiltered_glossy
+        row.prop(settings, "reflection_rays", text="Traced")
+        if settings.reflection_rays and drawing.errors["rays"]:
+            _text(layout, context, "Reflections keep the baked visibility: " + drawing.errors["rays"], icon='ERROR')
         col.row(heading="Sources").prop(settings, "source_shadows", text="Sharp Shadows")
         for line in gpu_shading.lobe_design_status() + environment.ringing_window_status() + environment.prefilter_status():
             _text(layout, context, line, icon='TIME')

@@ -193,6 +193,13 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "the share of the lobe's light the bake's visibility lets through; off: the "
                     "seed's Phong lobe truncated at order s, and rough dielectrics' specular "
                     "layers folded into Lambert")
+    reflection_rays: BoolProperty(
+        name="Reflection Rays", default=True, update=_redraw,
+        description="Trace the visibility of prefiltered glossy lobes per pixel through the scene's "
+                    "triangles (a few rays along the lobe, from each pixel), where the bake's "
+                    "visibility is too smooth for a sharp reflection: a crease's reflection of the "
+                    "object itself, a leg in front of a polished body. Off: the share of the lobe's "
+                    "light the bake's visibility lets through")
     source_shadows: BoolProperty(
         name="Sharp Source Shadows", default=True, update=_redraw,
         description="Light surfaces by the environment's bright compact sources (a sun, lamps, "

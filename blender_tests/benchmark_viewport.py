@@ -25,7 +25,8 @@ as ratios to PRT (8) and PRT (10). A third table times every method but PRT (2) 
 material can ask for - Lambert, Phong (sigma 61, a roughness of 0.3) and both, weighted per pixel as
 from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth times that
 Principled pair with the glossy lobe truncated per vertex against the prefiltered glossy light,
-per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4, and the same mesh as a metal
+per vertex (with the baked visibility ratio, and with the reflection rays tracing it through the
+heightfield's triangles) and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4, and the same mesh as a metal
 of roughness 0.5, whose glossy light is sampled by GLOSSY_TAPS lookups per pixel
 (live/shader_variant.SAMPLED_ROUGHNESS).
 
@@ -226,7 +227,8 @@ def remove_object(package, obj):
 def glossy_table(package, scene, view, mesh, real_counts, frames):
     """The prefiltered glossy light's frame cost (issue 28): Lambert + Phong weighted as from a
     Principled BSDF (roughness 0.3), its lobe truncated at s per vertex (the seed's way) against
-    the prefiltered lookup per vertex and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4."""
+    the prefiltered lookup per vertex with the baked visibility ratio, with the reflection rays
+    (the default), and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4."""
     env, shading = package.scene.environment, package.live.gpu_shading
     if shading.prefiltered_texture(env.source(scene), True) is None:
         raise RuntimeError("the prefiltered environment was not made")
@@ -240,14 +242,16 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
           "metal of roughness 0.5, sampled by %d taps per pixel:" % (
               len(mesh[0]), width, rows, width * rows * 16 / 1e6,
               package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE, taps))
-    print("%-28s %20s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex", "prefiltered / pixel",
-                                         "sampled metal"))
+    print("%-28s %20s %20s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex",
+                                              "+ reflection rays", "prefiltered / pixel", "sampled metal"))
     metal = sdtest.principled_material("Metal", (0.9, 0.9, 0.9, 1.0), 0.5, 1.0)
     for method, s, sv in (("prt_gaunt", 8, 2), ("msd_visibility", 4, 2)):
         obj = baked_object(package, scene, *mesh, real_counts, method, lobes, s, sv)
         cells = []
-        for prefiltered, per_pixel in ((False, False), (True, False), (True, True)):
+        for prefiltered, rays, per_pixel in ((False, False, False), (True, False, False), (True, True, False),
+                                             (True, True, True)):
             settings.prefiltered_glossy = prefiltered
+            settings.reflection_rays = rays
             cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel),
                                      frames if not per_pixel else 1))
         settings.prefiltered_glossy = True

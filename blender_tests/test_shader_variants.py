@@ -9,7 +9,8 @@ drawn variant with material albedos (slots and an image texture; Lambert + Phong
 Principled weights, and Phong alone with them as a metal has; each of those also with the
 prefiltered glossy light; Lambert with the weights and prefiltered light of rough dielectrics'
 specular layers), and each drawn Lambert variant at ALBEDO_ORDERS also lit by SOURCES bright
-sources with their shadow maps: N_VARIANTS programs, each built by
+sources with their shadow maps, each drawn prefiltered glossy one also with them and tracing its
+visibility through the ray BVH (with and without the sources): N_VARIANTS programs, each built by
 gpu_shading exactly as the live shading builds it (defines, frame block, samplers, interface).
 
 1. GPU: gpu.shader.create_from_info on the running Blender (a GPU context from a Workbench render
@@ -50,7 +51,7 @@ import bpy  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 582        # the programs variants() enumerates
+N_VARIANTS = 654        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 PHONG_EXPONENT = 8.0
 SOURCES = 4                # bright sources in the source variants (the most the map gives)
@@ -63,13 +64,17 @@ def _module(package, name):
 def variants(package):
     """Every variant the live shading can build at ORDERS, and at ALBEDO_ORDERS each drawn one of
     a Lambert lobe 0, or of a glossy one lit by the prefiltered atlas, also lit by SOURCES bright
-    sources on their own."""
+    sources on their own; each such glossy one also tracing its visibility (reflection rays),
+    with and without the sources."""
     import dataclasses
     for variant in _variants(package):
         yield variant
         if (not variant.vertex_target and (not variant.glossy or variant.prefiltered_lookup)
                 and (variant.light_order, variant.visibility_order) == ALBEDO_ORDERS):
             yield dataclasses.replace(variant, sources=SOURCES)
+            if variant.glossy:
+                yield dataclasses.replace(variant, reflection_rays=True)
+                yield dataclasses.replace(variant, reflection_rays=True, sources=SOURCES)
 
 
 def _variants(package):

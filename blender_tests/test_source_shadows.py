@@ -31,7 +31,8 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
    MAX_MIRROR_PEAK.
 8. forest.exr on the ground and the cube in polished steel (roughness TRACED_ROUGHNESS): the ground
    mirrors the cube. With the Reflection Rays (the default: the glossy lobe's visibility traced
-   per pixel) under MAX_TRACED_ERROR and under TRACED_GAIN of the error with the baked visibility.
+   per pixel) under MAX_TRACED_ERROR and under TRACED_GAIN of the error with the baked visibility
+   (for a metal, chosen with the rays, none: the panel asks for a new bake while they are off).
 The panel says the sources are shadowed per pixel. Error images (Cycles, preview, |difference| x 4)
 go to --out. --quick (the quick tier): step 1 alone.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_source_shadows.py -- --zip Z --out DIR
@@ -262,7 +263,13 @@ def main():
     scene.sd_lighting.reflection_rays = False
     untraced = sdtest.block_error(sdtest.preview(os.path.join(args.out, "forest_steel_untraced.exr"),
                                                  width=SIZE, height=SIZE), cycles, BLOCK, mask)[0]
+    bpy.context.view_layer.objects.active = ground
+    lines = [line for line in sdtest.panel_texts() if "traced reflections" in line]
     scene.sd_lighting.reflection_rays = True
+    checks.check(any("bake again" in line for line in lines) and
+                 not any("traced reflections" in line for line in sdtest.panel_texts()),
+                 "a metal baked for traced reflections: the panel asks for a new bake while they are off",
+                 "; ".join(lines))
     checks.check(result == {'FINISHED'} and traced < MAX_TRACED_ERROR and traced < TRACED_GAIN * untraced,
                  "a polished floor mirrors the cube where Cycles does (its visibility traced per pixel)",
                  "%.2f %% (limit %.0f %%); with the baked visibility %.2f %%"

@@ -380,7 +380,8 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
  * visibility ratio of the prefiltered light `open` (read around `axis`) made to see the shadows of
  * the sources it holds: the ratio is of the remainder's lobe alone, mixed by those sources' share
  * of `open` (sd_source_in_atlas), so that a softbox's reflection goes dark in its shadow and the
- * sky's beside it keeps the baked ratio. `stored`: 1, or 0 where no data is (a lightmap pixel
+ * sky's beside it keeps the baked ratio (with reflection rays the traced visibility sees those
+ * shadows itself and is left as it is). `stored`: 1, or 0 where no data is (a lightmap pixel
  * without a texel: no light at all). Called where every pixel does (sd_source_light takes
  * screen-space derivatives). */
 vec3 sd_sources_on_lobes(vec3 normal, vec3 view, vec3 axis, vec3 open, float stored, inout float visibility,
@@ -393,11 +394,14 @@ vec3 sd_sources_on_lobes(vec3 normal, vec3 view, vec3 axis, vec3 open, float sto
   for (int i = 0; i < SD_SOURCES; i++) {
     if (sd.source_irradiance[i].w > 0.5) {
       highlights += (stored * visible[i]) * sd_source_highlight(i, normal, view, roughness);
-    } else {
+    }
+#  ifndef SD_REFLECTION_RAYS   /* the traced visibility sees those sources' shadows too */
+    else {
       held += sd_source_in_atlas(i, axis, roughness) * vec2(1.0, visible[i]);
     }
+#  endif
   }
-#  ifndef SD_REFLECTION_RAYS   /* traced visibility sees those sources' shadows too */
+#  ifndef SD_REFLECTION_RAYS
   float share = clamp(held.x / max(dot(open, SD_LUMINANCE), 1e-8), 0.0, 1.0);
   visibility = mix(visibility, held.x > 0.0 ? held.y / held.x : 1.0, stored * share);
 #  endif

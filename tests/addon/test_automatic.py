@@ -45,11 +45,12 @@ def towards_the_eye(points):
 
 
 def table(sdnative, environment, occluders=None, lobe="lambert", exponent=1.0, ids=ALL, max_order=6,
-          rays=256, diffuse_share=0.0, prefiltered=False, views=None):
+          rays=256, diffuse_share=0.0, prefiltered=False, views=None, traced=False):
     light = lambda s: np.asarray(environment.sh(s)).reshape(-1, 3)  # noqa: E731
     sample = accuracy.Sample.of_mesh(*uv_sphere(), occluders=occluders, count=48, views=views)
     return accuracy.ErrorTable(sdnative, sample, environment, light, lobe, exponent, np.eye(3), ids,
-                               max_order, rays, diffuse_share=diffuse_share, prefiltered=prefiltered)
+                               max_order, rays, diffuse_share=diffuse_share, prefiltered=prefiltered,
+                               traced=traced)
 
 
 def choose(sdnative, errors, target=0.02):
@@ -196,6 +197,24 @@ def test_a_prefiltered_glossy_lobe_is_measured_as_it_is_drawn(sdnative, forest):
     assert unshadowed == pytest.approx(direct, rel=1e-9)
     truncated = table(sdnative, forest, FLOOR, **sharp)
     assert min(truncated.error(accuracy.Setting(*key, 256)) for key in truncated.measured) > 2 * choice.error
+
+
+def test_a_traced_glossy_lobe_leaves_the_choice_to_the_other_lobe(sdnative, forest):
+    """With Reflection Rays the glossy lobe is drawn as its shadowed light whatever the setting: a
+    metal on a floor measures no error at any setting and gets the cheapest, which stores nothing;
+    a plastic's error is its Lambert lobe's alone, under what the same table measures untraced."""
+    sharp = dict(lobe="phong", exponent=300.0, views=towards_the_eye, max_order=6)
+    metal = table(sdnative, forest, FLOOR, prefiltered=True, traced=True, **sharp)
+    assert max(metal.error(accuracy.Setting(*key, 256)) for key in metal.measured) == 0.0
+    choice = choose(sdnative, metal)
+    assert choice.met_target and methods.get(choice.setting.method).data is None
+    plastic = dict(sharp, diffuse_share=0.9)
+    traced = table(sdnative, forest, FLOOR, prefiltered=True, traced=True, **plastic)
+    untraced = table(sdnative, forest, FLOOR, prefiltered=True, **plastic)
+    unshadowed = accuracy.Setting("unshadowed", 6, 0, 256)
+    assert 0.0 < traced.error(unshadowed) < untraced.error(unshadowed)
+    # the Lambert lobe still needs its shadows: a shadowed method is chosen
+    assert methods.get(choose(sdnative, traced).setting.method).data is not None
 
 
 def sky(sdnative, sun):

@@ -77,7 +77,7 @@ def _analysis_inputs(scene, obj, geometry, env_source, settings, to_bake_space, 
     return analysis.gather(env_source, lobes.Lobes.of_bake(settings), rotation, eye,
                            panel.target_error, panel.max_automatic_order, fixed,
                            panel.ringing_window.lower(), triangle_pixels, panel.source_shadows,
-                           panel.prefiltered_glossy)
+                           panel.prefiltered_glossy, panel.reflection_rays)
 
 
 def recorded_settings(scene, obj, env_source):

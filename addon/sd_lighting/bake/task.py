@@ -143,7 +143,8 @@ class BakeTask:
             method=choice.setting.method, light_order=choice.setting.light_order,
             visibility_order=choice.setting.visibility_order, rays=choice.setting.rays,
             predicted_error=float(choice.error),
-            frame_terms=int(choice.frame_terms), sources=choice.sources)
+            frame_terms=int(choice.frame_terms), sources=choice.sources,
+            traced=self.analysis.traced and lobes.Lobes.of_bake(self.settings).prefiltered_glossy(True))
         self.predicted_error = float(choice.error)
 
     def adopt(self, settings, predicted_error):

@@ -25,7 +25,10 @@ way but the surface's own tangent plane, the same samples), times the setting's 
 noise largely cancels where V = 1, so removing the reference's variance puts these errors low by
 at most its own error). Its
 truncated B alone would put every setting near 100 % off for a sharp lobe, and the cheapest,
-with little or no shadowing, was often chosen.
+with little or no shadowing, was often chosen. Where the live shading also traces that lobe's
+visibility (*Reflection Rays*), it is drawn as its shadowed light whatever the setting: the
+setting's error is then the other lobe's alone (a plastic's Lambert lobe), and a metal's is none,
+so the cheapest setting is chosen - its bake is not drawn.
 
 Nothing here needs Blender; the sdnative module is passed in.
 """
@@ -148,14 +151,16 @@ class ErrorTable:
     (SHADE_SHARE), relative to their own B, the larger counting: a view of that side shows it.
     prefiltered: a Phong lobe is drawn by the prefiltered light times the visibility ratio (see
     the module's doc), with a remainder the remainder's prefiltered light (the sources' highlights
-    taken as exact too)."""
+    taken as exact too); traced: its visibility is traced too, the lobe drawn as its shadowed
+    light (the module's doc)."""
 
     def __init__(self, sdnative, sample, environment, light, lobe, exponent, rotation, methods,
                  max_order, rays, seed=0, stop=None, diffuse_share=0.0, progress=None, remainder=None,
-                 prefiltered=False):
+                 prefiltered=False, traced=False):
         self.lobe, self.exponent, self.rays = lobe, float(exponent), int(rays)
         self.max_order = int(max_order)
         self.prefiltered = bool(prefiltered) and lobe != "lambert"
+        self.traced = self.prefiltered and bool(traced)
         self._lobes = [(lobe, self.exponent, 1.0 - diffuse_share)]
         if diffuse_share > 0.0:
             self._lobes.append(("lambert", 1.0, float(diffuse_share)))
@@ -163,7 +168,7 @@ class ErrorTable:
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._rotation = sdnative, sample, rotation
         self._views = sample.views if sample.views is not None else sample.normals
-        count = (1 + (remainder is not None)) * (1 + self.prefiltered)
+        count = (1 + (remainder is not None)) * (1 + self.prefiltered + (self.traced and diffuse_share > 0.0))
         references = iter(range(count))
         self._progress = [_reporter(0.5 * k / count, 0.5 / count, progress, stop)
                           for k in range(count)] + [_reporter(0.5, 0.5, progress, stop)]
@@ -175,8 +180,22 @@ class ErrorTable:
                 return None, None
             lobe_weights = None if occluded else [(self.lobe, self.exponent, 1.0)]
             return self._reference(env, seed, stop, self._progress[next(references)], lobe_weights, occluded)
+
+        def traced_reference(env, whole, whole_error):
+            """(lobe 0's shadowed light, the variance of the table's reference without its part) -
+            what the traced lobe is drawn as (None without tracing). Its noise is the reference's
+            own, so it is not the setting's error."""
+            if not self.traced:
+                return None, whole_error ** 2
+            if len(self._lobes) == 1:
+                return whole, np.zeros_like(whole_error)
+            weight = self._lobes[0][2]
+            value, error = self._reference(env, seed, stop, self._progress[next(references)],
+                                           [(self.lobe, self.exponent, 1.0)])
+            return value, np.maximum(whole_error ** 2 - (weight * error) ** 2, 0.0)
         self.reference, error = measured_reference(environment)
         self._open_reference = measured_reference(environment, occluded=False)[0]
+        self._traced_reference, self._traced_variance = traced_reference(environment, self.reference, error)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
@@ -189,6 +208,8 @@ class ErrorTable:
         if remainder is not None:
             remainder_reference, remainder_error = measured_reference(remainder.environment)
             remainder_open = measured_reference(remainder.environment, occluded=False)[0]
+            remainder_traced, remainder_variance = traced_reference(remainder.environment, remainder_reference,
+                                                                    remainder_error)
             # the vertices the sources give under half their light: a view of that side shows the
             # error against their own B, which the whole sample's B would hide
             luminance = np.asarray(lobes.LUMINANCE)
@@ -204,16 +225,19 @@ class ErrorTable:
         free = sdnative.bake_transfer(sample.vertices, sample.normals, np.zeros((0, 3), np.int32),
                                       rays=self.rays, seed=seed, transfer_order=0)
         self.lit_fraction = np.asarray(bakes[0]["transfer"])[:, 0] / np.asarray(free["transfer"])[:, 0]
-        self.measured = self._measure(measured, bakes, light, self.reference, self.reference_variance, stop, parts,
-                                      self._open_reference)
+        self.measured = self._measure(measured, bakes, light, self.reference, self._traced_variance, stop, parts,
+                                      self._open_reference, self._traced_reference)
         self.measured_sources = None if remainder is None else self._measure(
-            measured, bakes, remainder.light, remainder_reference, remainder_error ** 2, stop, parts,
-            remainder_open)
+            measured, bakes, remainder.light, remainder_reference, remainder_variance, stop, parts,
+            remainder_open, remainder_traced)
 
-    def _measure(self, measured, bakes, light, reference, variance, stop, parts=None, open_reference=None):
+    def _measure(self, measured, bakes, light, reference, variance, stop, parts=None, open_reference=None,
+                 traced_reference=None):
         """{(method, s, s'): [Measured per part]} of the two bakes shaded with `light` against
-        `reference`, relative to the whole map's B, over each of `parts` (masks of the sample;
-        default: all of it); open_reference: lobe 0's unshadowed light of the same map (prefiltered)."""
+        `reference` (of variance `variance`: without the traced lobe's part, which the shading
+        shares), relative to the whole map's B, over each of `parts` (masks of the sample;
+        default: all of it); open_reference: lobe 0's unshadowed light of the same map
+        (prefiltered); traced_reference: its shadowed light (traced), or None."""
         parts = [slice(None)] if parts is None else parts
         out = {}
         for method in measured:
@@ -221,7 +245,8 @@ class ErrorTable:
                 for sv in range(MAX_VISIBILITY_ORDER + 1) if method.uses_visibility_order else (0,):
                     if stop is not None and stop():
                         raise InterruptedError("cancelled")
-                    first, second = (self._shade(method, s, sv, bake, light, open_reference) for bake in bakes)
+                    first, second = (self._shade(method, s, sv, bake, light, open_reference, traced_reference)
+                                     for bake in bakes)
                     out[(method.id, s, sv)] = []
                     for rows in parts:
                         noise = relative_error(first[rows], second[rows], whole=self.reference[rows]) / np.sqrt(2.0)
@@ -270,7 +295,7 @@ class ErrorTable:
                  for key, value in twice.items() if isinstance(value, np.ndarray) and len(value) == 2 * count}
                 for half in (0, 1)]
 
-    def _shade(self, method, s, sv, bake, light, open_reference=None):
+    def _shade(self, method, s, sv, bake, light, open_reference=None, traced_reference=None):
         data = {}
         if method.data is not None:   # the arrays of order s, s': prefixes of the baked ones
             shape = method.data.shape(s, sv) if method.data.shape else ()
@@ -282,7 +307,9 @@ class ErrorTable:
         for k, (lobe, exponent, weight) in enumerate(self._lobes):
             b = self._sd.shade(method.id, coefficients, self._sample.normals, views=self._lobe_views(lobe),
                                rotation=self._rotation, lobe=lobe, exponent=exponent, **data)
-            if k == 0 and self.prefiltered:
+            if k == 0 and traced_reference is not None:
+                b = traced_reference
+            elif k == 0 and self.prefiltered:
                 b = self._visibility_ratio(method, s, sv, b, coefficients)[:, None] * open_reference
             out = out + weight * np.maximum(b, 0.0)   # displayed radiance is never negative (sd_surface)
         return out

@@ -30,10 +30,11 @@ class Inputs:
     remainder: object = None     # accuracy.Remainder where the map's bright sources may be shaded
                                  # on their own, else None
     prefiltered: bool = False    # the scene's Prefiltered Glossy (glossy lobes measured as drawn)
+    traced: bool = False         # and its Reflection Rays (their visibility traced when drawn)
 
 
 def gather(src, lobe_set, rotation, eye, target_error, max_order, fixed, ringing_setting,
-           triangle_pixels, sources=False, prefiltered=False):
+           triangle_pixels, sources=False, prefiltered=False, traced=False):
     """Inputs for an object: src an environment.Source, lobe_set its scene/lobes.Lobes (L is
     windowed as the live shading windows it, Lobes.window_lobe), rotation g R, eye in the bake space;
     sources: whether the map's bright sources may be shaded on their own (the scene's Sharp Source
@@ -42,7 +43,7 @@ def gather(src, lobe_set, rotation, eye, target_error, max_order, fixed, ringing
     whose reflection the measurement would take as exact: a steel spider under studio.exr's
     softboxes was then chosen unshadowed, 21.5 % off Cycles against 16.4 %), the measurement then
     weighs them (accuracy.Remainder; found here, on the main thread, when not yet); prefiltered:
-    the scene's Prefiltered Glossy."""
+    the scene's Prefiltered Glossy; traced: its Reflection Rays."""
     if src.kind == "uniform":
         pixels = np.broadcast_to(np.asarray(src.colour, dtype=np.float32), (2, 4, 3)).copy()
         env = native.get().environment_from_pixels(pixels)
@@ -67,7 +68,7 @@ def gather(src, lobe_set, rotation, eye, target_error, max_order, fixed, ringing
             remainder = accuracy.Remainder(split["remainder"], lambda order: light(order, remainder=True))
     max_order = max(int(max_order), int(fixed.get("light_order", 0)))
     return Inputs(env, light, rotation, eye, float(target_error), max_order, dict(fixed),
-                  triangle_pixels, remainder, bool(prefiltered))
+                  triangle_pixels, remainder, bool(prefiltered), bool(prefiltered and traced))
 
 
 def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, stop, progress=None):
@@ -87,7 +88,8 @@ def _table(inputs, geometry, occluders, lobe_set, method_ids, max_order, rays, s
                                lobe_set.exponent, inputs.rotation, method_ids, max_order, rays,
                                stop=stop, diffuse_share=lobe_set.diffuse_share, progress=progress,
                                remainder=inputs.remainder,
-                               prefiltered=lobe_set.prefiltered_glossy(inputs.prefiltered))
+                               prefiltered=lobe_set.prefiltered_glossy(inputs.prefiltered),
+                               traced=inputs.traced)
 
 
 def choose(inputs, geometry, occluders, lobe_set, stop, fitted=False, texels=0, progress=None,

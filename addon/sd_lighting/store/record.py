@@ -61,6 +61,8 @@ class BakeRecord:
     frame_terms: Optional[int] = None
     sources: Optional[bool] = None   # the map's bright sources shaded on their own (None: the
                                      # scene's Sharp Source Shadows decides)
+    traced: Optional[bool] = None    # chosen with the glossy lobe's visibility traced when drawn
+                                     # (the scene's Reflection Rays: its baked visibility unused)
     # What the bake found.
     bake_id: str = _found("")
     inputs: str = _found("")     # digest of everything the result depends on (BakeTask.inputs_hash)

@@ -440,6 +440,9 @@ class SD_PT_lighting_active(_SubPanel, bpy.types.Panel):
                   "it are from there: bake again", icon='ERROR')
         if baked.scale_changed(obj):
             _text(warnings, context, "Scale changed since the bake: bake again", icon='ERROR')
+        if record.traced and not (settings.reflection_rays and settings.prefiltered_glossy):
+            _text(warnings, context, "Chosen for traced reflections, drawn with the bake's visibility: "
+                  "bake again", icon='ERROR')
         differences = geometry.render_differences(obj)
         if differences:
             _text(warnings, context, "Cycles renders other geometry (%s): the bake and the preview are "

@@ -198,8 +198,10 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="Trace the visibility of prefiltered glossy lobes per pixel through the scene's "
                     "triangles (a few rays along the lobe, from each pixel), where the bake's "
                     "visibility is too smooth for a sharp reflection: a crease's reflection of the "
-                    "object itself, a leg in front of a polished body. Off: the share of the lobe's "
-                    "light the bake's visibility lets through")
+                    "object itself, a leg in front of a polished body. The automatic mode then "
+                    "stores no visibility for a metal, whose bake is not drawn: bake again after "
+                    "turning this off. Off: the share of the lobe's light the bake's visibility "
+                    "lets through")
     source_shadows: BoolProperty(
         name="Sharp Source Shadows", default=True, update=_redraw,
         description="Light surfaces by the environment's bright compact sources (a sun, lamps, "

@@ -19,7 +19,8 @@ its specular layer lit live, weighted per pixel by scene/lobes.py) and previewed
 unshadowed formula at s = 12 and the prefiltered glossy light (the default), against Cycles from
 two seeds: relative RMS of block averages and bias per channel within GLOSSY's limits, the gold
 also with the world turned and tilted (the prefilter, run in a worker thread, keeps the first
-interactive draw waiting for nothing: the truncated lobe is drawn meanwhile); the gold shown with the seed's truncated Phong lobe instead
+interactive draw waiting for nothing: the truncated lobe is drawn meanwhile, also where the
+reflection rays traced the last frame); the gold shown with the seed's truncated Phong lobe instead
 is further off, the plastic shown as one Phong lobe of its colour (the add-on before the split)
 far off, and the rough plastic with its layer folded into Lambert (no prefiltered light) further off.
 The gold's lobe is sampled (live/shader_variant.SAMPLED_ROUGHNESS), the half metal's half of it:
@@ -328,6 +329,17 @@ def glossy(checks, package, scene, preview, out, materials):
             _, textures = drawing._frame(scene, ball, data, view, 1.0, False)
             checks.check(data.variant.prefiltered_lookup and len(textures) == 1,
                          "then the object is drawn with it")
+            # traced too; while a new environment's atlas is made, neither (the variant of the
+            # last frame's rays without the atlas raised, every frame)
+            rays = drawing.reflection_rays(scene, True)
+            drawing._frame(scene, ball, data, view, 1.0, False, rays=rays)
+            traced = data.variant.reflection_rays
+            env.clear_cache()
+            shading.clear_cache()
+            _, textures = drawing._frame(scene, ball, data, view, 1.0, False, rays=rays)
+            checks.check(traced and not data.variant.reflection_rays and not data.variant.prefiltered_lookup
+                         and env.prefiltered_atlases().wait(120),
+                         "a traced object is drawn with the truncated lobe while a new environment is prefiltered")
             # the world turned and tilted: the prefiltered lookup turns with it, as Cycles' does
             mapping = scene.world.node_tree.nodes["Mapping"]
             mapping.inputs["Rotation"].default_value = (0.4, 0.0, 1.9)

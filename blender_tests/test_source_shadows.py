@@ -31,8 +31,9 @@ Against Cycles (direct light, pixel filter off, two seeds, noise under 1.5 %), r
    MAX_MIRROR_PEAK.
 8. forest.exr on the ground and the cube in polished steel (roughness TRACED_ROUGHNESS): the ground
    mirrors the cube. With the Reflection Rays (the default: the glossy lobe's visibility traced
-   per pixel) under MAX_TRACED_ERROR and under TRACED_GAIN of the error with the baked visibility
-   (for a metal, chosen with the rays, none: the panel asks for a new bake while they are off).
+   per pixel) under MAX_TRACED_ERROR and under TRACED_GAIN of the error drawn with the rays off -
+   of a bake that stores no visibility, since the automatic mode chose it for the rays (the panel
+   then asks for a new bake).
 The panel says the sources are shadowed per pixel. Error images (Cycles, preview, |difference| x 4)
 go to --out. --quick (the quick tier): step 1 alone.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_source_shadows.py -- --zip Z --out DIR

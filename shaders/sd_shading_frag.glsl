@@ -279,8 +279,8 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
 {
   mat3 to_world = transpose(mat3(sd.world_to_local));
   vec3 origin = sd.ray_bvh.yzw + sd_origin_offset + sd.ray_offset.x * (to_world * ng);
-  if (roughness < SD_SINGLE_RAY_ROUGHNESS) {
-    return sd_ray_occluded(origin, to_world * axis, 0.0) ? 0.0 : 1.0;
+  if (roughness < SD_SINGLE_RAY_ROUGHNESS) {   /* below the triangle: sd_triangle_horizon's */
+    return (dot(axis, ng) > 0.0 && sd_ray_occluded(origin, to_world * axis, 0.0)) ? 0.0 : 1.0;
   }
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
@@ -311,7 +311,7 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
  * where one lookup is too far off; a dielectric's layer keeps the one lookup, its share of the light
  * too small to pay for the taps. Either way without the lobe's share below the triangle (ng:
  * sd_triangle_horizon, or the taps there dropped), which the object itself hides. The visibility
- * ratio stays the baked lobe's, around the mirrored view. */
+ * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility). */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
 {
   float roughness = sd_lobe_weights.z;

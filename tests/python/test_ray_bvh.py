@@ -2,7 +2,7 @@
 arrays it returns, its walk against every triangle tested with numpy (float64: rays that graze an
 edge may differ from float32, so those are left out) and bad input. The layout's invariants are
 tested in tests/cpp/shading/test_ray_bvh.cpp; the shader's walk of it against Cycles in
-blender_tests/test_material_colour.py."""
+blender_tests/test_source_shadows.py (step 8)."""
 import numpy as np
 import pytest
 

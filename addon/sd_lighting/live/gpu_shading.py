@@ -468,23 +468,18 @@ class ObjectData:
         atlas; frame_block decides with the slots' weights)."""
         return self.lobe == "phong" and bool(self.prefiltered) and not self.variant.vertex_target
 
-    def _use_sources(self, count):
-        """Switches to the variant lit by `count` sources on their own (0: none)."""
-        variant = dataclasses.replace(self.variant, sources=count)
-        if variant != self.variant:
-            self.variant = variant
-            self.shader = shader_program(variant)
-            self.ubo = None
-
     def _weighted(self, prefiltered):
         """Whether the slots' lobe weights are drawn, with the prefiltered atlas's layout or ():
         a Lambert lobe's specular layers need the prefiltered light (folded into it without)."""
         return self.lobes.weighted and (not self.lobes.layer or bool(prefiltered))
 
-    def _use_albedos(self, albedos, prefiltered):
+    def _use_surface(self, albedos, prefiltered, sources, traced):
         """The block's albedo and lobe weight rows for the materials' current albedos
-        (materials.object_albedos), switching to the variant they need: none for a lobe without
-        weights whose albedos are all white. Returns {field: rows}."""
+        (materials.object_albedos), switching, once, to the variant they need - none for a lobe
+        without weights whose albedos are all white - lit by `sources` bright sources on their own
+        and tracing its glossy visibility (`traced`) where that variant can take them (a glossy lobe
+        only where the prefiltered atlas lights it: while a new environment's is made, neither).
+        Returns {field: rows}."""
         if self.variant.vertex_target:
             return {}
         rows = np.zeros((self.slot_count, 4))
@@ -504,7 +499,10 @@ class ObjectData:
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
                                       albedo_texture=image is not None, lobe_weights=weighted,
-                                      prefiltered=prefiltered)
+                                      prefiltered=prefiltered, sources=0, reflection_rays=False)
+        lit_alone = variant.prefiltered_lookup or not variant.glossy
+        variant = dataclasses.replace(variant, sources=sources if lit_alone else 0,
+                                      reflection_rays=bool(traced) and variant.glossy and variant.prefiltered_lookup)
         if variant != self.variant:
             self.variant = variant
             self.shader = shader_program(variant)
@@ -534,13 +532,8 @@ class ObjectData:
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
-        surface_rows = self._use_albedos(list(albedos), prefiltered)
-        self._use_sources(len(sources[0]) if sources else 0)
-        traced = rays is not None and self.variant.glossy and self.variant.prefiltered_lookup
-        if traced != self.variant.reflection_rays:
-            self.variant = dataclasses.replace(self.variant, reflection_rays=traced)
-            self.shader = shader_program(self.variant)
-            self.ubo = None
+        surface_rows = self._use_surface(list(albedos), prefiltered, len(sources[0]) if sources else 0,
+                                         rays is not None)
         self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:

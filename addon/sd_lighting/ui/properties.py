@@ -190,7 +190,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Prefiltered Glossy", default=True, update=_redraw,
         description="Light glossy Principled materials with the environment prefiltered by their "
                     "GGX lobe (the split sum: sharp at any roughness, looked up per pixel), times "
-                    "the share of the lobe's light the bake's visibility lets through; off: the "
+                    "the share of the lobe's light that reaches the surface (traced: Reflection "
+                    "Rays; else as the bake's visibility lets it through); off: the "
                     "seed's Phong lobe truncated at order s, and rough dielectrics' specular "
                     "layers folded into Lambert")
     reflection_rays: BoolProperty(

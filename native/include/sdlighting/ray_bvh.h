@@ -1,6 +1,6 @@
 // The scene's triangles as a bounding volume hierarchy laid out flat, for the rays the live shading
 // traces per pixel (issue 28: a sharp glossy lobe's visibility, which no per-vertex or low-order
-// visibility carries; shaders/sd_reflection_rays.glsl walks it). Embree builds the hierarchy
+// visibility carries; shaders/sd_ray_bvh.glsl walks it). Embree builds the hierarchy
 // (rtcBuildBVH, its SAH builder on every core); this lays it out in the arrays a texture holds.
 #pragma once
 

@@ -119,11 +119,10 @@ bool hits_triangle(const float* triangle, const glm::vec3& origin, const glm::ve
   const float inverse = 1.0f / det;
   const glm::vec3 s = origin - p0;
   const float u = glm::dot(s, p) * inverse;
-  if (u < 0.0f || u > 1.0f) return false;
   const glm::vec3 q = glm::cross(s, e1);
   const float v = glm::dot(dir, q) * inverse;
-  if (v < 0.0f || u + v > 1.0f) return false;
-  return glm::dot(e2, q) * inverse > t_min;
+  // the shader's test, as written there (a NaN fails it)
+  return u >= 0.0f && u <= 1.0f && v >= 0.0f && u + v <= 1.0f && glm::dot(e2, q) * inverse > t_min;
 }
 
 }  // namespace

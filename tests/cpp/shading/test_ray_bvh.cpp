@@ -42,11 +42,12 @@ bool brute_force(const RayBvh& bvh, const glm::vec3& origin, const glm::vec3& di
     const glm::vec3 p = glm::cross(dir, e2);
     const float det = glm::dot(e1, p);
     if (det == 0.0f) continue;
+    const float inverse = 1.0f / det;
     const glm::vec3 s = origin - p0;
-    const float u = glm::dot(s, p) / det;
+    const float u = glm::dot(s, p) * inverse;
     const glm::vec3 q = glm::cross(s, e1);
-    const float v = glm::dot(dir, q) / det;
-    if (u >= 0.0f && u <= 1.0f && v >= 0.0f && u + v <= 1.0f && glm::dot(e2, q) / det > t_min) return true;
+    const float v = glm::dot(dir, q) * inverse;
+    if (u >= 0.0f && u <= 1.0f && v >= 0.0f && u + v <= 1.0f && glm::dot(e2, q) * inverse > t_min) return true;
   }
   return false;
 }

@@ -168,34 +168,31 @@ class ErrorTable:
                              if lobe == "lambert" or not method_table.get(m).lambert_only)
         self._sd, self._sample, self._rotation = sdnative, sample, rotation
         self._views = sample.views if sample.views is not None else sample.normals
-        count = (1 + (remainder is not None)) * (1 + self.prefiltered + (self.traced and diffuse_share > 0.0))
+        count = (1 + (remainder is not None)) * (1 + self.prefiltered)
         references = iter(range(count))
         self._progress = [_reporter(0.5 * k / count, 0.5 / count, progress, stop)
                           for k in range(count)] + [_reporter(0.5, 0.5, progress, stop)]
 
         def measured_reference(env, occluded=True):
-            """(B, its standard error) of the table's lobes (occluded), or lobe 0's where V = 1 -
-            what the prefiltered light stands for (None without it); progress in the order made."""
+            """(B, its standard error, lobe 0's (B, error) alone) of the table's lobes (occluded),
+            or lobe 0's where V = 1 - what the prefiltered light stands for (None without it);
+            progress in the order made."""
             if not occluded and not self.prefiltered:
-                return None, None
+                return None, None, None
             lobe_weights = None if occluded else [(self.lobe, self.exponent, 1.0)]
             return self._reference(env, seed, stop, self._progress[next(references)], lobe_weights, occluded)
 
-        def traced_reference(env, whole, whole_error):
+        def traced_reference(first, whole_error):
             """(lobe 0's shadowed light, the variance of the table's reference without its part) -
-            what the traced lobe is drawn as (None without tracing). Its noise is the reference's
-            own, so it is not the setting's error."""
+            what the traced lobe is drawn as (None without tracing), from measured_reference's
+            lobe 0 `first`. Its noise is the reference's own, so it is not the setting's error."""
             if not self.traced:
                 return None, whole_error ** 2
-            if len(self._lobes) == 1:
-                return whole, np.zeros_like(whole_error)
-            weight = self._lobes[0][2]
-            value, error = self._reference(env, seed, stop, self._progress[next(references)],
-                                           [(self.lobe, self.exponent, 1.0)])
-            return value, np.maximum(whole_error ** 2 - (weight * error) ** 2, 0.0)
-        self.reference, error = measured_reference(environment)
+            value, error = first
+            return value, np.maximum(whole_error ** 2 - (self._lobes[0][2] * error) ** 2, 0.0)
+        self.reference, error, first = measured_reference(environment)
         self._open_reference = measured_reference(environment, occluded=False)[0]
-        self._traced_reference, self._traced_variance = traced_reference(environment, self.reference, error)
+        self._traced_reference, self._traced_variance = traced_reference(first, error)
         self.reference_variance = error ** 2
         self.reference_error = relative_error(self.reference + np.sqrt(self.reference_variance),
                                               self.reference)   # its own, over the sample
@@ -206,10 +203,9 @@ class ErrorTable:
             seen = facing if facing.any() else seen
         parts = [seen]
         if remainder is not None:
-            remainder_reference, remainder_error = measured_reference(remainder.environment)
+            remainder_reference, remainder_error, remainder_first = measured_reference(remainder.environment)
             remainder_open = measured_reference(remainder.environment, occluded=False)[0]
-            remainder_traced, remainder_variance = traced_reference(remainder.environment, remainder_reference,
-                                                                    remainder_error)
+            remainder_traced, remainder_variance = traced_reference(remainder_first, remainder_error)
             # the vertices the sources give under half their light: a view of that side shows the
             # error against their own B, which the whole sample's B would hide
             luminance = np.asarray(lobes.LUMINANCE)
@@ -258,8 +254,9 @@ class ErrorTable:
     def _reference(self, environment, seed, stop, progress, lobe_weights=None, occluded=True):
         """sdnative.reference on the sample (one scene: against a large mesh its build is most of
         the time), cancelled within a few vertices by stop: of `lobe_weights` (default: the
-        table's lobes), the weighted sum; occluded False: with nothing in the way. A prefiltered
-        lobe is cut at each vertex's tangent plane, as the split sum's and Cycles' are."""
+        table's lobes), the weighted sum and its standard error, and the first lobe's (B, error)
+        unweighted; occluded False: with nothing in the way. A prefiltered lobe is cut at each
+        vertex's tangent plane, as the split sum's and Cycles' are."""
         sample = self._sample
         triangles = sample.triangles if occluded else np.zeros((0, 3), dtype=np.int32)
         try:
@@ -272,7 +269,7 @@ class ErrorTable:
             raise InterruptedError("cancelled") from exc
         radiance = sum(weight * np.asarray(value) for weight, (value, _) in parts)
         error = np.sqrt(sum((weight * np.asarray(e)) ** 2 for weight, (_, e) in parts))
-        return radiance, error
+        return radiance, error, tuple(np.asarray(x) for x in parts[0][1])
 
     def _lobe_views(self, lobe):
         """The sampled views a lobe reads (Lambert: none)."""

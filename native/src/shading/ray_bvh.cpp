@@ -2,6 +2,7 @@
 
 #include "bake/embree_scene.h"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -20,8 +21,11 @@ namespace {
 struct BuildNode {
   bool leaf;
 };
+struct Box {
+  glm::vec3 lower, upper;
+};
 struct InnerNode : BuildNode {
-  RTCBounds bounds[2];
+  Box boxes[2];
   BuildNode* children[2];
 };
 struct LeafNode : BuildNode {
@@ -42,7 +46,10 @@ void set_children(void* node, void** children, unsigned count, void*) {
 }
 
 void set_bounds(void* node, const RTCBounds** bounds, unsigned count, void*) {
-  for (unsigned i = 0; i < count && i < 2; ++i) static_cast<InnerNode*>(node)->bounds[i] = *bounds[i];
+  for (unsigned i = 0; i < count && i < 2; ++i) {
+    static_cast<InnerNode*>(node)->boxes[i] = {{bounds[i]->lower_x, bounds[i]->lower_y, bounds[i]->lower_z},
+                                               {bounds[i]->upper_x, bounds[i]->upper_y, bounds[i]->upper_z}};
+  }
 }
 
 void* create_leaf(RTCThreadLocalAllocator allocator, const RTCBuildPrimitive* primitives, size_t count, void*) {
@@ -55,19 +62,13 @@ void* create_leaf(RTCThreadLocalAllocator allocator, const RTCBuildPrimitive* pr
   return leaf;
 }
 
-void put_box(float* out, const RTCBounds& box, float a, float b) {
-  out[0] = box.lower_x;
-  out[1] = box.lower_y;
-  out[2] = box.lower_z;
-  out[3] = a;
-  out[4] = box.upper_x;
-  out[5] = box.upper_y;
-  out[6] = box.upper_z;
-  out[7] = b;
+void put_box(float* out, const Box& box, float a, float b) {
+  const float values[8] = {box.lower.x, box.lower.y, box.lower.z, a, box.upper.x, box.upper.y, box.upper.z, b};
+  std::copy(values, values + 8, out);
 }
 
 // Depth first from `node` (box `box`), appending its nodes and its leaves' triangles.
-void lay_out(const BuildNode* node, const RTCBounds& box, const std::vector<std::array<glm::vec3, 3>>& corners,
+void lay_out(const BuildNode* node, const Box& box, const std::vector<std::array<glm::vec3, 3>>& corners,
              const std::vector<std::int64_t>& kept, RayBvh& bvh) {
   const std::size_t index = bvh.node_count();
   bvh.nodes.resize(bvh.nodes.size() + 8);
@@ -83,9 +84,9 @@ void lay_out(const BuildNode* node, const RTCBounds& box, const std::vector<std:
     return;
   }
   const auto* inner = static_cast<const InnerNode*>(node);
-  lay_out(inner->children[0], inner->bounds[0], corners, kept, bvh);
+  lay_out(inner->children[0], inner->boxes[0], corners, kept, bvh);
   const float second = static_cast<float>(bvh.node_count());
-  lay_out(inner->children[1], inner->bounds[1], corners, kept, bvh);
+  lay_out(inner->children[1], inner->boxes[1], corners, kept, bvh);
   put_box(&bvh.nodes[8 * index], box, static_cast<float>(index + 1), second);
 }
 
@@ -137,9 +138,7 @@ RayBvh build_ray_bvh(const std::vector<glm::dvec3>& vertices, const std::vector<
   std::vector<std::array<glm::vec3, 3>> corners;
   std::vector<std::int64_t> kept;
   std::vector<RTCBuildPrimitive> primitives;
-  RTCBounds root{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                 std::numeric_limits<float>::infinity(), 0.0f, -std::numeric_limits<float>::infinity(),
-                 -std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), 0.0f};
+  Box root{glm::vec3(std::numeric_limits<float>::infinity()), glm::vec3(-std::numeric_limits<float>::infinity())};
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     const std::array<glm::vec3, 3> p = {glm::vec3(vertices[triangles[i][0]]), glm::vec3(vertices[triangles[i][1]]),
                                         glm::vec3(vertices[triangles[i][2]])};
@@ -159,12 +158,8 @@ RayBvh build_ray_bvh(const std::vector<glm::dvec3>& vertices, const std::vector<
     primitives.push_back(primitive);
     corners.push_back(p);
     kept.push_back(static_cast<std::int64_t>(i));
-    root.lower_x = std::min(root.lower_x, lower.x);
-    root.lower_y = std::min(root.lower_y, lower.y);
-    root.lower_z = std::min(root.lower_z, lower.z);
-    root.upper_x = std::max(root.upper_x, upper.x);
-    root.upper_y = std::max(root.upper_y, upper.y);
-    root.upper_z = std::max(root.upper_z, upper.z);
+    root.lower = glm::min(root.lower, lower);
+    root.upper = glm::max(root.upper, upper);
   }
   RayBvh bvh;
   if (primitives.empty()) return bvh;

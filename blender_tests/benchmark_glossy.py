@@ -14,13 +14,19 @@ sunrise.exr and city.exr, and the smooth Wuson in Blender's default material und
 at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
-Printed per scene: relative RMS of block averages, bias per channel and the mean HDR-FLIP per
-pixel (sdtest.perceptual_error: highlights are where RMS and the eye disagree most), truncated and
+--matrix [HDRI ...]: instead, issue 28's grid alone - the smooth and the faceted Wuson each in gold
+(0.3), polished steel (0.15), red plastic (0.2) and gold (0.05) under each HDRI named (default:
+MATRIX_HDRIS) at the panel's defaults, 192 pixels; Cycles' renders are kept and reused (about 10
+minutes on 3.4.1 at first, 4 again; on bpy 4.5 with EEVEE about 25).
+
+Printed per scene: relative RMS of block averages, bias per channel, the mean HDR-FLIP per
+pixel (sdtest.perceptual_error: highlights are where RMS and the eye disagree most) and the darkest
+block against Cycles' where Cycles is lit (sdtest.darkest_block), truncated and
 prefiltered, and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
 the world's light and its probes as EEVEE makes them).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
-         [--hdri NAME.exr] [--models]
+         [--hdri NAME.exr] [--models | --matrix [HDRI ...]]
 (Debian's Blender needs `xvfb-run -a` in front for its GPU; a `bpy` module of 4.2+ runs it with
 its venv's python: `~/.cache/sd-lighting/venv/bpy-4.5.15/bin/python blender_tests/benchmark_glossy.py
 -- ...`.) Not part of the test suite (about 3 minutes; with EEVEE on llvmpipe about 6).
@@ -59,12 +65,19 @@ MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness
     ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "city.exr")]
 ASSIMP = "/usr/share/assimp/models/"
 
+# --matrix: issue 28's grid - a smooth and a faceted real model, each material at each HDRI
+MATRIX_MODELS = [("smooth Wuson", "OBJ/WusonOBJ.obj"), ("faceted Wuson", "PLY/Wuson.ply")]
+MATRIX_MATERIALS = [("gold", GOLD, 0.3, 1.0), ("steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0),
+                    ("red plastic", RED, 0.2, 0.0), ("gold", GOLD, 0.05, 1.0)]
+MATRIX_HDRIS = ["sunrise.exr", "forest.exr", "courtyard.exr", "city.exr", "studio.exr"]
 
-def compare(name, scene, objects, out, size, block, defaults=False):
+
+def compare(name, scene, objects, out, size, block, defaults=False, truncated=True, reuse=False):
     """Bakes `objects` (MSD (13), s = 8, s' = 4; defaults: at the panel's defaults), previews them
-    with and without the prefiltered light, prints the line."""
+    with the prefiltered light and (truncated) without, prints the line. reuse: Cycles' renders of
+    a run before into `out` (sdtest.cycles_pair), where the name says all the scene is."""
     stem = os.path.join(out, "".join(c for c in name.replace(" ", "_") if c.isalnum() or c in "_."))
-    cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block)
+    cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block, reuse=reuse)
     if defaults:
         sdtest.default_settings(scene)
         sdtest.select_only(objects)
@@ -72,7 +85,7 @@ def compare(name, scene, objects, out, size, block, defaults=False):
         sdtest.bake_settings(scene, 'msd_visibility', 'MATERIAL', 8, 4, rays=256, select=objects)
     assert bpy.ops.sd_lighting.bake(go_ahead=True) == {'FINISHED'}, name
     images = {}
-    for prefiltered in (False, True):
+    for prefiltered in (False, True) if truncated else (True,):
         scene.sd_lighting.prefiltered_glossy = prefiltered
         label = "prefiltered" if prefiltered else "truncated"
         images[label] = sdtest.preview(stem + "_" + label + ".exr", width=size, height=size)
@@ -80,12 +93,13 @@ def compare(name, scene, objects, out, size, block, defaults=False):
         images["EEVEE"] = eevee_render(scene, stem + "_eevee.exr", size)
     cells = []
     for label, ours in images.items():
-        error, bias, _, _ = sdtest.block_error(ours, cycles, block)
+        error, bias, a, b = sdtest.block_error(ours, cycles, block)
         try:
             flip = "%.3f" % sdtest.perceptual_error(ours, cycles)
         except ImportError:   # no FLIP for this CPython (sdtest.flip_module)
             flip = "n/a"
-        cells.append("%s %5.1f %% (bias %s %%, FLIP %s)" % (label, 100 * error, np.round(100 * bias, 1), flip))
+        cells.append("%s %5.1f %% (bias %s %%, FLIP %s, darkest lit block %.2fx)" % (
+            label, 100 * error, np.round(100 * bias, 1), flip, sdtest.darkest_block(a, b)))
     print("%-44s %s | Cycles' noise %.2f %%" % (name, " | ".join(cells), 100 * noise), flush=True)
 
 
@@ -95,15 +109,47 @@ def eevee_render(scene, path, size):
     return sdtest.render_still(scene, path, size)
 
 
+def model_scene(hdri, path, material, colour, roughness, metallic):
+    """A new scene under `hdri` with the assimp model at `path` in one Principled material, framed
+    as the --models scenes are; returns (scene, model)."""
+    scene = sdtest.empty_scene()
+    sdtest.hdri_world(scene, sdtest.hdri(hdri))
+    model = sdtest.sized_model(ASSIMP + path, 2.0, (0.0, 0.0, 1.0))
+    model.data.materials.clear()
+    model.data.materials.append(sdtest.principled_material(material, colour, roughness, metallic))
+    sdtest.camera(scene, location=(0.0, -5.0, 2.0), target=(0.0, 0.0, 1.0), lens=110.0)
+    return scene, model
+
+
+def matrix(hdris, out):
+    """Issue 28's grid at the panel's defaults, 192 pixels: MATRIX_MODELS x MATRIX_MATERIALS under
+    each of `hdris`, one line each (Cycles' renders are kept in a folder of `out` per Blender version
+    and reused)."""
+    print("glossy grid against Cycles at the panel's defaults (Blender %s)" % bpy.app.version_string)
+    out = os.path.join(out, bpy.app.version_string.split()[0])
+    os.makedirs(out, exist_ok=True)
+    for hdri in hdris:
+        for label, path in MATRIX_MODELS:
+            for material, colour, roughness, metallic in MATRIX_MATERIALS:
+                scene, model = model_scene(hdri, path, material, colour, roughness, metallic)
+                compare("%s, %s (%.2f), %s" % (label, material, roughness, hdri), scene, [model], out, 192, 4,
+                        defaults=True, truncated=False, reuse=True)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--zip", required=True)
     parser.add_argument("--out", required=True)
     parser.add_argument("--hdri", default="forest.exr")
     parser.add_argument("--models", action="store_true")
+    parser.add_argument("--matrix", nargs="*", metavar="HDRI",
+                        help="only issue 28's grid (MATRIX_*), under these HDRIs (none named: all of MATRIX_HDRIS)")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     os.makedirs(args.out, exist_ok=True)
     sdtest.install_addon(args.zip)
+    if args.matrix is not None:
+        matrix(args.matrix or MATRIX_HDRIS, args.out)
+        return
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri(args.hdri))
     print("glossy against Cycles under %s (MSD (13), s = 8, s' = 4)" % args.hdri)
@@ -127,12 +173,7 @@ def main():
     compare("gold Suzanne (0.3) on a red plastic floor (0.2)", scene, [monkey, ground], args.out, 160, 4)
     if args.models:
         for path, material, colour, roughness, metallic, hdri in MODELS:
-            scene = sdtest.empty_scene()
-            sdtest.hdri_world(scene, sdtest.hdri(hdri))
-            model = sdtest.sized_model(ASSIMP + path, 2.0, (0.0, 0.0, 1.0))
-            model.data.materials.clear()
-            model.data.materials.append(sdtest.principled_material(material, colour, roughness, metallic))
-            sdtest.camera(scene, location=(0.0, -5.0, 2.0), target=(0.0, 0.0, 1.0), lens=110.0)
+            scene, model = model_scene(hdri, path, material, colour, roughness, metallic)
             compare("%s, %s (%.2f), %s, defaults" % (os.path.basename(path), material, roughness, hdri),
                     scene, [model], args.out, 192, 4, defaults=True)
 

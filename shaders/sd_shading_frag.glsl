@@ -237,12 +237,14 @@ vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
   return vec2(w, sqrt(sqrt(solid_angle / 12.566370614359172)));
 }
 
-/* The mean light of the GGX lobe the view reflects (F = 1), from SD_GLOSSY_TAPS of its directions
+/* The mean light of the GGX lobe the view reflects, from SD_GLOSSY_TAPS of its directions
  * (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
- * sd_tap_weight. Where the split sum's lobe about one direction misses the real one (a rough metal:
- * the lobe stretched along the plane of n and v, cut at the horizon, its tails towards the view
- * heavier; msd-notes, "Glossy light"). */
-vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
+ * sd_tap_weight and by its Fresnel, f0 + (1 - f0) times the dielectric shape at v.h (f0 = 1: a
+ * metal's, which hardly varies; a plastic's layer reflects a grazing lobe's far side most). Where
+ * the split sum's lobe about one direction misses the real one (a rough metal, and every lobe at a
+ * grazing view: stretched along the plane of n and v, cut at the horizon, its tails towards the
+ * view heavier; msd-notes, "Glossy light"). */
+vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, float f0)
 {
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
@@ -256,6 +258,7 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
+      tap.x *= f0 + (1.0 - f0) * sd_dielectric_shape(clamp(dot(v, h), 0.0, 1.0));
       vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
       /* a direction below the triangle is the object's own (sd_triangle_horizon) */
       sum += (tap.x * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
@@ -306,10 +309,11 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
  * times its strength (the atlas is without it), read at `axis`, the mean direction of the lobe the
  * view reflects (sdnative.glossy_bend_table, rows SD_BRDF_TABLE_SIZE.. of the table: the lobe leans
  * from the mirrored view towards the normal at grazing views, a dielectric's less, its Fresnel
- * weighing the grazing light more; mixed by metallic). A metal's lobe rougher than
- * SD_SAMPLED_ROUGHNESS (blended in over the 0.1 below it) is sampled instead (sd_sampled_glossy_light),
- * where one lookup is too far off; a dielectric's layer keeps the one lookup, its share of the light
- * too small to pay for the taps. Either way without the lobe's share below the triangle (ng:
+ * weighing the grazing light more; mixed by metallic). Where one lookup is too far off the lobe is
+ * sampled instead (sd_sampled_glossy_light): at a view grazing below n.v = SD_SAMPLED_N_DOT_V
+ * (wholly from 0.1 below it down), and on a metal rougher than SD_SAMPLED_ROUGHNESS (over the 0.1
+ * below); elsewhere the one lookup is as close for a sixty-fourth of the cost. Either way without
+ * the lobe's share below the triangle (ng:
  * sd_triangle_horizon, or the taps there dropped), which the object itself hides. The visibility
  * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility). */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
@@ -322,8 +326,10 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
   axis = dot(axis, axis) > 1e-12 ? normalize(axis) : normal;
   vec3 open = sd_prefiltered_light(axis, roughness) * sd_triangle_horizon(axis, normal, ng, roughness);
   float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
+  sampled = max(sampled, 1.0 - smoothstep(SD_SAMPLED_N_DOT_V - 0.1, SD_SAMPLED_N_DOT_V, dot(normal, view)));
   if (sampled > 0.0) {
-    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness), sampled);
+    float f0 = mix(sd_lobe_weights.y, 1.0, sd_lobe_weights.x);
+    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness, f0), sampled);
   }
   return sd.prefiltered_scale.x * open;
 }

@@ -28,10 +28,12 @@ BRDF_TABLE_SAMPLER = (6, "sd_environment_brdf_table")       # the GGX lobe's tab
 BRDF_TABLE_SIZE = 32   # each table's side (sdnative.environment_brdf_table, glossy_bend_table)
 SHADOW_MAP_SAMPLER = (7, "sd_shadow_map")                   # the sources' shadow maps, side by side
 RAY_BVH_SAMPLER = (8, "sd_ray_bvh")                         # the scene's triangles (live/ray_bvh.py)
-# A metal's glossy light from this roughness on (blended in over the 0.1 below) is sampled by
-# GLOSSY_TAPS directions of its lobe instead of one prefiltered lookup (sd_sampled_glossy_light;
-# msd-notes, "Glossy light", measures both).
+# The glossy light is sampled by GLOSSY_TAPS directions of its lobe instead of one prefiltered
+# lookup (sd_sampled_glossy_light) where the view grazes, n.v below SAMPLED_N_DOT_V (wholly from
+# 0.1 below it down), and on a metal from SAMPLED_ROUGHNESS on (over the 0.1 below): where the
+# lobe stretches away from the round lobe one lookup reads (msd-notes, "Glossy light", measures both).
 SAMPLED_ROUGHNESS = 0.3
+SAMPLED_N_DOT_V = 0.6
 GLOSSY_TAPS = 64
 # The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel, drawn
 # as the taps are; below SINGLE_RAY_ROUGHNESS one, along the lobe's axis (a lobe under a degree or
@@ -238,6 +240,7 @@ class Variant:
             d["SD_PREFILTERED_WIDTH"] = str(self.prefiltered[0])
             d["SD_PREFILTERED_LEVELS"] = str(self.prefiltered[1])
             d["SD_SAMPLED_ROUGHNESS"] = "%.3f" % SAMPLED_ROUGHNESS
+            d["SD_SAMPLED_N_DOT_V"] = "%.3f" % SAMPLED_N_DOT_V
             d["SD_GLOSSY_TAPS"] = str(GLOSSY_TAPS)
             d["SD_OPEN_ORDER"] = str(self.open_order)
             d["SD_HORIZON_LOBE"] = str(self.shaded_lobes)

@@ -16,8 +16,8 @@ at the panel's defaults
 
 --matrix [HDRI ...]: instead, issue 28's grid alone - the smooth and the faceted Wuson each in gold
 (0.3), polished steel (0.15), red plastic (0.2) and gold (0.05) under each HDRI named (default:
-MATRIX_HDRIS) at the panel's defaults, 192 pixels; Cycles' renders are kept and reused (about 10
-minutes on 3.4.1 at first, 4 again; on bpy 4.5 with EEVEE about 25).
+MATRIX_HDRIS) at the panel's defaults, 192 pixels; Cycles' and EEVEE's renders are kept and reused
+(about 10 minutes on 3.4.1 at first, 4 again; on bpy 4.5 with EEVEE about 25 at first).
 
 Printed per scene: relative RMS of block averages, bias per channel, the mean HDR-FLIP per
 pixel (sdtest.perceptual_error: highlights are where RMS and the eye disagree most) and the darkest
@@ -74,8 +74,9 @@ MATRIX_HDRIS = ["sunrise.exr", "forest.exr", "courtyard.exr", "city.exr", "studi
 
 def compare(name, scene, objects, out, size, block, defaults=False, truncated=True, reuse=False):
     """Bakes `objects` (MSD (13), s = 8, s' = 4; defaults: at the panel's defaults), previews them
-    with the prefiltered light and (truncated) without, prints the line. reuse: Cycles' renders of
-    a run before into `out` (sdtest.cycles_pair), where the name says all the scene is."""
+    with the prefiltered light and (truncated) without, prints the line. reuse: Cycles' (and
+    EEVEE's) renders of a run before into `out` (sdtest.cycles_pair), where the name says all the
+    scene is."""
     stem = os.path.join(out, "".join(c for c in name.replace(" ", "_") if c.isalnum() or c in "_."))
     cycles, noise = sdtest.cycles_pair(scene, stem, size, 1024, block, reuse=reuse)
     if defaults:
@@ -90,7 +91,9 @@ def compare(name, scene, objects, out, size, block, defaults=False, truncated=Tr
         label = "prefiltered" if prefiltered else "truncated"
         images[label] = sdtest.preview(stem + "_" + label + ".exr", width=size, height=size)
     if bpy.app.version >= (4, 2, 0):
-        images["EEVEE"] = eevee_render(scene, stem + "_eevee.exr", size)
+        eevee = stem + "_eevee.exr"
+        images["EEVEE"] = sdtest.load_exr(eevee) if reuse and os.path.exists(eevee) else \
+            eevee_render(scene, eevee, size)
     cells = []
     for label, ours in images.items():
         error, bias, a, b = sdtest.block_error(ours, cycles, block)

@@ -312,7 +312,7 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
  * weighing the grazing light more; mixed by metallic). Where one lookup is too far off the lobe is
  * sampled instead (sd_sampled_glossy_light): at a view grazing below n.v = SD_SAMPLED_N_DOT_V
  * (wholly from 0.1 below it down), and on a metal rougher than SD_SAMPLED_ROUGHNESS (over the 0.1
- * below); elsewhere the one lookup is as close for a sixty-fourth of the cost. Either way without
+ * below); elsewhere the one lookup is as close for a hundredth of the cost. Either way without
  * the lobe's share below the triangle (ng:
  * sd_triangle_horizon, or the taps there dropped), which the object itself hides. The visibility
  * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility). */

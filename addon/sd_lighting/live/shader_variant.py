@@ -34,7 +34,7 @@ RAY_BVH_SAMPLER = (8, "sd_ray_bvh")                         # the scene's triang
 # lobe stretches away from the round lobe one lookup reads (msd-notes, "Glossy light", measures both).
 SAMPLED_ROUGHNESS = 0.3
 SAMPLED_N_DOT_V = 0.6
-GLOSSY_TAPS = 64
+GLOSSY_TAPS = 128
 # The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel, drawn
 # as the taps are; below SINGLE_RAY_ROUGHNESS one, along the lobe's axis (a lobe under a degree or
 # two wide).

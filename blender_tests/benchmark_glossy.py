@@ -21,7 +21,7 @@ MATRIX_HDRIS) at the panel's defaults, 192 pixels; Cycles' and EEVEE's renders a
 
 Printed per scene: relative RMS of block averages, bias per channel, the mean HDR-FLIP per
 pixel (sdtest.perceptual_error: highlights are where RMS and the eye disagree most) and the darkest
-block against Cycles' where Cycles is lit (sdtest.darkest_block), truncated and
+block against Cycles' where Cycles is lit (sdtest.darkest_block), truncated (not with --matrix) and
 prefiltered, and on Blender 4.2 and later EEVEE's at its defaults (what a user would pick instead; 64 samples,
 the world's light and its probes as EEVEE makes them).
 
@@ -63,8 +63,6 @@ MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness
     ("OBJ/WusonOBJ.obj", "gold", GOLD, 0.05, 1.0, "city.exr"),
     ("PLY/Wuson.ply", "red plastic", RED, 0.2, 0.0, "city.exr"),
     ("OBJ/spider.obj", "steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0, "city.exr")]
-ASSIMP = "/usr/share/assimp/models/"
-
 # --matrix: issue 28's grid - a smooth and a faceted real model, each material at each HDRI
 MATRIX_MODELS = [("smooth Wuson", "OBJ/WusonOBJ.obj"), ("faceted Wuson", "PLY/Wuson.ply")]
 MATRIX_MATERIALS = [("gold", GOLD, 0.3, 1.0), ("steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0),
@@ -92,8 +90,9 @@ def compare(name, scene, objects, out, size, block, defaults=False, truncated=Tr
         images[label] = sdtest.preview(stem + "_" + label + ".exr", width=size, height=size)
     if bpy.app.version >= (4, 2, 0):
         eevee = stem + "_eevee.exr"
-        images["EEVEE"] = sdtest.load_exr(eevee) if reuse and os.path.exists(eevee) else \
-            eevee_render(scene, eevee, size)
+        images["EEVEE"] = sdtest.reused(eevee, size, reuse)
+        if images["EEVEE"] is None:
+            images["EEVEE"] = eevee_render(scene, eevee, size)
     cells = []
     for label, ours in images.items():
         error, bias, a, b = sdtest.block_error(ours, cycles, block)
@@ -112,18 +111,6 @@ def eevee_render(scene, path, size):
     return sdtest.render_still(scene, path, size)
 
 
-def model_scene(hdri, path, material, colour, roughness, metallic):
-    """A new scene under `hdri` with the assimp model at `path` in one Principled material, framed
-    as the --models scenes are; returns (scene, model)."""
-    scene = sdtest.empty_scene()
-    sdtest.hdri_world(scene, sdtest.hdri(hdri))
-    model = sdtest.sized_model(ASSIMP + path, 2.0, (0.0, 0.0, 1.0))
-    model.data.materials.clear()
-    model.data.materials.append(sdtest.principled_material(material, colour, roughness, metallic))
-    sdtest.camera(scene, location=(0.0, -5.0, 2.0), target=(0.0, 0.0, 1.0), lens=110.0)
-    return scene, model
-
-
 def matrix(hdris, out):
     """Issue 28's grid at the panel's defaults, 192 pixels: MATRIX_MODELS x MATRIX_MATERIALS under
     each of `hdris`, one line each (Cycles' renders are kept in a folder of `out` per Blender version
@@ -134,7 +121,7 @@ def matrix(hdris, out):
     for hdri in hdris:
         for label, path in MATRIX_MODELS:
             for material, colour, roughness, metallic in MATRIX_MATERIALS:
-                scene, model = model_scene(hdri, path, material, colour, roughness, metallic)
+                scene, model = sdtest.glossy_model_scene(hdri, path, material, colour, roughness, metallic)
                 compare("%s, %s (%.2f), %s" % (label, material, roughness, hdri), scene, [model], out, 192, 4,
                         defaults=True, truncated=False, reuse=True)
 
@@ -144,8 +131,9 @@ def main():
     parser.add_argument("--zip", required=True)
     parser.add_argument("--out", required=True)
     parser.add_argument("--hdri", default="forest.exr")
-    parser.add_argument("--models", action="store_true")
-    parser.add_argument("--matrix", nargs="*", metavar="HDRI",
+    scenes = parser.add_mutually_exclusive_group()
+    scenes.add_argument("--models", action="store_true")
+    scenes.add_argument("--matrix", nargs="*", metavar="HDRI",
                         help="only issue 28's grid (MATRIX_*), under these HDRIs (none named: all of MATRIX_HDRIS)")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     os.makedirs(args.out, exist_ok=True)
@@ -176,7 +164,7 @@ def main():
     compare("gold Suzanne (0.3) on a red plastic floor (0.2)", scene, [monkey, ground], args.out, 160, 4)
     if args.models:
         for path, material, colour, roughness, metallic, hdri in MODELS:
-            scene, model = model_scene(hdri, path, material, colour, roughness, metallic)
+            scene, model = sdtest.glossy_model_scene(hdri, path, material, colour, roughness, metallic)
             compare("%s, %s (%.2f), %s, defaults" % (os.path.basename(path), material, roughness, hdri),
                     scene, [model], args.out, 192, 4, defaults=True)
 

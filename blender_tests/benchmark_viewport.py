@@ -27,8 +27,8 @@ from a Principled BSDF (Lambert + Phong) - as ratios to Lambert alone. A fourth 
 Principled pair with the glossy lobe truncated per vertex against the prefiltered glossy light,
 per vertex (with the baked visibility ratio, and with the reflection rays tracing it through the
 heightfield's triangles) and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4, and the same mesh as a metal
-of roughness 0.5, whose glossy light is sampled by GLOSSY_TAPS lookups per pixel
-(live/shader_variant.SAMPLED_ROUGHNESS).
+of roughness 0.5, whose glossy light is sampled by GLOSSY_TAPS lookups at every pixel
+(live/shader_variant.SAMPLED_ROUGHNESS; the plastic's only where the view grazes, SAMPLED_N_DOT_V).
 
 A last table (--model PATH) bakes a real model for real, twice, with MSD (13) and PRT (8) at s = 4,
 s' = 2, 256 rays, and times both in interleaved rounds, L~ of MSD (13) as an SH sum and from the

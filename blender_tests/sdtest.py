@@ -604,6 +604,16 @@ def render_still(scene, path, size, transparent=True):
     return load_exr(path)
 
 
+def reused(path, size, reuse=True):
+    """load_exr's image of a render a run before wrote to `path`, where `reuse`, the file is there
+    and it is size x size; else None (render it again)."""
+    if reuse and os.path.exists(path):
+        image = load_exr(path)
+        if image.shape[:2] == (size, size):
+            return image
+    return None
+
+
 def cycles_pair(scene, path_stem, size, samples, block, importance_map=FAST_IMPORTANCE_MAP, reuse=False):
     """Cycles from two seeds (samples // 2 each, cycles_render): (their mean, the relative RMS noise
     of the mean's block x block averages estimated from their difference, over the blocks where
@@ -614,9 +624,10 @@ def cycles_pair(scene, path_stem, size, samples, block, importance_map=FAST_IMPO
 
     def render(seed):
         path = "%s_cycles_%s.exr" % (path_stem, "ab"[seed - 1])
-        if reuse and os.path.exists(path):
-            return load_exr(path)
-        return cycles_render(scene, path, size, samples // 2, seed=seed, importance_map=importance_map)
+        image = reused(path, size, reuse)
+        if image is None:
+            image = cycles_render(scene, path, size, samples // 2, seed=seed, importance_map=importance_map)
+        return image
     a, b = render(1), render(2)
     mask = covered(a, b)
     block_a, block_b = block_averages(a, mask, block), block_averages(b, mask, block)
@@ -681,3 +692,19 @@ def sized_model(path, size, location):
     bpy.ops.object.transform_apply(location=False, rotation=False, scale=True)
     obj.location = location
     return obj
+
+
+ASSIMP_MODELS = "/usr/share/assimp/models/"   # Debian's assimp-testmodels
+
+
+def glossy_model_scene(hdri_name, path, material, colour, roughness, metallic):
+    """A new scene under Blender's HDRI `hdri_name` with the assimp model at `path` (relative to
+    ASSIMP_MODELS) 2 units across in one Principled material, seen from the front: the glossy
+    benchmarks' and tests' framing. Returns (scene, model)."""
+    scene = empty_scene()
+    hdri_world(scene, hdri(hdri_name))
+    model = sized_model(ASSIMP_MODELS + path, 2.0, (0.0, 0.0, 1.0))
+    model.data.materials.clear()
+    model.data.materials.append(principled_material(material, colour, roughness, metallic))
+    camera(scene, location=(0.0, -5.0, 2.0), target=(0.0, 0.0, 1.0), lens=110.0)
+    return scene, model

@@ -65,6 +65,13 @@ float sd_dielectric_shape(float c)
   return (0.5 * a * a * (1.0 + b * b) - normal) / (1.0 - normal);
 }
 
+/* The layer's Fresnel at cos c = v.h for its F0: f0 + (1 - f0) times the dielectric shape (1 for
+ * f0 = 1, a metal's, which this takes as flat). */
+float sd_layer_fresnel(float f0, float c)
+{
+  return f0 + (1.0 - f0) * sd_dielectric_shape(clamp(c, 0.0, 1.0));
+}
+
 /* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg):
  * the single-scattering F0 A + B, times (multiscatter 1: Multiscatter GGX) the light multiple
  * scattering adds as Cycles' Multiscatter GGX keeps it (Kulla and Conty 2017, "Revisiting
@@ -239,8 +246,8 @@ vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
 
 /* The mean light of the GGX lobe the view reflects, from SD_GLOSSY_TAPS of its directions
  * (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
- * sd_tap_weight and by its Fresnel, f0 + (1 - f0) times the dielectric shape at v.h (f0 = 1: a
- * metal's, which hardly varies; a plastic's layer reflects a grazing lobe's far side most). Where
+ * sd_tap_weight and by its Fresnel (sd_layer_fresnel; f0 = 1: a metal's, taken as flat - a gold's
+ * blue rises towards grazing in Cycles; a plastic's layer reflects a grazing lobe's far side most). Where
  * the split sum's lobe about one direction misses the real one (a rough metal, and every lobe at a
  * grazing view: stretched along the plane of n and v, cut at the horizon, its tails towards the
  * view heavier; msd-notes, "Glossy light"). */
@@ -258,7 +265,7 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, f
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
-      tap.x *= f0 + (1.0 - f0) * sd_dielectric_shape(clamp(dot(v, h), 0.0, 1.0));
+      tap.x *= sd_layer_fresnel(f0, dot(v, h));
       vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
       /* a direction below the triangle is the object's own (sd_triangle_horizon) */
       sum += (tap.x * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
@@ -375,7 +382,7 @@ vec3 sd_source_highlight(int i, vec3 normal, vec3 view, float roughness)
   float f0 = sd_lobe_weights.y;
   vec3 h = view + centre;
   float v_dot_h = dot(h, h) > 1e-12 ? dot(view, h) * inversesqrt(dot(h, h)) : 0.0;
-  float fresnel = f0 + (1.0 - f0) * sd_dielectric_shape(clamp(v_dot_h, 0.0, 1.0));
+  float fresnel = sd_layer_fresnel(f0, v_dot_h);
   float layer = f0 * (brdf.x + brdf.y - brdf.w) + brdf.w;
   float albedo = mix(fresnel / max(layer, 1e-4), 1.0 / max(brdf.x + brdf.y, 1e-4), sd_lobe_weights.x);
   return (3.141592653589793 * lobe * albedo / (4.0 * n_dot_v)) * sd.source_irradiance[i].rgb;

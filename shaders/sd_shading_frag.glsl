@@ -72,6 +72,13 @@ float sd_layer_fresnel(float f0, float c)
   return f0 + (1.0 - f0) * sd_dielectric_shape(clamp(c, 0.0, 1.0));
 }
 
+/* The F0 the glossy lobe's taps weigh their Fresnel with (sd_layer_fresnel): the slot's, mixed
+ * towards a metal's 1 by metallic. */
+float sd_tap_f0()
+{
+  return mix(sd_lobe_weights.y, 1.0, sd_lobe_weights.x);
+}
+
 /* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg):
  * the single-scattering F0 A + B, times (multiscatter 1: Multiscatter GGX) the light multiple
  * scattering adds as Cycles' Multiscatter GGX keeps it (Kulla and Conty 2017, "Revisiting
@@ -280,7 +287,8 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, f
  * (the Reflection Rays option): SD_REFLECTION_RAYS directions of the lobe the view reflects
  * (sd_lobe_tap; one, along `axis`, below SD_SINGLE_RAY_ROUGHNESS, where the lobe is narrower than
  * the taps' spread would matter), each a ray from the pixel through the ray BVH (sd_ray_occluded),
- * weighed by its light (the prefiltered level of its solid angle, in luminance) and sd_tap_weight.
+ * weighed by its light (the prefiltered level of its solid angle, in luminance), sd_tap_weight and
+ * its Fresnel (sd_layer_fresnel), as the sampled light it shadows is.
  * Directions below the triangle are left out: sd_triangle_horizon takes that share. The baked
  * visibility ratio, of order s' at the vertices, is too smooth for a sharp lobe: it lets through a
  * crease's reflection of the object itself (msd-notes, "Glossy light"). The rays start
@@ -298,13 +306,14 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec2 light = vec2(0.0);   /* reaching the pixel, all */
+  float f0 = sd_tap_f0();
   for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
     vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
     if (l.z > 0.0 && dot(direction, ng) > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_REFLECTION_RAYS, a2, lambda_v);
-      float w = tap.x * max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
+      float w = tap.x * sd_layer_fresnel(f0, dot(v, h)) * max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
       light += vec2(sd_ray_occluded(origin, to_world * direction, 0.0) ? 0.0 : w, w);
     }
   }
@@ -335,8 +344,7 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
   float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
   sampled = max(sampled, 1.0 - smoothstep(SD_SAMPLED_N_DOT_V - 0.1, SD_SAMPLED_N_DOT_V, dot(normal, view)));
   if (sampled > 0.0) {
-    float f0 = mix(sd_lobe_weights.y, 1.0, sd_lobe_weights.x);
-    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness, f0), sampled);
+    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness, sd_tap_f0()), sampled);
   }
   return sd.prefiltered_scale.x * open;
 }

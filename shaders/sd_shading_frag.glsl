@@ -254,10 +254,10 @@ vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
 /* The mean light of the GGX lobe the view reflects, from SD_GLOSSY_TAPS of its directions
  * (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
  * sd_tap_weight and by its Fresnel (sd_layer_fresnel; f0 = 1: a metal's, taken as flat - a gold's
- * blue rises towards grazing in Cycles; a plastic's layer reflects a grazing lobe's far side most). Where
- * the split sum's lobe about one direction misses the real one (a rough metal, and every lobe at a
- * grazing view: stretched along the plane of n and v, cut at the horizon, its tails towards the
- * view heavier; msd-notes, "Glossy light"). */
+ * blue rises towards grazing in Cycles; a plastic's layer reflects a grazing lobe's far side
+ * most). Where the split sum's lobe about one direction misses the real one (a rough metal, and
+ * every lobe at a grazing view: stretched along the plane of n and v, cut at the horizon, its
+ * tails towards the view heavier; msd-notes, "Glossy light"). */
 vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, float f0)
 {
   float alpha = max(roughness * roughness, 1e-4);
@@ -313,7 +313,8 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
     vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
     if (l.z > 0.0 && dot(direction, ng) > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_REFLECTION_RAYS, a2, lambda_v);
-      float w = tap.x * sd_layer_fresnel(f0, dot(v, h)) * max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
+      float w = tap.x * sd_layer_fresnel(f0, dot(v, h)) *
+                max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
       light += vec2(sd_ray_occluded(origin, to_world * direction, 0.0) ? 0.0 : w, w);
     }
   }
@@ -328,9 +329,9 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
  * weighing the grazing light more; mixed by metallic). Where one lookup is too far off the lobe is
  * sampled instead (sd_sampled_glossy_light): at a view grazing below n.v = SD_SAMPLED_N_DOT_V
  * (wholly from 0.1 below it down), and on a metal rougher than SD_SAMPLED_ROUGHNESS (over the 0.1
- * below); elsewhere the one lookup is as close for a hundredth of the cost. Either way without
- * the lobe's share below the triangle (ng:
- * sd_triangle_horizon, or the taps there dropped), which the object itself hides. The visibility
+ * below); elsewhere the one lookup is as close for about a hundredth of the cost. Either way
+ * without the lobe's share below the triangle (ng: sd_triangle_horizon, or the taps there
+ * dropped), which the object itself hides. The visibility
  * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility). */
 vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
 {

@@ -15,7 +15,7 @@ at the panel's defaults
 (the automatic mode) and 192 pixels wide.
 
 --matrix [HDRI ...]: instead, issue 28's grid alone - the smooth and the faceted Wuson each in gold
-(0.3), polished steel (0.15), red plastic (0.2) and gold (0.05) under each HDRI named (default:
+(0.3), polished steel (0.15), red plastic (0.2), gold (0.05) and gold and red plastic (0.5) under each HDRI named (default:
 MATRIX_HDRIS) at the panel's defaults, 192 pixels; Cycles' and EEVEE's renders are kept and reused
 (about 10 minutes on 3.4.1 at first, 4 again; on bpy 4.5 with EEVEE about 25 at first).
 
@@ -66,7 +66,8 @@ MODELS = [  # Debian's assimp-testmodels: file, material, base colour, roughness
 # --matrix: issue 28's grid - a smooth and a faceted real model, each material at each HDRI
 MATRIX_MODELS = [("smooth Wuson", "OBJ/WusonOBJ.obj"), ("faceted Wuson", "PLY/Wuson.ply")]
 MATRIX_MATERIALS = [("gold", GOLD, 0.3, 1.0), ("steel", (0.6, 0.6, 0.62, 1.0), 0.15, 1.0),
-                    ("red plastic", RED, 0.2, 0.0), ("gold", GOLD, 0.05, 1.0)]
+                    ("red plastic", RED, 0.2, 0.0), ("gold", GOLD, 0.05, 1.0), ("gold", GOLD, 0.5, 1.0),
+                    ("red plastic", RED, 0.5, 0.0)]
 MATRIX_HDRIS = ["sunrise.exr", "forest.exr", "courtyard.exr", "city.exr", "studio.exr"]
 
 

@@ -54,6 +54,7 @@ import numpy as np  # noqa: E402
 
 WIDTH, HEIGHT = 1280, 720
 ROUNDS = 3   # interleaved rounds of the every-method table, whose medians it quotes
+FEW_RAYS = 8   # the glossy table's cheaper reflection rays, beside the default count
 
 
 def options():
@@ -227,8 +228,8 @@ def remove_object(package, obj):
 def glossy_table(package, scene, view, mesh, real_counts, frames):
     """The prefiltered glossy light's frame cost (issue 28): Lambert + Phong weighted as from a
     Principled BSDF (roughness 0.3), its lobe truncated at s per vertex (the seed's way) against
-    the prefiltered lookup per vertex with the baked visibility ratio, with the reflection rays
-    (the default), and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4."""
+    the prefiltered lookup per vertex with the baked visibility ratio, with FEW_RAYS reflection rays
+    and with the default count, and per pixel, for PRT (10) at s = 8 and MSD (13) at s = 4."""
     env, shading = package.scene.environment, package.live.gpu_shading
     if shading.prefiltered_texture(env.source(scene), True) is None:
         raise RuntimeError("the prefiltered environment was not made")
@@ -237,21 +238,24 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
     lobes = {"lobe": "phong", "exponent": sigma, "diffuse_lobe": True, "lobe_weights": True, "diffuse_share": 0.9}
     settings = scene.sd_lighting
     taps = package.live.shader_variant.GLOSSY_TAPS
+    rays = package.live.shader_variant.REFLECTION_RAYS
     print("\nThe prefiltered glossy light, %d vertices, Lambert + Phong (roughness 0.3), frame ms "
           "(atlas %d x %d RGBA32F, %.1f MB, and two %d x %d BRDF tables); last column: the lobe of a "
           "metal of roughness 0.5, sampled by %d taps per pixel:" % (
               len(mesh[0]), width, rows, width * rows * 16 / 1e6,
               package.live.shader_variant.BRDF_TABLE_SIZE, package.live.shader_variant.BRDF_TABLE_SIZE, taps))
-    print("%-28s %20s %20s %20s %20s %20s" % ("method", "truncated / vertex", "prefiltered / vertex",
-                                              "+ reflection rays", "prefiltered / pixel", "sampled metal"))
+    print("%-28s %20s %20s %20s %20s %20s %20s" % (
+        "method", "truncated / vertex", "prefiltered / vertex", "+ %d rays" % FEW_RAYS, "+ %d rays" % rays,
+        "prefiltered / pixel", "sampled metal"))
     metal = sdtest.principled_material("Metal", (0.9, 0.9, 0.9, 1.0), 0.5, 1.0)
     for method, s, sv in (("prt_gaunt", 8, 2), ("msd_visibility", 4, 2)):
         obj = baked_object(package, scene, *mesh, real_counts, method, lobes, s, sv)
         cells = []
-        for prefiltered, rays, per_pixel in ((False, False, False), (True, False, False), (True, True, False),
-                                             (True, True, True)):
+        for prefiltered, count, per_pixel in ((False, 0, False), (True, 0, False), (True, FEW_RAYS, False),
+                                              (True, rays, False), (True, rays, True)):
             settings.prefiltered_glossy = prefiltered
-            settings.reflection_rays = rays
+            settings.reflection_rays = count > 0
+            settings.reflection_ray_count = max(count, 1)
             cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel),
                                      frames if not per_pixel else 1))
         settings.prefiltered_glossy = True

@@ -67,14 +67,15 @@ def variants(package):
     sources on their own; each such glossy one also tracing its visibility (reflection rays),
     with and without the sources."""
     import dataclasses
+    rays = _module(package, "live.shader_variant").REFLECTION_RAYS
     for variant in _variants(package):
         yield variant
         if (not variant.vertex_target and (not variant.glossy or variant.prefiltered_lookup)
                 and (variant.light_order, variant.visibility_order) == ALBEDO_ORDERS):
             yield dataclasses.replace(variant, sources=SOURCES)
             if variant.glossy:
-                yield dataclasses.replace(variant, reflection_rays=True)
-                yield dataclasses.replace(variant, reflection_rays=True, sources=SOURCES)
+                yield dataclasses.replace(variant, reflection_rays=rays)
+                yield dataclasses.replace(variant, reflection_rays=rays, sources=SOURCES)
 
 
 def _variants(package):

@@ -65,18 +65,31 @@ float sd_dielectric_shape(float c)
   return (0.5 * a * a * (1.0 + b * b) - normal) / (1.0 - normal);
 }
 
-/* The layer's Fresnel at cos c = v.h for its F0: f0 + (1 - f0) times the dielectric shape (1 for
- * f0 = 1, a metal's, which this takes as flat). */
+/* The dielectric layer's Fresnel at cos c = v.h for its F0: f0 + (1 - f0) times the dielectric
+ * shape. */
 float sd_layer_fresnel(float f0, float c)
 {
   return f0 + (1.0 - f0) * sd_dielectric_shape(clamp(c, 0.0, 1.0));
 }
 
-/* The F0 the glossy lobe's taps weigh their Fresnel with (sd_layer_fresnel): the slot's, mixed
- * towards a metal's 1 by metallic. */
-float sd_tap_f0()
+/* The glossy lobe's Fresnel per channel at cos c = v.h, what its taps weigh their light with: as
+ * sd_surface mixes the layers (before 4.0 one lobe of F0 mixed towards the base colour by metallic,
+ * with the dielectric's shape; 4.0+ a dielectric and a metal closure, the metal's Schlick's Fresnel
+ * of the base colour). A gold's blue, F0 0.34, reflects the grazing half of its lobe most. */
+vec3 sd_tap_fresnel(float c)
 {
-  return mix(sd_lobe_weights.y, 1.0, sd_lobe_weights.x);
+  c = clamp(c, 0.0, 1.0);
+  vec3 albedo = sd_surface_albedo();
+  float metal = sd_lobe_weights.x;
+  float f0 = sd_lobe_weights.y;
+  float code = abs(sd_lobe_weights.w);
+  float over = step(0.5, code) * (1.0 - step(1.5, code));
+  float shape = sd_dielectric_shape(c);
+  float m = 1.0 - c;
+  float schlick = m * m * m * m * m;
+  vec3 mixed = mix(vec3(f0), albedo, metal);
+  vec3 layers = mix(vec3(sd_layer_fresnel(f0, c)), albedo + (vec3(1.0) - albedo) * schlick, metal);
+  return mix(mixed + (vec3(1.0) - mixed) * shape, layers, over);
 }
 
 /* The specular layer's directional albedo for F0 (per channel) and a Fresnel shape's (A, B, E_avg):
@@ -251,14 +264,13 @@ vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
   return vec2(w, sqrt(sqrt(solid_angle / 12.566370614359172)));
 }
 
-/* The mean light of the GGX lobe the view reflects, from SD_GLOSSY_TAPS of its directions
- * (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
- * sd_tap_weight and by its Fresnel (sd_layer_fresnel; f0 = 1: a metal's, taken as flat - a gold's
- * blue rises towards grazing in Cycles; a plastic's layer reflects a grazing lobe's far side
- * most). Where the split sum's lobe about one direction misses the real one (a rough metal, and
+/* The mean light of the GGX lobe the view reflects, per channel, from SD_GLOSSY_TAPS of its
+ * directions (sd_lobe_tap), each read from the prefiltered level of its solid angle and weighed by
+ * sd_tap_weight and by its Fresnel (sd_tap_fresnel: a plastic's layer and a gold's blue reflect a
+ * grazing lobe's far side most). Where the split sum's lobe about one direction misses the real one (a rough metal, and
  * every lobe at a grazing view: stretched along the plane of n and v, cut at the horizon, its
  * tails towards the view heavier; msd-notes, "Glossy light"). */
-vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, float f0)
+vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
 {
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
@@ -266,20 +278,20 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, f
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec3 sum = vec3(0.0);
-  float weights = 0.0;
+  vec3 weights = vec3(0.0);
   for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
     vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
-      tap.x *= sd_layer_fresnel(f0, dot(v, h));
+      vec3 w = tap.x * sd_tap_fresnel(dot(v, h));
       vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
       /* a direction below the triangle is the object's own (sd_triangle_horizon) */
-      sum += (tap.x * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
-      weights += tap.x;
+      sum += (w * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
+      weights += w;
     }
   }
-  return (weights > 0.0) ? sum / weights : vec3(0.0);
+  return sum / max(weights, vec3(1e-12));
 }
 
 #ifdef SD_REFLECTION_RAYS
@@ -287,8 +299,8 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, f
  * (the Reflection Rays option): SD_REFLECTION_RAYS directions of the lobe the view reflects
  * (sd_lobe_tap; one, along `axis`, below SD_SINGLE_RAY_ROUGHNESS, where the lobe is narrower than
  * the taps' spread would matter), each a ray from the pixel through the ray BVH (sd_ray_occluded),
- * weighed by its light (the prefiltered level of its solid angle, in luminance), sd_tap_weight and
- * its Fresnel (sd_layer_fresnel), as the sampled light it shadows is.
+ * weighed by its light times its Fresnel (sd_tap_fresnel), in luminance, and by sd_tap_weight, as
+ * the sampled light it shadows is.
  * Directions below the triangle are left out: sd_triangle_horizon takes that share. The baked
  * visibility ratio, of order s' at the vertices, is too smooth for a sharp lobe: it lets through a
  * crease's reflection of the object itself (msd-notes, "Glossy light"). The rays start
@@ -306,15 +318,14 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec2 light = vec2(0.0);   /* reaching the pixel, all */
-  float f0 = sd_tap_f0();
   for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
     vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
     if (l.z > 0.0 && dot(direction, ng) > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_REFLECTION_RAYS, a2, lambda_v);
-      float w = tap.x * sd_layer_fresnel(f0, dot(v, h)) *
-                max(dot(sd_prefiltered_light(direction, tap.y), SD_LUMINANCE), 1e-6);
+      float w = tap.x * max(dot(sd_tap_fresnel(dot(v, h)) * sd_prefiltered_light(direction, tap.y),
+                                SD_LUMINANCE), 1e-6);
       light += vec2(sd_ray_occluded(origin, to_world * direction, 0.0) ? 0.0 : w, w);
     }
   }
@@ -345,7 +356,7 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
   float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
   sampled = max(sampled, 1.0 - smoothstep(SD_SAMPLED_N_DOT_V - 0.1, SD_SAMPLED_N_DOT_V, dot(normal, view)));
   if (sampled > 0.0) {
-    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness, sd_tap_f0()), sampled);
+    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness), sampled);
   }
   return sd.prefiltered_scale.x * open;
 }

@@ -31,7 +31,7 @@ def all_variants():
                 if sources and lobes not in ("lambert", "layer") and not (prefiltered and albedo):
                     continue   # a glossy lobe takes the sources where the prefiltered atlas lights it
                 # a glossy lobe lit by the prefiltered atlas traces its visibility (reflection rays)
-                rays = lobes not in ("lambert", "layer") and prefiltered and albedo and not target
+                rays = 16 if lobes not in ("lambert", "layer") and prefiltered and albedo and not target else 0
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
@@ -242,6 +242,21 @@ def test_prefiltered_lookup_reads_the_horizon_factors_to_s_prime(sdnative):
                          prefiltered=(1024, 7))
     assert unshadowed.horizon_order == 0
     assert not dataclasses.replace(variant, material_count=0).prefiltered_lookup   # the vertex target
+
+
+def test_reflection_rays_variant_casts_the_scenes_count(sdnative):
+    """The traced glossy visibility casts the variant's rays per pixel (the scene's Rays), only on
+    a glossy lobe lit by the prefiltered atlas."""
+    variant = Variant(methods.get("unshadowed"), True, 4, 0, material_count=1, lobe_weights=True,
+                      prefiltered=(1024, 7), reflection_rays=12)
+    defines = variant.defines(sdnative.sh_recurrence_constants)
+    assert defines["SD_REFLECTION_RAYS"] == "12"
+    assert "SD_REFLECTION_RAYS" not in dataclasses.replace(variant, reflection_rays=0).defines(
+        sdnative.sh_recurrence_constants)
+    with pytest.raises(ValueError, match="rays per pixel"):
+        dataclasses.replace(variant, reflection_rays=-1)
+    with pytest.raises(ValueError, match="reflection rays trace"):
+        dataclasses.replace(variant, prefiltered=(), lobe_weights=False, material_count=0)
 
 
 def test_lambert_layer_variant_passes_lobe_0_on_as_the_diffuse(sdnative):

@@ -29,7 +29,8 @@ from ..scene.view import View
 from ..store import attributes, baked
 from ..store.record import RecordError
 from . import gpu_shading, ray_bvh, source_shadows, staleness
-from .shader_variant import BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER, RAY_BVH_SAMPLER, SHADOW_MAP_SAMPLER
+from .shader_variant import (BAND_LIMITED_TEXTURE_SAMPLER, PREFILTERED_SAMPLER, RAY_BVH_SAMPLER, REFLECTION_RAYS,
+                             SHADOW_MAP_SAMPLER)
 
 log = logging.getLogger(__name__)
 
@@ -213,6 +214,13 @@ def use_reflection_rays(scene):
     return bool(settings is None or settings.reflection_rays)
 
 
+def reflection_ray_count(scene):
+    """The scene's rays per pixel of a traced glossy lobe (shader_variant.REFLECTION_RAYS where it
+    has no settings)."""
+    settings = getattr(scene, "sd_lighting", None)
+    return REFLECTION_RAYS if settings is None else int(settings.reflection_ray_count)
+
+
 def reflection_rays(scene, wait, view_layer=None):
     """The scene's ray BVH (ray_bvh.scene_bvh), or None where building it failed (errors["rays"]
     says why; wait=True raises): the glossy lobes keep the baked visibility ratio."""
@@ -270,6 +278,7 @@ def _frame(scene, obj, data, view, scale, wait, source=None, rotation=None, matr
         textures[SHADOW_MAP_SAMPLER[1]] = sources[1]
     if rays is not None:
         kwargs["rays"] = ray_bvh.block_rows(rays, matrix, data.radius)
+        kwargs["ray_count"] = reflection_ray_count(scene)
         textures[RAY_BVH_SAMPLER[1]] = rays[0]
     block = data.frame_block(matrix, view.view_projection, view.camera, light, gr, scale,
                              albedos=materials.object_albedos(obj), prefiltered=prefiltered is not None,

@@ -42,7 +42,7 @@ from ..store.bake_data import LIGHTMAP, LIGHTMAP_UV, TEXTURE_WIDTH
 from . import band_limited_map
 from . import lobe_designs as lobe_design_cache
 from .shader_variant import (ALBEDO_TEXTURE_SAMPLER, BRDF_TABLE_SAMPLER, BRDF_TABLE_SIZE, DATA_SAMPLER, GAUNT_SAMPLER,
-                             LIGHTMAP_INDEX_SAMPLER, SHADOW_MAP_SAMPLER, Variant)
+                             LIGHTMAP_INDEX_SAMPLER, REFLECTION_RAYS, SHADOW_MAP_SAMPLER, Variant)
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))   # sd_lighting/
 EQUIRECT_FILE = "sd_equirect.glsl"
@@ -477,7 +477,8 @@ class ObjectData:
         """The block's albedo and lobe weight rows for the materials' current albedos
         (materials.object_albedos), switching, once, to the variant they need - none for a lobe
         without weights whose albedos are all white - lit by `sources` bright sources on their own
-        and tracing its glossy visibility (`traced`) where that variant can take them (a glossy lobe
+        and tracing its glossy visibility with `traced` rays per pixel (0: not) where that variant
+        can take them (a glossy lobe
         only where the prefiltered atlas lights it: while a new environment's is made, neither).
         Returns {field: rows}."""
         if self.variant.vertex_target:
@@ -499,10 +500,10 @@ class ObjectData:
         variant = dataclasses.replace(self.variant, material_count=0 if white else self.slot_count,
                                       material_slots=not white and self.slot_count > 1,
                                       albedo_texture=image is not None, lobe_weights=weighted,
-                                      prefiltered=prefiltered, sources=0, reflection_rays=False)
+                                      prefiltered=prefiltered, sources=0, reflection_rays=0)
         lit_alone = variant.prefiltered_lookup or not variant.glossy
         variant = dataclasses.replace(variant, sources=sources if lit_alone else 0,
-                                      reflection_rays=bool(traced) and variant.glossy and variant.prefiltered_lookup)
+                                      reflection_rays=traced if variant.glossy and variant.prefiltered_lookup else 0)
         if variant != self.variant:
             self.variant = variant
             self.shader = shader_program(variant)
@@ -514,7 +515,7 @@ class ObjectData:
 
     def frame_block(self, model, view_projection, camera, light, local_to_environment,
                     exposure_scale, target=(1, 1), depth_bias=0.0, albedos=(), prefiltered=True, strength=1.0,
-                    band_limited_scale=1.0, sources=None, rays=None):
+                    band_limited_scale=1.0, sources=None, rays=None, ray_count=REFLECTION_RAYS):
         """The uniform block's bytes for one draw.
 
         model: 4x4 object-to-world; view_projection: 4x4 world-to-clip; camera: (x, y, z, w) with
@@ -528,12 +529,13 @@ class ObjectData:
         the atlas is without; band_limited_scale: that of the band-limited texture's codes;
         sources: (scene/light_sources.Source list, their shadow rows) lighting the data on their
         own (takes_sources; `light` is then the rest of the map), or None; rays: the ray_bvh and
-        ray_offset rows (ray_bvh.block_rows) where the glossy lobe traces its visibility, or None. The
+        ray_offset rows (ray_bvh.block_rows) where the glossy lobe traces its visibility with
+        `ray_count` rays per pixel, or None. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()
         surface_rows = self._use_surface(list(albedos), prefiltered, len(sources[0]) if sources else 0,
-                                         rays is not None)
+                                         ray_count if rays is not None else 0)
         self.mirrored = bool(np.linalg.det(np.asarray(model, dtype=np.float64)[:3, :3]) < 0.0)
         camera = np.array(camera, dtype=np.float64)
         if camera[3] > 0.5:

@@ -35,10 +35,11 @@ RAY_BVH_SAMPLER = (8, "sd_ray_bvh")                         # the scene's triang
 SAMPLED_ROUGHNESS = 0.3
 SAMPLED_N_DOT_V = 0.6
 GLOSSY_TAPS = 128
-# The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel, drawn
-# as the taps are; below SINGLE_RAY_ROUGHNESS one, along the lobe's axis (a lobe under a degree or
-# two wide).
-REFLECTION_RAYS = 8
+# The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel by
+# default (the scene's reflection_ray_count), drawn as the taps are; below SINGLE_RAY_ROUGHNESS one,
+# along the lobe's axis (a lobe under a degree or two wide). Fewer leave a rough lobe's partial
+# visibility in steps from triangle to triangle (msd-notes, "Reflection rays").
+REFLECTION_RAYS = 32
 SINGLE_RAY_ROUGHNESS = 0.1
 
 
@@ -112,7 +113,8 @@ class Variant:
                                   # looked up in (drawn with weights), or () for its SH result
     sources: int = 0              # the map's bright sources lighting the lobes on their own,
                                   # shadowed per pixel (scene/light_sources.py); L is the rest
-    reflection_rays: bool = False # the glossy lobe's visibility traced per pixel (live/ray_bvh.py)
+    reflection_rays: int = 0      # rays per pixel tracing the glossy lobe's visibility
+                                  # (live/ray_bvh.py), or 0
 
     def __post_init__(self):
         if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \
@@ -126,6 +128,8 @@ class Variant:
         if self.sources and (self.vertex_target or (self.glossy and not self.prefiltered_lookup)):
             raise ValueError("the bright sources light a Lambert lobe 0, or a glossy one lit by the "
                              "prefiltered atlas, in a drawn image")
+        if self.reflection_rays < 0:
+            raise ValueError("reflection rays per pixel must be 0 (none) or more")
         if self.reflection_rays and not (self.glossy and self.prefiltered_lookup):
             raise ValueError("reflection rays trace a glossy lobe lit by the prefiltered atlas")
 
@@ -253,7 +257,7 @@ class Variant:
             d["SD_SHADOW_MAP_SIZE"] = str(SHADOW_MAP_SIZE)
             d["SD_HIGHLIGHT_POINTS"] = str(HIGHLIGHT_POINTS)
         if self.reflection_rays:
-            d["SD_REFLECTION_RAYS"] = str(REFLECTION_RAYS)
+            d["SD_REFLECTION_RAYS"] = str(self.reflection_rays)
             d["SD_SINGLE_RAY_ROUGHNESS"] = "%.3f" % SINGLE_RAY_ROUGHNESS
             # the walk's stack: the native builder's depth bound (ray_bvh.h)
             d["SD_RAY_BVH_MAX_DEPTH"] = str(native.get().RAY_BVH_MAX_DEPTH)

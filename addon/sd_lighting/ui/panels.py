@@ -349,6 +349,9 @@ class SD_PT_lighting_live(_SubPanel, bpy.types.Panel):
         row = col.row(heading="Reflections")
         row.active = settings.prefiltered_glossy
         row.prop(settings, "reflection_rays", text="Traced")
+        count = row.row()
+        count.active = settings.reflection_rays
+        count.prop(settings, "reflection_ray_count")
         if settings.reflection_rays and drawing.errors["rays"]:
             _text(layout, context, "Reflections keep the baked visibility: " + drawing.errors["rays"], icon='ERROR')
         col.row(heading="Sources").prop(settings, "source_shadows", text="Sharp Shadows")

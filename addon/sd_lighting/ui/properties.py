@@ -10,7 +10,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        IntProperty, PointerProperty, StringProperty)
 
 from .. import methods, native, redraw
-from ..live import live_rebake
+from ..live import live_rebake, shader_variant
 from ..plan import analysis
 from ..scene import environment, ringing
 from ..bake import lightmap, refine
@@ -203,6 +203,11 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "stores no visibility for a metal, whose bake is not drawn: bake again after "
                     "turning this off. Off: the share of the lobe's light the bake's visibility "
                     "lets through")
+    reflection_ray_count: IntProperty(
+        name="Rays", default=shader_variant.REFLECTION_RAYS, min=1, soft_max=128, max=1024, update=_redraw,
+        description="Reflection rays per pixel of a glossy lobe rougher than a near-mirror (which "
+                    "takes one): fewer draw faster; a rough lobe's partial shadow then changes "
+                    "in steps from one small triangle to the next")
     source_shadows: BoolProperty(
         name="Sharp Source Shadows", default=True, update=_redraw,
         description="Light surfaces by the environment's bright compact sources (a sun, lamps, "

@@ -51,7 +51,7 @@ import bpy  # noqa: E402
 
 ORDERS = [(0, 0), (1, 1), (6, 3)]
 ALBEDO_ORDERS = (1, 1)     # the albedo variants (colour per slot, image texture): at one order
-N_VARIANTS = 654        # the programs variants() enumerates
+N_VARIANTS = 700        # the programs variants() enumerates
 LIGHTMAP = (1024, 512)     # texture-space variants: any size compiles the same way
 PHONG_EXPONENT = 8.0
 SOURCES = 4                # bright sources in the source variants (the most the map gives)
@@ -64,8 +64,8 @@ def _module(package, name):
 def variants(package):
     """Every variant the live shading can build at ORDERS, and at ALBEDO_ORDERS each drawn one of
     a Lambert lobe 0, or of a glossy one lit by the prefiltered atlas, also lit by SOURCES bright
-    sources on their own; each such glossy one also tracing its visibility (reflection rays),
-    with and without the sources."""
+    sources on their own; each such glossy one, or Lambert one with its specular layers, also
+    tracing its visibility (reflection rays), with and without the sources."""
     import dataclasses
     rays = _module(package, "live.shader_variant").REFLECTION_RAYS
     for variant in _variants(package):
@@ -73,7 +73,7 @@ def variants(package):
         if (not variant.vertex_target and (not variant.glossy or variant.prefiltered_lookup)
                 and (variant.light_order, variant.visibility_order) == ALBEDO_ORDERS):
             yield dataclasses.replace(variant, sources=SOURCES)
-            if variant.glossy:
+            if variant.prefiltered_lookup:
                 yield dataclasses.replace(variant, reflection_rays=rays)
                 yield dataclasses.replace(variant, reflection_rays=rays, sources=SOURCES)
 

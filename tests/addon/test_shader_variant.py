@@ -30,8 +30,8 @@ def all_variants():
                     (0, 2) if not target else (0,)):
                 if sources and lobes not in ("lambert", "layer") and not (prefiltered and albedo):
                     continue   # a glossy lobe takes the sources where the prefiltered atlas lights it
-                # a glossy lobe lit by the prefiltered atlas traces its visibility (reflection rays)
-                rays = 16 if lobes not in ("lambert", "layer") and prefiltered and albedo and not target else 0
+                # a glossy lobe or a specular layer lit by the prefiltered atlas traces its visibility
+                rays = 16 if lobes != "lambert" and prefiltered and albedo and not target else 0
                 yield Variant(method, lobes not in ("lambert", "layer"), 4, 2, 0 if method.data is None else 3,
                               18 if method.lobe_design else 0, 77 if method.gaunt_table else 0,
                               per_pixel, target,
@@ -246,7 +246,7 @@ def test_prefiltered_lookup_reads_the_horizon_factors_to_s_prime(sdnative):
 
 def test_reflection_rays_variant_casts_the_scenes_count(sdnative):
     """The traced glossy visibility casts the variant's rays per pixel (the scene's Rays), only on
-    a glossy lobe lit by the prefiltered atlas."""
+    a glossy lobe or a Lambert lobe's specular layer lit by the prefiltered atlas."""
     variant = Variant(methods.get("unshadowed"), True, 4, 0, material_count=1, lobe_weights=True,
                       prefiltered=(1024, 7), reflection_rays=12)
     defines = variant.defines(sdnative.sh_recurrence_constants)
@@ -257,6 +257,9 @@ def test_reflection_rays_variant_casts_the_scenes_count(sdnative):
         dataclasses.replace(variant, reflection_rays=-1)
     with pytest.raises(ValueError, match="reflection rays trace"):
         dataclasses.replace(variant, prefiltered=(), lobe_weights=False, material_count=0)
+    layer = Variant(methods.get("prt_diffuse"), False, 4, 0, data_stride=7, material_count=1,
+                    lobe_weights=True, prefiltered=(1024, 7), reflection_rays=12)
+    assert layer.lambert_layer and layer.defines(sdnative.sh_recurrence_constants)["SD_REFLECTION_RAYS"] == "12"
 
 
 def test_lambert_layer_variant_passes_lobe_0_on_as_the_diffuse(sdnative):

@@ -464,9 +464,9 @@ class ObjectData:
 
     @property
     def traces_reflections(self):
-        """Whether the glossy lobe can trace its visibility (a Phong lobe 0 with the prefiltered
-        atlas; frame_block decides with the slots' weights)."""
-        return self.lobe == "phong" and bool(self.prefiltered) and not self.variant.vertex_target
+        """Whether the glossy lobe, or a Lambert lobe's specular layer, can trace its visibility
+        (with the prefiltered atlas; frame_block decides with the slots' weights)."""
+        return (self.lobe == "phong" or self.lobes.layer) and bool(self.prefiltered) and not self.variant.vertex_target
 
     def _weighted(self, prefiltered):
         """Whether the slots' lobe weights are drawn, with the prefiltered atlas's layout or ():
@@ -503,7 +503,7 @@ class ObjectData:
                                       prefiltered=prefiltered, sources=0, reflection_rays=0)
         lit_alone = variant.prefiltered_lookup or not variant.glossy
         variant = dataclasses.replace(variant, sources=sources if lit_alone else 0,
-                                      reflection_rays=traced if variant.glossy and variant.prefiltered_lookup else 0)
+                                      reflection_rays=traced if variant.prefiltered_lookup else 0)
         if variant != self.variant:
             self.variant = variant
             self.shader = shader_program(variant)

@@ -130,8 +130,9 @@ class Variant:
                              "prefiltered atlas, in a drawn image")
         if self.reflection_rays < 0:
             raise ValueError("reflection rays per pixel must be 0 (none) or more")
-        if self.reflection_rays and not (self.glossy and self.prefiltered_lookup):
-            raise ValueError("reflection rays trace a glossy lobe lit by the prefiltered atlas")
+        if self.reflection_rays and not self.prefiltered_lookup:
+            raise ValueError("reflection rays trace a glossy lobe, or a Lambert lobe's specular layer, "
+                             "lit by the prefiltered atlas")
 
     @property
     def weighted(self):

@@ -196,8 +196,8 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "layers folded into Lambert")
     reflection_rays: BoolProperty(
         name="Reflection Rays", default=True, update=_redraw,
-        description="Trace the visibility of prefiltered glossy lobes per pixel through the scene's "
-                    "triangles (a few rays along the lobe, from each pixel), where the bake's "
+        description="Trace the visibility of prefiltered glossy lobes and specular layers per pixel "
+                    "through the scene's triangles (rays along the lobe, from each pixel), where the bake's "
                     "visibility is too smooth for a sharp reflection: a crease's reflection of the "
                     "object itself, a leg in front of a polished body. The automatic mode then "
                     "stores no visibility for a metal, whose bake is not drawn: bake again after "

@@ -357,8 +357,11 @@ float sd_prefiltered_roughness(int k)
 }
 
 /* The environment prefiltered by the GGX lobe of perceptual roughness r around the local direction
- * d (looked up at g R d): linear in alpha = r^2 between the two levels around it (linear in r, a
- * near-mirror's r = 0.05 took 57 % of level 1, whose alpha is three times its own). */
+ * d (looked up at g R d): between two GGX levels linear in alpha^2, as a blur's variance adds
+ * (linear in alpha, the blend of a sharper and a wider level blurred a bright facet more than the
+ * lobe between them does); between the map itself (level 0) and level 1 linear in alpha = r^2 (in
+ * alpha^2 a near-mirror read the map's texels almost alone, sharper than Cycles shows it; linear
+ * in r, r = 0.05 took 57 % of level 1, whose alpha is three times its own). */
 vec3 sd_prefiltered_light(vec3 d, float roughness)
 {
   vec3 e = normalize(mat3(sd.local_to_environment) * d);
@@ -368,7 +371,8 @@ vec3 sd_prefiltered_light(vec3 d, float roughness)
   int k = (past_first < 1.0) ? 0 : min(int(past_first), SD_PREFILTERED_LEVELS - 2);
   float below = sd_prefiltered_roughness(k);
   float above = sd_prefiltered_roughness(k + 1);
-  float t = clamp((r * r - below * below) / (above * above - below * below), 0.0, 1.0);
+  float power = (k == 0) ? 2.0 : 4.0;   /* alpha, or alpha^2 */
+  float t = clamp((pow(r, power) - pow(below, power)) / (pow(above, power) - pow(below, power)), 0.0, 1.0);
   return mix(sd_prefiltered_level(e, k), sd_prefiltered_level(e, k + 1), t);
 }
 #endif

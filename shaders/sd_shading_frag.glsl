@@ -75,11 +75,11 @@ float sd_layer_fresnel(float f0, float c)
 /* The glossy lobe's Fresnel per channel at cos c = v.h, what its taps weigh their light with: as
  * sd_surface mixes the layers (before 4.0 one lobe of F0 mixed towards the base colour by metallic,
  * with the dielectric's shape; 4.0+ a dielectric and a metal closure, the metal's Schlick's Fresnel
- * of the base colour). A gold's blue, F0 0.34, reflects the grazing half of its lobe most. */
-vec3 sd_tap_fresnel(float c)
+ * of the base colour `albedo`, sd_surface_albedo's). A gold's blue, F0 0.34, reflects the grazing half
+ * of its lobe most. */
+vec3 sd_tap_fresnel(float c, vec3 albedo)
 {
   c = clamp(c, 0.0, 1.0);
-  vec3 albedo = sd_surface_albedo();
   float metal = sd_lobe_weights.x;
   float f0 = sd_lobe_weights.y;
   float code = abs(sd_lobe_weights.w);
@@ -279,12 +279,13 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec3 sum = vec3(0.0);
   vec3 weights = vec3(0.0);
+  vec3 albedo = sd_surface_albedo();
   for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
     vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
-      vec3 w = tap.x * sd_tap_fresnel(dot(v, h));
+      vec3 w = tap.x * sd_tap_fresnel(dot(v, h), albedo);
       vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
       /* a direction below the triangle is the object's own (sd_triangle_horizon) */
       sum += (w * step(0.0, dot(direction, ng))) * sd_prefiltered_light(direction, tap.y);
@@ -318,13 +319,14 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec2 light = vec2(0.0);   /* reaching the pixel, all */
+  vec3 albedo = sd_surface_albedo();
   for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
     vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
     if (l.z > 0.0 && dot(direction, ng) > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_REFLECTION_RAYS, a2, lambda_v);
-      float w = tap.x * max(dot(sd_tap_fresnel(dot(v, h)) * sd_prefiltered_light(direction, tap.y),
+      float w = tap.x * max(dot(sd_tap_fresnel(dot(v, h), albedo) * sd_prefiltered_light(direction, tap.y),
                                 SD_LUMINANCE), 1e-6);
       light += vec2(sd_ray_occluded(origin, to_world * direction, 0.0) ? 0.0 : w, w);
     }

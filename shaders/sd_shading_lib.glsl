@@ -371,8 +371,14 @@ vec3 sd_prefiltered_light(vec3 d, float roughness)
   int k = (past_first < 1.0) ? 0 : min(int(past_first), SD_PREFILTERED_LEVELS - 2);
   float below = sd_prefiltered_roughness(k);
   float above = sd_prefiltered_roughness(k + 1);
-  float power = (k == 0) ? 2.0 : 4.0;   /* alpha, or alpha^2 */
-  float t = clamp((pow(r, power) - pow(below, power)) / (pow(above, power) - pow(below, power)), 0.0, 1.0);
+  /* alpha, or alpha^2 */
+  float x = r * r, x0 = below * below, x1 = above * above;
+  if (k > 0) {
+    x *= x;
+    x0 *= x0;
+    x1 *= x1;
+  }
+  float t = clamp((x - x0) / (x1 - x0), 0.0, 1.0);
   return mix(sd_prefiltered_level(e, k), sd_prefiltered_level(e, k + 1), t);
 }
 #endif

@@ -255,7 +255,8 @@ def glossy_table(package, scene, view, mesh, real_counts, frames):
                                               (True, rays, False), (True, rays, True)):
             settings.prefiltered_glossy = prefiltered
             settings.reflection_rays = count > 0
-            settings.reflection_ray_count = max(count, 1)
+            if count:
+                settings.reflection_ray_count = str(count)
             cells.append(time_frames(lambda: package.live.drawing.draw_objects(scene, [obj], view, 1.0, per_pixel),
                                      frames if not per_pixel else 1))
         settings.prefiltered_glossy = True

@@ -371,6 +371,11 @@ def glossy(checks, package, scene, preview, out, materials):
             rays = drawing.reflection_rays(scene, True)
             drawing._frame(scene, ball, data, view, 1.0, False, rays=rays)
             traced = data.variant.reflection_rays
+            scene.sd_lighting.reflection_ray_count = "8"
+            drawing._frame(scene, ball, data, view, 1.0, False, rays=rays)
+            checks.check(traced == package.live.shader_variant.REFLECTION_RAYS and data.variant.reflection_rays == 8,
+                         "the scene's Rays set the rays each pixel casts", "%d, then %d" % (traced, data.variant.reflection_rays))
+            scene.sd_lighting.reflection_ray_count = str(traced)
             env.clear_cache()
             shading.clear_cache()
             _, textures = drawing._frame(scene, ball, data, view, 1.0, False, rays=rays)

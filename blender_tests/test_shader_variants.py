@@ -172,7 +172,8 @@ def name(variant):
         variant.visibility_order, " per-pixel" if variant.per_pixel else "",
         " vertex-target" if variant.vertex_target else "",
         " texture" if variant.band_limited_texture else "") + (" lightmap" if variant.lightmap else "") + (
-        " %d sources" % variant.sources if variant.sources else "")
+        " %d sources" % variant.sources if variant.sources else "") + (
+        " %d rays" % variant.reflection_rays if variant.reflection_rays else "")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -75,8 +75,8 @@ float sd_layer_fresnel(float f0, float c)
 /* The glossy lobe's Fresnel per channel at cos c = v.h, what its taps weigh their light with: as
  * sd_surface mixes the layers (before 4.0 one lobe of F0 mixed towards the base colour by metallic,
  * with the dielectric's shape; 4.0+ a dielectric and a metal closure, the metal's Schlick's Fresnel
- * of the base colour `albedo`, sd_surface_albedo's). A gold's blue, F0 0.34, reflects the grazing half
- * of its lobe most. */
+ * of the base colour `albedo`, sd_surface_albedo's). A gold's blue, F0 about 0.3, reflects the
+ * grazing half of its lobe most. */
 vec3 sd_tap_fresnel(float c, vec3 albedo)
 {
   c = clamp(c, 0.0, 1.0);
@@ -270,7 +270,7 @@ vec2 sd_tap_weight(vec3 v, vec3 h, vec3 l, int count, float a2, float lambda_v)
  * grazing lobe's far side most). Where the split sum's lobe about one direction misses the real one (a rough metal, and
  * every lobe at a grazing view: stretched along the plane of n and v, cut at the horizon, its
  * tails towards the view heavier; msd-notes, "Glossy light"). */
-vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
+vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, vec3 albedo)
 {
   float alpha = max(roughness * roughness, 1e-4);
   float a2 = alpha * alpha;
@@ -279,7 +279,6 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec3 sum = vec3(0.0);
   vec3 weights = vec3(0.0);
-  vec3 albedo = sd_surface_albedo();
   for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
     vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
@@ -296,7 +295,8 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
 }
 
 #ifdef SD_REFLECTION_RAYS
-/* The share of the glossy lobe's light that reaches the pixel past the scene's triangles, traced
+/* The share of the glossy lobe's light (or a Lambert lobe's specular layer's) that reaches the
+ * pixel past the scene's triangles, traced
  * (the Reflection Rays option): SD_REFLECTION_RAYS directions of the lobe the view reflects
  * (sd_lobe_tap; one, along `axis`, below SD_SINGLE_RAY_ROUGHNESS, where the lobe is narrower than
  * the taps' spread would matter), each a ray from the pixel through the ray BVH (sd_ray_occluded),
@@ -305,9 +305,16 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness)
  * Directions below the triangle are left out: sd_triangle_horizon takes that share. The baked
  * visibility ratio, of order s' at the vertices, is too smooth for a sharp lobe: it lets through a
  * crease's reflection of the object itself (msd-notes, "Glossy light"). The rays start
- * sd.ray_offset.x along the triangle's normal (live/ray_bvh.py). */
-float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float roughness)
+ * sd.ray_offset.x along the triangle's normal (live/ray_bvh.py). A slot without a specular layer
+ * beside the Lambert lobe casts none (sd_surface draws no lobe 0 there). `albedo`: sd_surface_albedo's, read where every pixel reads it (an image's
+ * derivatives). */
+float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float roughness, vec3 albedo)
 {
+#  if defined(SD_DIFFUSE_LOBE) || defined(SD_LAMBERT_LAYER)
+  if (abs(sd_lobe_weights.w) < 0.5) {   /* sd_surface's layer code: none */
+    return 1.0;
+  }
+#  endif
   mat3 to_world = transpose(mat3(sd.world_to_local));
   vec3 origin = sd.ray_bvh.yzw + sd_origin_offset + sd.ray_offset.x * (to_world * ng);
   if (roughness < SD_SINGLE_RAY_ROUGHNESS) {   /* below the triangle: sd_triangle_horizon's */
@@ -319,7 +326,6 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec2 light = vec2(0.0);   /* reaching the pixel, all */
-  vec3 albedo = sd_surface_albedo();
   for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
     vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
@@ -345,8 +351,9 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
  * below); elsewhere the one lookup is as close for about a hundredth of the cost. Either way
  * without the lobe's share below the triangle (ng: sd_triangle_horizon, or the taps there
  * dropped), which the object itself hides. The visibility
- * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility). */
-vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
+ * is the baked lobe's ratio, around the mirrored view, or traced (sd_traced_visibility).
+ * `albedo`: as sd_traced_visibility's. */
+vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, vec3 albedo, out vec3 axis)
 {
   float roughness = sd_lobe_weights.z;
   vec2 bends = sd_brdf_table(dot(normal, view), roughness, SD_BRDF_TABLE_SIZE).xy;
@@ -358,7 +365,7 @@ vec3 sd_open_glossy_light(vec3 normal, vec3 view, vec3 ng, out vec3 axis)
   float sampled = sd_lobe_weights.x * smoothstep(SD_SAMPLED_ROUGHNESS - 0.1, SD_SAMPLED_ROUGHNESS, roughness);
   sampled = max(sampled, 1.0 - smoothstep(SD_SAMPLED_N_DOT_V - 0.1, SD_SAMPLED_N_DOT_V, dot(normal, view)));
   if (sampled > 0.0) {
-    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness), sampled);
+    open = mix(open, sd_sampled_glossy_light(normal, view, ng, roughness, albedo), sampled);
   }
   return sd.prefiltered_scale.x * open;
 }
@@ -512,9 +519,10 @@ void main()
   vec3 ng;
   normal = sd_glossy_normal(normal, view, ng);
   vec3 axis;
-  vec3 open = sd_open_glossy_light(normal, view, ng, axis);
+  vec3 albedo = sd_surface_albedo();
+  vec3 open = sd_open_glossy_light(normal, view, ng, albedo, axis);
 #    ifdef SD_REFLECTION_RAYS
-  visibility = stored * sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z);
+  visibility = stored * sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z, albedo);
 #    endif
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES
@@ -539,9 +547,10 @@ void main()
   vec3 normal = sd_glossy_normal(normalize(sd_normal), view, ng);
   float visibility = sd_visibility;
   vec3 axis;
-  vec3 open = sd_open_glossy_light(normal, view, ng, axis);
+  vec3 albedo = sd_surface_albedo();
+  vec3 open = sd_open_glossy_light(normal, view, ng, albedo, axis);
 #    ifdef SD_REFLECTION_RAYS
-  visibility = sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z);
+  visibility = sd_traced_visibility(normal, view, ng, axis, sd_lobe_weights.z, albedo);
 #    endif
   vec3 highlights = vec3(0.0);
 #    ifdef SD_SOURCES

@@ -209,21 +209,22 @@ def use_prefiltered_glossy(scene):
 
 
 def use_reflection_rays(scene):
-    """The scene's option: the prefiltered glossy lobes trace their visibility per pixel."""
+    """The scene's option: the prefiltered glossy lobes and specular layers trace their visibility
+    per pixel."""
     settings = getattr(scene, "sd_lighting", None)
     return bool(settings is None or settings.reflection_rays)
 
 
 def reflection_ray_count(scene):
-    """The scene's rays per pixel of a traced glossy lobe (shader_variant.REFLECTION_RAYS where it
-    has no settings)."""
+    """The scene's rays per pixel of a traced lobe (shader_variant.REFLECTION_RAYS where it has no
+    settings)."""
     settings = getattr(scene, "sd_lighting", None)
     return REFLECTION_RAYS if settings is None else int(settings.reflection_ray_count)
 
 
 def reflection_rays(scene, wait, view_layer=None):
     """The scene's ray BVH (ray_bvh.scene_bvh), or None where building it failed (errors["rays"]
-    says why; wait=True raises): the glossy lobes keep the baked visibility ratio."""
+    says why; wait=True raises): the glossy lobes and layers keep the baked visibility ratio."""
     import bpy
     view_layer = view_layer or bpy.context.view_layer
     return _unless_failed("rays", "the glossy lobes keep the baked visibility", wait,

@@ -529,8 +529,8 @@ class ObjectData:
         the atlas is without; band_limited_scale: that of the band-limited texture's codes;
         sources: (scene/light_sources.Source list, their shadow rows) lighting the data on their
         own (takes_sources; `light` is then the rest of the map), or None; rays: the ray_bvh and
-        ray_offset rows (ray_bvh.block_rows) where the glossy lobe traces its visibility with
-        `ray_count` rays per pixel, or None. The
+        ray_offset rows (ray_bvh.block_rows) where the glossy lobe or the specular layer traces
+        its visibility with `ray_count` rays per pixel, or None. The
         shader gets the eye relative to the object's origin, differenced here in float64 (far from
         the world origin float32 world positions would round the view away)."""
         self.refresh_design()

@@ -35,11 +35,13 @@ RAY_BVH_SAMPLER = (8, "sd_ray_bvh")                         # the scene's triang
 SAMPLED_ROUGHNESS = 0.3
 SAMPLED_N_DOT_V = 0.6
 GLOSSY_TAPS = 128
-# The glossy lobe's traced visibility (reflection_rays; sd_traced_visibility): rays per pixel by
-# default (the scene's reflection_ray_count), drawn as the taps are; below SINGLE_RAY_ROUGHNESS one,
+# The traced visibility of a glossy lobe or a Lambert lobe's specular layer (reflection_rays;
+# sd_traced_visibility): rays per pixel by default, and the counts the scene's reflection_ray_count
+# offers (each its own program, so a few), drawn as the taps are; below SINGLE_RAY_ROUGHNESS one,
 # along the lobe's axis (a lobe under a degree or two wide). Fewer leave a rough lobe's partial
 # visibility in steps from triangle to triangle (msd-notes, "Reflection rays").
 REFLECTION_RAYS = 32
+RAY_COUNTS = (8, 16, 32, 64)
 SINGLE_RAY_ROUGHNESS = 0.1
 
 
@@ -113,8 +115,8 @@ class Variant:
                                   # looked up in (drawn with weights), or () for its SH result
     sources: int = 0              # the map's bright sources lighting the lobes on their own,
                                   # shadowed per pixel (scene/light_sources.py); L is the rest
-    reflection_rays: int = 0      # rays per pixel tracing the glossy lobe's visibility
-                                  # (live/ray_bvh.py), or 0
+    reflection_rays: int = 0      # rays per pixel tracing the glossy lobe's or the specular
+                                  # layer's visibility (live/ray_bvh.py), or 0
 
     def __post_init__(self):
         if (self.lobe_weights and not (self.glossy or self.prefiltered)) or \

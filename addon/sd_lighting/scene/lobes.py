@@ -7,8 +7,8 @@ problem"), and the weights that give each lobe its colour for a Principled BSDF.
 - A rough dielectric (roughness >= 0.5, metallic 0; Blender's default material) is Lambert with its
   specular layer (Lobes.layer): the bake has the Lambert lobe alone, as cheap as a diffuse one,
   and the live shading lights the layer - a few percent of the light at normal incidence, which
-  brightens every rim - by the environment prefiltered by its GGX lobe, shadowed by the Lambert
-  lobe's own visibility ratio (a lobe this broad sees about what the diffuse sees); without the
+  brightens every rim - by the environment prefiltered by its GGX lobe, shadowed by the traced
+  reflection rays (with the rays off by the Lambert lobe's own visibility ratio); without the
   prefiltered light the layer is folded into Lambert (msd-notes, "Glossy light", measures both).
 - The lobes' colours, per pixel, as the Principled BSDF splits its energy: Phong times the
   specular layer's directional albedo E = F0 A + B, with (A, B) the split-sum scale and bias of a

@@ -196,15 +196,16 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "layers folded into Lambert")
     reflection_rays: BoolProperty(
         name="Reflection Rays", default=True, update=_redraw,
-        description="Trace the visibility of prefiltered glossy lobes and specular layers per pixel "
+        description="Trace the visibility of prefiltered glossy lobes and rough dielectrics' specular layers per pixel "
                     "through the scene's triangles (rays along the lobe, from each pixel), where the bake's "
                     "visibility is too smooth for a sharp reflection: a crease's reflection of the "
                     "object itself, a leg in front of a polished body. The automatic mode then "
                     "stores no visibility for a metal, whose bake is not drawn: bake again after "
                     "turning this off. Off: the share of the lobe's light the bake's visibility "
                     "lets through")
-    reflection_ray_count: IntProperty(
-        name="Rays", default=shader_variant.REFLECTION_RAYS, min=1, soft_max=128, max=1024, update=_redraw,
+    reflection_ray_count: EnumProperty(
+        name="Rays", default=str(shader_variant.REFLECTION_RAYS), update=_redraw,
+        items=[(str(n), str(n), "%d reflection rays per pixel" % n) for n in shader_variant.RAY_COUNTS],
         description="Reflection rays per pixel of a glossy lobe rougher than a near-mirror (which "
                     "takes one): fewer draw faster; a rough lobe's partial shadow then changes "
                     "in steps from one small triangle to the next")

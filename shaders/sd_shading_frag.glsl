@@ -88,7 +88,7 @@ vec3 sd_tap_fresnel(float c, vec3 albedo)
   float m = 1.0 - c;
   float schlick = m * m * m * m * m;
   vec3 mixed = mix(vec3(f0), albedo, metal);
-  vec3 layers = mix(vec3(sd_layer_fresnel(f0, c)), albedo + (vec3(1.0) - albedo) * schlick, metal);
+  vec3 layers = mix(vec3(f0 + (1.0 - f0) * shape), albedo + (vec3(1.0) - albedo) * schlick, metal);
   return mix(mixed + (vec3(1.0) - mixed) * shape, layers, over);
 }
 

@@ -10,6 +10,7 @@ or by the Python of Blender as a module (the bpy wheel), which behaves like `ble
 """
 
 import argparse
+import faulthandler
 import gc
 import os
 import sys
@@ -213,7 +214,9 @@ def finish(code):
 
 
 def run(main):
-    """Runs main() -> exit code; any exception fails the test."""
+    """Runs main() -> exit code; any exception fails the test. A crash prints the Python stack
+    of every thread first (faulthandler), so that the log says where it happened."""
+    faulthandler.enable(all_threads=True)
     try:
         code = main()
     except Exception:

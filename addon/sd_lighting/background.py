@@ -9,13 +9,53 @@ computations that ended, and a timer redraws the viewports when it changes (draw
 computation that raises is reported (`failures`) and not retried; it never raises into the draw.
 What is not interactive (a preview render, the tests' reference) waits for the result (`result`).
 
+`quiet` holds every such thread out of Python while the main thread calls Blender operators under
+a context override: Blender reads the override from C without the GIL when another thread holds it,
+and crashes (docs/blender-notes.md, "Long work in the UI").
+
 Nothing here needs Blender.
 """
 
+import contextlib
 import logging
 import threading
+import time
+import weakref
 
 log = logging.getLogger(__name__)
+
+_registry_lock = threading.Lock()
+_workers = weakref.WeakSet()       # every Worker started
+_backgrounds = weakref.WeakSet()   # every Background
+
+
+class Busy(Exception):
+    """A thread of ours was still running when `quiet` had to go on."""
+
+
+@contextlib.contextmanager
+def quiet(timeout):
+    """Within the block no thread of this module's runs: it waits up to `timeout` seconds for the
+    Workers to end (the caller cancels those it may) and for each Background's computation in
+    progress, and starts none until the block ends. Raises Busy, naming what still runs, when
+    the time is up."""
+    deadline = time.monotonic() + timeout
+    with _registry_lock:
+        workers, backgrounds = list(_workers), list(_backgrounds)
+    for work in backgrounds:
+        work._pause()
+    try:
+        for worker in workers:
+            worker.join(max(deadline - time.monotonic(), 0.0))
+            if worker.running():
+                raise Busy("%s still runs after %.0f s" % (worker.thread_name, timeout))
+        for work in backgrounds:
+            if not work._wait_paused(max(deadline - time.monotonic(), 0.0)):
+                raise Busy("%s still computes after %.0f s" % (work.name, timeout))
+        yield
+    finally:
+        for work in backgrounds:
+            work._resume()
 
 
 class Worker:
@@ -31,7 +71,12 @@ class Worker:
     def start(self):
         """Runs `run` in a new thread."""
         self._thread = threading.Thread(target=self.run, name=self.thread_name, daemon=True)
+        with _registry_lock:
+            _workers.add(self)
         self._thread.start()
+
+    def running(self):
+        return self._thread is not None and self._thread.is_alive()
 
     def cancel(self):
         self.cancel_requested = True
@@ -60,7 +105,10 @@ class Background:
         self._failed = {}      # key -> why its computation failed
         self._thread = None
         self._closed = False
+        self._paused = 0       # quiet() blocks open: no computation starts
         self.generation = 0
+        with _registry_lock:
+            _backgrounds.add(self)
 
     def get(self, key, compute=None):
         """The key's result, or None while it is not there. With `compute` (a callable of no
@@ -125,15 +173,34 @@ class Background:
                 or any(queued == key for queued, _ in self._queue)):
             return
         self._queue.append((key, compute))
-        if self._thread is None:
+        self._start_thread()
+
+    def _start_thread(self):
+        """Starts the worker thread if there is work and none runs (lock held)."""
+        if self._thread is None and self._queue and not self._paused and not self._closed:
             self._thread = threading.Thread(target=self._work, name=self.name, daemon=True)
             self._thread.start()
+
+    def _pause(self):
+        with self._lock:
+            self._paused += 1
+
+    def _wait_paused(self, timeout):
+        """Waits until the worker thread has ended (paused: none starts); whether it has."""
+        with self._lock:
+            return self._ended.wait_for(lambda: self._thread is None, timeout)
+
+    def _resume(self):
+        with self._lock:
+            self._paused -= 1
+            self._start_thread()
 
     def _work(self):
         while True:
             with self._lock:
-                if self._closed or not self._queue:
+                if self._closed or not self._queue or self._paused:
                     self._thread = None
+                    self._ended.notify_all()
                     return
                 key, compute = self._queue[0]
             result, failure = None, None
@@ -145,6 +212,7 @@ class Background:
             with self._lock:
                 if self._closed:
                     self._thread = None
+                    self._ended.notify_all()
                     return
                 self._queue.pop(0)
                 if failure is None:

@@ -3,10 +3,11 @@ computed once and kept, a failure is reported and not raised, waiting callers ge
 the failure."""
 
 import threading
+import time
 
 import pytest
 
-from sd_lighting.background import Background, Failed
+from sd_lighting.background import Background, Busy, Failed, Worker, quiet
 
 
 class _Held:
@@ -102,3 +103,45 @@ def test_put_keeps_a_result_without_computing():
     work = Background("test")
     work.put("k", "from a file")
     assert work.get("k", lambda: pytest.fail("computed")) == "from a file" and work.pending() == []
+
+
+class _Sleeper(Worker):
+    """A Worker that runs until `release` is set."""
+
+    thread_name = "test sleeper"
+
+    def __init__(self):
+        super().__init__()
+        self.release = threading.Event()
+
+    def run(self):
+        self.release.wait(30)
+
+
+def test_quiet_waits_for_the_computation_in_progress_and_starts_none():
+    work = Background("test")
+    first = _Held(value=1)
+    work.get("first", first)
+    work.get("second", lambda: 2)
+    threading.Timer(0.2, first.release.set).start()
+    with quiet(30):
+        assert work.results() == {"first": 1}       # waited for: it ended before the block
+        work.get("third", lambda: 3)
+        time.sleep(0.2)
+        assert work.pending() == ["second", "third"] and work.generation == 1   # nothing started
+    assert work.wait(30) and work.results() == {"first": 1, "second": 2, "third": 3}
+
+
+def test_quiet_waits_for_workers_and_says_which_still_runs():
+    worker = _Sleeper()
+    worker.start()
+    work = Background("test")
+    with pytest.raises(Busy, match="test sleeper"):
+        with quiet(0.2):
+            pass
+    assert worker.running()
+    work.get("after", lambda: 4)            # the Backgrounds were resumed
+    assert work.wait(30) and work.get("after") == 4
+    threading.Timer(0.2, worker.release.set).start()
+    with quiet(30):
+        assert not worker.running()

@@ -3,9 +3,12 @@ Smart UV Project of the baked copy, on the main thread, leaving nothing of the u
 
 import numpy as np
 
+from .. import background
 from ..errors import BakeError
 from ..store import attributes
 from . import lightmap
+
+QUIET_SECONDS = 30.0   # how long the unwrap waits for the add-on's threads (background.quiet)
 
 
 def lightmap_uvs(context, geometry, size):
@@ -19,9 +22,11 @@ def lightmap_uvs(context, geometry, size):
     margin shrinks with few charts (to about a texel on a cube), and the exact 'FRACTION' one
     packs ten times slower (13 s on the 85k-vertex engine). The copy is of the split vertices, so
     its charts also end at sharp edges, material borders and albedo UV seams. It lives in a
-    temporary scene, so that Edit Mode reaches it alone; nothing else changes. Raises BakeError
-    outside Object Mode (another object would share that Edit Mode), for a copy without area, or
-    when the unwrap fails."""
+    temporary scene, so that Edit Mode reaches it alone; nothing else changes. The operators run
+    under a context override, so the add-on's threads are held out of Python meanwhile
+    (background.quiet; the caller has cancelled those it may). Raises BakeError outside Object
+    Mode (another object would share that Edit Mode), for a copy without area, when a thread of
+    the add-on's still runs after QUIET_SECONDS, or when the unwrap fails."""
     import bpy
     if context.mode != 'OBJECT':
         raise BakeError("texture-space data are unwrapped in Object Mode (the mode is %s): switch "
@@ -32,6 +37,19 @@ def lightmap_uvs(context, geometry, size):
         raise BakeError("the baked copy has no area to unwrap a lightmap over")
     mesh = attributes.new_mesh("sd_lightmap unwrap", geometry.vertices / np.sqrt(area), geometry.loop_vertices,
                                geometry.loop_starts, geometry.loop_totals)
+    try:
+        with background.quiet(QUIET_SECONDS):
+            return _smart_project(context, geometry, size, mesh)
+    except background.Busy as exc:
+        raise BakeError("the lightmap's unwrap waited for the add-on's background work: %s; try "
+                        "again" % exc) from exc
+    finally:
+        bpy.data.meshes.remove(mesh)
+
+
+def _smart_project(context, geometry, size, mesh):
+    """lightmap_uvs' unwrap of `mesh`, a copy of the geometry, in a temporary scene."""
+    import bpy
     scene = obj = None
     try:
         scene = bpy.data.scenes.new("sd_lightmap unwrap")
@@ -68,7 +86,6 @@ def lightmap_uvs(context, geometry, size):
     finally:
         if obj is not None:
             bpy.data.objects.remove(obj)
-        bpy.data.meshes.remove(mesh)
         if scene is not None:
             bpy.data.scenes.remove(scene)
 

@@ -26,7 +26,7 @@ prefiltered, and on Blender 4.2 and later EEVEE's at its defaults (what a user w
 the world's light and its probes as EEVEE makes them).
 
 Run: blender -b --factory-startup --python blender_tests/benchmark_glossy.py -- --zip build/sd_lighting.zip --out DIR
-         [--hdri NAME.exr] [--models | --matrix [HDRI ...]]
+         [--hdri NAME.exr] [--models | --matrix [HDRI ...] [--roughness R ...]]
 (Debian's Blender needs `xvfb-run -a` in front for its GPU; a `bpy` module of 4.2+ runs it with
 its venv's python: `~/.cache/sd-lighting/venv/bpy-4.5.15/bin/python blender_tests/benchmark_glossy.py
 -- ...`.) Not part of the test suite (about 3 minutes; with EEVEE on llvmpipe about 6).
@@ -112,16 +112,18 @@ def eevee_render(scene, path, size):
     return sdtest.render_still(scene, path, size)
 
 
-def matrix(hdris, out):
-    """Issue 28's grid at the panel's defaults, 192 pixels: MATRIX_MODELS x MATRIX_MATERIALS under
-    each of `hdris`, one line each (Cycles' renders are kept in a folder of `out` per Blender version
-    and reused)."""
+def matrix(hdris, out, roughnesses=None):
+    """Issue 28's grid at the panel's defaults, 192 pixels: MATRIX_MODELS x MATRIX_MATERIALS (those
+    of these roughnesses; None: all) under each of `hdris`, one line each (Cycles' renders
+    are kept in a folder of `out` per Blender version and reused)."""
     print("glossy grid against Cycles at the panel's defaults (Blender %s)" % bpy.app.version_string)
     out = os.path.join(out, bpy.app.version_string.split()[0])
     os.makedirs(out, exist_ok=True)
     for hdri in hdris:
         for label, path in MATRIX_MODELS:
             for material, colour, roughness, metallic in MATRIX_MATERIALS:
+                if roughnesses is not None and roughness not in roughnesses:
+                    continue
                 scene, model = sdtest.glossy_model_scene(hdri, path, material, colour, roughness, metallic)
                 compare("%s, %s (%.2f), %s" % (label, material, roughness, hdri), scene, [model], out, 192, 4,
                         defaults=True, truncated=False, reuse=True)
@@ -136,11 +138,13 @@ def main():
     scenes.add_argument("--models", action="store_true")
     scenes.add_argument("--matrix", nargs="*", metavar="HDRI",
                         help="only issue 28's grid (MATRIX_*), under these HDRIs (none named: all of MATRIX_HDRIS)")
+    parser.add_argument("--roughness", nargs="+", type=float,
+                        help="with --matrix: only the materials of these roughnesses")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     os.makedirs(args.out, exist_ok=True)
     sdtest.install_addon(args.zip)
     if args.matrix is not None:
-        matrix(args.matrix or MATRIX_HDRIS, args.out)
+        matrix(args.matrix or MATRIX_HDRIS, args.out, args.roughness)
         return
     scene = sdtest.empty_scene()
     sdtest.hdri_world(scene, sdtest.hdri(args.hdri))

@@ -72,6 +72,16 @@ float sd_layer_fresnel(float f0, float c)
   return f0 + (1.0 - f0) * sd_dielectric_shape(clamp(c, 0.0, 1.0));
 }
 
+/* The slot's layer code (sd_lobe_weights.w, scene/lobes.py) as (layer, over): 1 where the slot
+ * has a specular layer, and 1 where that layer lies over the diffuse (4.0+) rather than added to it
+ * (before 4.0). */
+vec2 sd_layers()
+{
+  float code = abs(sd_lobe_weights.w);
+  float layer = step(0.5, code);
+  return vec2(layer, layer * (1.0 - step(1.5, code)));
+}
+
 /* The glossy lobe's Fresnel per channel at cos c = v.h, what its taps weigh their light with: as
  * sd_surface mixes the layers (before 4.0 one lobe of F0 mixed towards the base colour by metallic,
  * with the dielectric's shape; 4.0+ a dielectric and a metal closure, the metal's Schlick's Fresnel
@@ -82,8 +92,7 @@ vec3 sd_tap_fresnel(float c, vec3 albedo)
   c = clamp(c, 0.0, 1.0);
   float metal = sd_lobe_weights.x;
   float f0 = sd_lobe_weights.y;
-  float code = abs(sd_lobe_weights.w);
-  float over = step(0.5, code) * (1.0 - step(1.5, code));
+  float over = sd_layers().y;
   float shape = sd_dielectric_shape(c);
   float m = 1.0 - c;
   float schlick = m * m * m * m * m;
@@ -125,9 +134,9 @@ vec3 sd_surface(vec3 lobe0, vec3 diffuse, float n_dot_v)
 #if defined(SD_LOBE_WEIGHTS)
   float metal = sd_lobe_weights.x;
   float f0 = sd_lobe_weights.y;
-  float code = abs(sd_lobe_weights.w);
-  float layer = step(0.5, code);
-  float over = layer * (1.0 - step(1.5, code));
+  vec2 layers = sd_layers();
+  float layer = layers.x;
+  float over = layers.y;
   float multiscatter = step(0.0, sd_lobe_weights.w);
   vec4 brdf = sd_environment_brdf(n_dot_v, sd_lobe_weights.z);
   vec3 dielectric_shape = vec3(brdf.x + brdf.y - brdf.w, brdf.w, brdf.z);
@@ -311,7 +320,7 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, v
 float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float roughness, vec3 albedo)
 {
 #  if defined(SD_DIFFUSE_LOBE) || defined(SD_LAMBERT_LAYER)
-  if (abs(sd_lobe_weights.w) < 0.5) {   /* sd_surface's layer code: none */
+  if (sd_layers().x < 0.5) {   /* no specular layer */
     return 1.0;
   }
 #  endif

@@ -240,9 +240,14 @@ void sd_lobe_frame(vec3 normal, vec3 view, float alpha, out vec3 t1, out vec3 t2
   b2 = cross(vh, b1);
 }
 
-/* The microfacet normal (tangent frame) of Hammersley point i of `count`, ((i + 1/2) / count, the
- * radical inverse of i in base 2), mapped onto the visible normals of sd_lobe_frame's frame. One
- * set for every pixel, so that what the taps estimate is smooth over the surface, without noise. */
+/* The microfacet normal (tangent frame) of Hammersley point i of `count` ((i + 1/2) / count, the
+ * radical inverse of i in base 2), mapped onto the visible normals of sd_lobe_frame's frame. Each
+ * pixel of a 4 x 4 tile shifts the set (interleaved sampling, Keller and Heidrich 2001): by its
+ * Bayer index j within each radial stratum, (i + (j + 1/2) / 16) / count, and turns it by j's
+ * bits reversed, so that the tile's 16 pixels together cast 16 times as many directions. With one
+ * set for every pixel a flat facet, whose pixels share a lobe, kept that set's error whole, from
+ * facet to facet; interleaved it is a fine grain a 4 x 4 block averages out (msd-notes, "Glossy
+ * light"). */
 vec3 sd_lobe_tap(int i, int count, vec3 vh, vec3 b1, vec3 b2, float alpha)
 {
   float u2 = 0.0;
@@ -251,8 +256,12 @@ vec3 sd_lobe_tap(int i, int count, vec3 vh, vec3 b1, vec3 b2, float alpha)
     u2 += digit * float(bits % 2);
     digit *= 0.5;
   }
-  float radius = sqrt((float(i) + 0.5) / float(count));
-  float phi = 6.283185307179586 * u2;
+  ivec2 cell = ivec2(gl_FragCoord.xy) % 4;
+  int x = cell.x ^ cell.y;
+  int j = ((x & 1) << 3) | ((cell.y & 1) << 2) | ((x & 2)) | ((cell.y & 2) >> 1);
+  int k = ((j & 1) << 3) | ((j & 2) << 1) | ((j & 4) >> 1) | ((j & 8) >> 3);
+  float radius = sqrt((float(i) + (float(j) + 0.5) / 16.0) / float(count));
+  float phi = 6.283185307179586 * fract(u2 + (float(k) + 0.5) / 16.0);
   float p1 = radius * cos(phi);
   float s = 0.5 * (1.0 + vh.z);
   float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * radius * sin(phi);

@@ -39,7 +39,7 @@ GLOSSY_TAPS = 128
 # sd_traced_visibility): rays per pixel by default, and the counts the scene's reflection_ray_count
 # offers (each its own program, so a few), drawn as the taps are; below SINGLE_RAY_ROUGHNESS one,
 # along the lobe's axis (a lobe under a degree or two wide). Fewer leave a rough lobe's partial
-# visibility in steps from triangle to triangle (msd-notes, "Reflection rays").
+# visibility coarser: a grain over 4 x 4 pixels, whose rays interleave (msd-notes, "Reflection rays").
 REFLECTION_RAYS = 32
 RAY_COUNTS = (8, 16, 32, 64)
 SINGLE_RAY_ROUGHNESS = 0.1

@@ -3,12 +3,14 @@ vertices: per vertex the ground cannot show the ball's contact shadow) baked wit
 Checks: the baked copy's UV map and the texels' mesh; the preview shows the contact shadow the
 per-vertex bake cannot; the preview at ground pixels equals the CPU evaluation of the texels,
 blended bilinearly at each pixel's lightmap UV; save and reload keep it; Clear Bake removes the
-texels too; MSD (13) bakes per vertex; outside Object Mode the bake refuses and changes nothing.
+texels too; MSD (13) bakes per vertex; outside Object Mode, or while a thread of the add-on's
+computes (background.quiet), the bake refuses and changes nothing.
 Run: blender -b --factory-startup --python-exit-code 1 --python blender_tests/test_texture_space.py -- --zip Z --out DIR
 """
 
 import os
 import sys
+import threading
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sdtest  # noqa: E402
@@ -229,6 +231,24 @@ def main():
     scene.sd_lighting.lightmap_size = str(SIZE)
 
     scene.sd_lighting.light_order = scene.sd_lighting.visibility_order = 2
+
+    # While a thread of the add-on's computes, the unwrap (operators under a context override,
+    # which Blender reads without the GIL while another thread holds it) does not run: it waits,
+    # here QUIET_SECONDS = 0.5 s, then the bake refuses and nothing changes.
+    held = threading.Event()
+    work = package.background.Background("test_texture_space hold")
+    work.get("held", lambda: held.wait(30))
+    unwrap, saved = package.bake.unwrap, package.bake.unwrap.QUIET_SECONDS
+    unwrap.QUIET_SECONDS = 0.5
+    before = sdtest.snapshot()
+    try:
+        result, text = sdtest.operator_reports(bpy.ops.sd_lighting.bake)
+    finally:
+        unwrap.QUIET_SECONDS = saved
+        held.set()
+    checks.check(result == {'CANCELLED'} and "test_texture_space hold" in text and sdtest.snapshot() == before
+                 and work.wait(30), "while the add-on's thread computes the unwrap waits, then the bake "
+                 "refuses and changes nothing", text.strip().splitlines()[-1][-120:] if text.strip() else "")
 
     # MSD (13): per-vertex designs only, no texels.
     scene.sd_lighting.method = 'msd_visibility'

@@ -48,10 +48,10 @@ def quiet(timeout):
         for worker in workers:
             worker.join(max(deadline - time.monotonic(), 0.0))
             if worker.running():
-                raise Busy("%s still runs after %.0f s" % (worker.thread_name, timeout))
+                raise Busy("%s still runs after %g s" % (worker.thread_name, timeout))
         for work in backgrounds:
             if not work._wait_paused(max(deadline - time.monotonic(), 0.0)):
-                raise Busy("%s still computes after %.0f s" % (work.name, timeout))
+                raise Busy("%s still computes after %g s" % (work.name, timeout))
         yield
     finally:
         for work in backgrounds:

@@ -240,6 +240,17 @@ void sd_lobe_frame(vec3 normal, vec3 view, float alpha, out vec3 t1, out vec3 t2
   b2 = cross(vh, b1);
 }
 
+/* sd_lobe_tap's shift of this pixel's Hammersley set: ((j + 1/2) / 16, (k + 1/2) / 16), j the
+ * pixel's index in a 4 x 4 Bayer matrix, k its bits reversed. */
+vec2 sd_tap_shift()
+{
+  ivec2 cell = ivec2(gl_FragCoord.xy) % 4;
+  int x = cell.x ^ cell.y;
+  int j = ((x & 1) << 3) | ((cell.y & 1) << 2) | (x & 2) | ((cell.y & 2) >> 1);
+  int k = ((j & 1) << 3) | ((j & 2) << 1) | ((j & 4) >> 1) | ((j & 8) >> 3);
+  return (vec2(float(j), float(k)) + 0.5) / 16.0;
+}
+
 /* The microfacet normal (tangent frame) of Hammersley point i of `count` ((i + 1/2) / count, the
  * radical inverse of i in base 2), mapped onto the visible normals of sd_lobe_frame's frame. Each
  * pixel of a 4 x 4 tile shifts the set (interleaved sampling, Keller and Heidrich 2001): by its
@@ -247,8 +258,8 @@ void sd_lobe_frame(vec3 normal, vec3 view, float alpha, out vec3 t1, out vec3 t2
  * bits reversed, so that the tile's 16 pixels together cast 16 times as many directions. With one
  * set for every pixel a flat facet, whose pixels share a lobe, kept that set's error whole, from
  * facet to facet; interleaved it is a fine grain a 4 x 4 block averages out (msd-notes, "Glossy
- * light"). */
-vec3 sd_lobe_tap(int i, int count, vec3 vh, vec3 b1, vec3 b2, float alpha)
+ * light"). `shift`: sd_tap_shift's, the pixel's. */
+vec3 sd_lobe_tap(int i, int count, vec2 shift, vec3 vh, vec3 b1, vec3 b2, float alpha)
 {
   float u2 = 0.0;
   float digit = 0.5;
@@ -256,12 +267,8 @@ vec3 sd_lobe_tap(int i, int count, vec3 vh, vec3 b1, vec3 b2, float alpha)
     u2 += digit * float(bits % 2);
     digit *= 0.5;
   }
-  ivec2 cell = ivec2(gl_FragCoord.xy) % 4;
-  int x = cell.x ^ cell.y;
-  int j = ((x & 1) << 3) | ((cell.y & 1) << 2) | ((x & 2)) | ((cell.y & 2) >> 1);
-  int k = ((j & 1) << 3) | ((j & 2) << 1) | ((j & 4) >> 1) | ((j & 8) >> 3);
-  float radius = sqrt((float(i) + (float(j) + 0.5) / 16.0) / float(count));
-  float phi = 6.283185307179586 * fract(u2 + (float(k) + 0.5) / 16.0);
+  float radius = sqrt((float(i) + shift.x) / float(count));
+  float phi = 6.283185307179586 * fract(u2 + shift.y);
   float p1 = radius * cos(phi);
   float s = 0.5 * (1.0 + vh.z);
   float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * radius * sin(phi);
@@ -297,8 +304,9 @@ vec3 sd_sampled_glossy_light(vec3 normal, vec3 view, vec3 ng, float roughness, v
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec3 sum = vec3(0.0);
   vec3 weights = vec3(0.0);
+  vec2 shift = sd_tap_shift();
   for (int i = 0; i < SD_GLOSSY_TAPS; i++) {
-    vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, vh, b1, b2, alpha);
+    vec3 h = sd_lobe_tap(i, SD_GLOSSY_TAPS, shift, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     if (l.z > 0.0) {
       vec2 tap = sd_tap_weight(v, h, l, SD_GLOSSY_TAPS, a2, lambda_v);
@@ -344,8 +352,9 @@ float sd_traced_visibility(vec3 normal, vec3 view, vec3 ng, vec3 axis, float rou
   sd_lobe_frame(normal, view, alpha, t1, t2, v, vh, b1, b2);
   float lambda_v = sd_smith_lambda(v.z, a2);
   vec2 light = vec2(0.0);   /* reaching the pixel, all */
+  vec2 shift = sd_tap_shift();
   for (int i = 0; i < SD_REFLECTION_RAYS; i++) {
-    vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, vh, b1, b2, alpha);
+    vec3 h = sd_lobe_tap(i, SD_REFLECTION_RAYS, shift, vh, b1, b2, alpha);
     vec3 l = 2.0 * dot(v, h) * h - v;
     vec3 direction = l.x * t1 + l.y * t2 + l.z * normal;
     if (l.z > 0.0 && dot(direction, ng) > 0.0) {
